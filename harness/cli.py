@@ -1,0 +1,56 @@
+"""The ``cassi`` command line.
+
+Each cassi package contributes its subcommands through the ``cassi.commands`` entry point
+group (``module:register``, called with the argparse subparsers object), so this module never
+imports a layer it must not depend on. Exit codes: 0 success, 2 bad input, 1 other failure.
+"""
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from importlib.metadata import entry_points, version
+
+from cassi.data.errors import CassiInputError
+
+EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str):  # argparse's own bad-input path: exit 2 like ours
+        self.print_usage(sys.stderr)
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="cassi", description=__doc__.splitlines()[0] + " See README.md.")
+    parser.add_argument("--version", action="version", version=f"cassi-farm {version('cassi-farm')}")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+    for ep in sorted(entry_points(group="cassi.commands"), key=lambda e: e.name):
+        ep.load()(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO,
+                        format="%(levelname)s %(name)s: %(message)s")
+    try:
+        return int(args.func(args) or EXIT_OK)
+    except CassiInputError as err:
+        print(f"cassi: error: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("cassi: interrupted", file=sys.stderr)
+        return EXIT_FAILURE
+    except Exception as err:  # noqa: BLE001 - the CLI boundary: report, never a traceback dump
+        logging.getLogger("cassi").debug("failure", exc_info=True)
+        print(f"cassi: failed: {type(err).__name__}: {err}", file=sys.stderr)
+        return EXIT_FAILURE
+
+
+if __name__ == "__main__":
+    sys.exit(main())
