@@ -1,0 +1,132 @@
+"""The head-measures file: gonion and gnathion per subject.
+
+The thesis (4.1.1, "Chin and Jaw Adjustments") shapes the jaw and chin from "the measured positions of
+the gonion and gnathion, as given in the Headmeasures.txt file" but never prints that file. This
+module defines its format for cassi-farm.
+
+Format (``Headmeasures.txt``, cassi-farm head measures, version 1)
+-------------------------------------------------------------------
+Plain ASCII text, whitespace separated (tabs or spaces, LF or CRLF, final newline optional)::
+
+    # cassi-farm head measures v1: XRMB head frame, micrometres
+    Subject GONION_X GONION_Y GNATHION_X GNATHION_Y
+    JW11    -81200   -49800   -6100      -41700
+    JW12    -78400   -52300   -4300      -44900
+
+- Lines starting with ``#`` are comments; blank lines are ignored.
+- The header line ``Subject GONION_X GONION_Y GNATHION_X GNATHION_Y`` is optional (any case).
+- Every other line: subject name (letters and digits, e.g. ``JW45``) and four numbers, the
+  gonion (angle of the jaw) x, y and gnathion (point of the chin) x, y, in micrometres, in the same
+  XRMB head frame as the task files (thesis 3.2.3: origin between the tips of the upper central
+  incisors, +x out of the mouth along the maxillary occlusal plane, +y toward the roof of the
+  mouth), so both points have negative x and y. Integers, like the other XRMB files; decimals are
+  read too.
+- One line per subject; a subject listed twice is an error.
+
+The file may sit in the corpus root (all subjects) or in a subject's directory (that subject; it
+takes precedence). :func:`read_head_measures` returns ``{subject: HeadMeasures}`` with millimetres.
+"""
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from cassi.data.atomic import atomic_write_text
+from cassi.data.errors import CassiInputError
+from cassi.data.textlines import decode_ascii, parse_num, read_bytes, split_lines, tokens
+
+HEAD_MEASURES_FILE = "Headmeasures.txt"
+HEADER = ("SUBJECT", "GONION_X", "GONION_Y", "GNATHION_X", "GNATHION_Y")
+_SUBJECT_RE = re.compile(r"[A-Za-z][A-Za-z0-9_-]{0,31}", re.ASCII)
+_MAX_ABS_UM = 500_000
+
+
+@dataclass(frozen=True, eq=False)
+class HeadMeasures:
+    """Gonion and gnathion of one subject.
+
+    Attributes
+    ----------
+    gonion_mm : float64 (2,)
+        Angle of the jaw, (x, y) mm in the XRMB head frame.
+    gnathion_mm : float64 (2,)
+        Point of the chin, (x, y) mm in the XRMB head frame.
+    """
+
+    gonion_mm: np.ndarray
+    gnathion_mm: np.ndarray
+
+    def __eq__(self, other):
+        if not isinstance(other, HeadMeasures):
+            return NotImplemented
+        return (np.array_equal(self.gonion_mm, other.gonion_mm)
+                and np.array_equal(self.gnathion_mm, other.gnathion_mm))
+
+    __hash__ = None  # mutable arrays inside
+
+
+def parse_head_measures(data: bytes | str, *,
+                        path: str | os.PathLike | None = None) -> dict[str, HeadMeasures]:
+    """Parse head-measures text (see the module docstring) -> ``{subject: HeadMeasures}``."""
+    text = decode_ascii(data, path=path)
+    out: dict[str, HeadMeasures] = {}
+    seen_line: dict[str, int] = {}
+    for line_no, line in enumerate(split_lines(text), start=1):
+        if line.lstrip().startswith("#"):
+            continue
+        toks = tokens(line)
+        if not toks:
+            continue
+        if tuple(t.upper() for t in toks) == HEADER:
+            if out:
+                raise CassiInputError("header line after data lines", path=path, line=line_no)
+            continue
+        if len(toks) != 5:
+            raise CassiInputError(
+                f"expected 5 columns (subject gonion_x gonion_y gnathion_x gnathion_y), found "
+                f"{len(toks)}", path=path, line=line_no)
+        subject = toks[0]
+        if not _SUBJECT_RE.fullmatch(subject):
+            raise CassiInputError(f"bad subject name {subject[:40]!r}", path=path, line=line_no)
+        key = subject.upper()
+        if key in seen_line:
+            raise CassiInputError(f"subject {subject} listed twice (first at line "
+                                  f"{seen_line[key]})", path=path, line=line_no)
+        vals = [parse_num(t, what=f"column {k} ({HEADER[k - 1].lower()})", path=path, line=line_no)
+                for k, t in enumerate(toks[1:], start=2)]
+        if any(abs(v) > _MAX_ABS_UM for v in vals):
+            raise CassiInputError("coordinate implausibly far from the origin (micrometres "
+                                  "expected)", path=path, line=line_no)
+        seen_line[key] = line_no
+        arr = np.asarray(vals, dtype=np.float64) / 1000.0
+        out[key] = HeadMeasures(gonion_mm=arr[:2].copy(), gnathion_mm=arr[2:].copy())
+    return out
+
+
+def read_head_measures(path: str | os.PathLike) -> dict[str, HeadMeasures]:
+    """Read a head-measures file -> ``{SUBJECT: HeadMeasures}`` (subject names upper-cased)."""
+    return parse_head_measures(read_bytes(path), path=path)
+
+
+def format_head_measures(measures: dict[str, HeadMeasures]) -> str:
+    lines = ["# cassi-farm head measures v1: XRMB head frame, micrometres",
+             "Subject GONION_X GONION_Y GNATHION_X GNATHION_Y"]
+    for subject in sorted(measures):
+        if not _SUBJECT_RE.fullmatch(subject):
+            raise CassiInputError(f"bad subject name {subject!r}")
+        hm = measures[subject]
+        vals = np.concatenate([np.asarray(hm.gonion_mm, float).reshape(2),
+                               np.asarray(hm.gnathion_mm, float).reshape(2)])
+        if not np.isfinite(vals).all():
+            raise CassiInputError(f"{subject}: non-finite head measure")
+        um = np.rint(vals * 1000.0).astype(np.int64).tolist()
+        lines.append(f"{subject} {um[0]} {um[1]} {um[2]} {um[3]}")
+    return "\n".join(lines) + "\n"
+
+
+def write_head_measures(path: str | os.PathLike, measures: dict[str, HeadMeasures]) -> None:
+    """Write a head-measures file (atomic), subjects sorted, values rounded to micrometres."""
+    atomic_write_text(path, format_head_measures(measures))

@@ -1,0 +1,373 @@
+"""Readers and writers for the Wisconsin X-ray Microbeam (XRMB) files CASSI uses.
+
+Task files (thesis 3.2.5, Figure 3.9)
+-------------------------------------
+``tpNNN.txy``, ``tpNNN_R.txy`` (repetition R) or the thesis's ``SUBJ_NNN.TXY`` (any case): one row
+per sample, 17 whitespace-separated integer columns::
+
+    time_us ULx ULy LLx LLy T1x T1y T2x T2y T3x T3y T4x T4y MNIx MNIy MNMx MNMy
+
+Time in microseconds (nominal period 6866 us), coordinates in micrometres in the XRMB head frame
+(thesis 3.2.3: origin between the tips of the central maxillary incisors, x along the maxillary
+occlusal plane with positive x out of the mouth, y normal to it with positive y toward the roof of
+the mouth). ``1000000`` marks a bad value (mistracked, missing or not yet tracked pellet); it
+becomes ``valid == False`` and NaN coordinates, never a coordinate. Tabs or spaces, CRLF or LF,
+with or without a final newline are all read.
+
+Outline files (thesis Figure 3.11)
+----------------------------------
+``PAL.DAT`` (palate, front to back) and ``PHA.DAT`` (pharynx): one ``x y`` pair per line in
+micrometres; returned as float64 ``(P, 2)`` millimetres.
+
+Mis.dat and the head-measures file live in :mod:`cassi.data.mis` and
+:mod:`cassi.data.headmeasures` and are re-exported here.
+"""
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from cassi.data.atomic import atomic_write_text
+from cassi.data.errors import CassiInputError
+from cassi.data.headmeasures import (  # noqa: F401  (re-exported: contract names them here)
+    HeadMeasures, parse_head_measures, read_head_measures, write_head_measures,
+    format_head_measures)
+from cassi.data.mis import (  # noqa: F401
+    MISTRACK_PELLET_CODES, MistrackEntry, format_mis, parse_mis, read_mis, write_mis)
+from cassi.data.textlines import (decode_ascii, numbered_rows, parse_int, parse_num, read_bytes,
+                                  split_lines, tokens)
+
+PELLETS = ("UL", "LL", "T1", "T2", "T3", "T4", "MNI", "MNM")
+BAD_VALUE = 1000000
+NOMINAL_PERIOD_US = 6866
+N_COLUMNS = 1 + 2 * len(PELLETS)
+COLUMN_NAMES = ("time",) + tuple(f"{p}{c}" for p in PELLETS for c in "xy")
+
+_NUM = r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)"
+_SEP = r"[ \t\f\v]+"
+# One well-formed row; rows that do not match are diagnosed field by field (the slow path).
+_ROW_RE = re.compile(rf"[ \t\f\v]*[0-9]{{1,15}}(?:{_SEP}{_NUM}){{16}}[ \t\f\v\r]*", re.ASCII)
+_TASK_NAME_RE = re.compile(
+    r"^(?:tp|(?P<subject>[a-z]+[0-9]+)_)(?P<task>[0-9]{1,4})(?:_(?P<rep>[0-9]{1,3}))?\.txy$",
+    re.IGNORECASE | re.ASCII)
+# Largest plausible coordinate (micrometres): 0.5 m from the incisors is certainly wrong data.
+_MAX_ABS_UM = 500_000
+
+
+def parse_task_name(name: str) -> tuple[str | None, int, int]:
+    """Subject (if the name carries it), task and repetition from a task file name.
+
+    ``tp013.txy`` -> ``(None, 13, 1)``; ``tp015_2.txy`` -> ``(None, 15, 2)``;
+    ``JW45_013.TXY`` -> ``("JW45", 13, 1)``. Raises :class:`CassiInputError` otherwise.
+    """
+    m = _TASK_NAME_RE.match(name)
+    if not m:
+        raise CassiInputError(
+            "not a task file name (expected tpNNN.txy, tpNNN_R.txy or SUBJ_NNN.txy)", path=name)
+    subject = m.group("subject")
+    rep = int(m.group("rep")) if m.group("rep") else 1
+    task = int(m.group("task"))
+    if task < 1 or rep < 1:
+        raise CassiInputError("task and repetition numbers start at 1", path=name)
+    return (subject.upper() if subject else None), task, rep
+
+
+def task_file_name(task: int, rep: int = 1) -> str:
+    """The canonical file name for a task: ``tpNNN.txy`` or ``tpNNN_R.txy``."""
+    return f"tp{task:03d}.txy" if rep == 1 else f"tp{task:03d}_{rep}.txy"
+
+
+@dataclass(frozen=True, eq=False)
+class TaskRecording:
+    """One XRMB task file.
+
+    Attributes
+    ----------
+    path : Path or None
+        Where it was read from (None when built in memory).
+    subject : str
+    task : int
+        XRMB task (record) number, 1..118.
+    rep : int
+        Repetition: 1 for ``tpNNN.txy``, R for ``tpNNN_R.txy``.
+    time_us : int64 (F,)
+        Sample times in microseconds, strictly increasing.
+    xy_mm : float64 (F, 8, 2)
+        Pellet x, y in millimetres in the XRMB frame, pellets in :data:`PELLETS` order; NaN where
+        the pellet is invalid.
+    valid : bool (F, 8)
+        False where the file had the bad value 1000000.
+    warnings : tuple of str
+        Problems found that did not stop reading (``file:line: reason``).
+    """
+
+    path: Path | None
+    subject: str
+    task: int
+    rep: int
+    time_us: np.ndarray
+    xy_mm: np.ndarray
+    valid: np.ndarray
+    warnings: tuple[str, ...] = field(default=())
+
+    @property
+    def n_frames(self) -> int:
+        return int(self.time_us.shape[0])
+
+    @property
+    def all_valid(self) -> np.ndarray:
+        """bool (F,): rows where all eight pellets are valid."""
+        return self.valid.all(axis=1)
+
+    @property
+    def first_valid_index(self) -> int | None:
+        """Index of the first row with all eight pellets valid, or None (thesis 3.2.5)."""
+        rows = np.flatnonzero(self.all_valid)
+        return int(rows[0]) if rows.size else None
+
+    @property
+    def first_valid_time_us(self) -> int | None:
+        i = self.first_valid_index
+        return None if i is None else int(self.time_us[i])
+
+    def pellet(self, name: str) -> np.ndarray:
+        """float64 (F, 2) mm for one pellet by name (``"UL"`` ... ``"MNM"``)."""
+        return self.xy_mm[:, PELLETS.index(name)]
+
+
+def _diagnose_row(toks: list[str], *, path, line) -> None:
+    """Raise the precise error for a row that failed the fast pattern."""
+    if len(toks) != N_COLUMNS:
+        raise CassiInputError(f"expected {N_COLUMNS} columns, found {len(toks)}", path=path, line=line)
+    t = toks[0]
+    if not re.fullmatch(r"[0-9]+", t, re.ASCII):
+        parse_int(t, what="column 1 (time)", path=path, line=line)  # raises if not an integer
+        raise CassiInputError(f"column 1 (time): {t[:40]!r} must be a non-negative integer",
+                              path=path, line=line)
+    if len(t) > 15:
+        raise CassiInputError(f"column 1 (time): {t[:40]!r} is too large", path=path, line=line)
+    for k, tok in enumerate(toks[1:], start=2):
+        parse_num(tok, what=f"column {k} ({COLUMN_NAMES[k - 1]})", path=path, line=line)
+    raise CassiInputError("malformed row", path=path, line=line)  # pragma: no cover - defensive
+
+
+def parse_txy(data: bytes | str, *, path: str | os.PathLike | None = None,
+              subject: str | None = None, task: int | None = None, rep: int | None = None,
+              require_valid: bool = True) -> TaskRecording:
+    """Parse the text of a task file.
+
+    Parameters
+    ----------
+    data : bytes or str
+        The file's content.
+    path : path-like, optional
+        Used in messages; subject/task/rep are taken from its name when not given.
+    subject, task, rep : optional
+        Override what the file name says. ``task`` is required when the name is not a task name.
+    require_valid : bool
+        When True (default) a file with no row where all eight pellets are valid is an error;
+        when False it is a recorded warning (used to report why a file is unusable).
+
+    Raises
+    ------
+    CassiInputError
+        Empty file, wrong column count, non-numeric field, time not increasing, no valid row.
+    """
+    name_subject, name_task, name_rep = None, None, None
+    if path is not None:
+        try:
+            name_subject, name_task, name_rep = parse_task_name(Path(path).name)
+        except CassiInputError:
+            if task is None:
+                raise
+    task = task if task is not None else name_task
+    if task is None:
+        raise CassiInputError("task number unknown (pass task=...)", path=path)
+    rep = rep if rep is not None else (name_rep or 1)
+    if subject is None:
+        subject = name_subject
+        if subject is None and path is not None:
+            subject = Path(path).resolve().parent.name.upper() or None
+    subject = subject or "UNKNOWN"
+
+    text = decode_ascii(data, path=path)
+    lines = split_lines(text)
+    warnings: list[str] = []
+
+    def warn(msg: str, line: int | None = None) -> None:
+        warnings.append(str(CassiInputError(msg, path=path, line=line)))
+
+    rows: list[str] = []
+    line_numbers: list[int] = []
+    blank_inside: list[int] = []
+    for i, line in enumerate(lines, start=1):
+        if _ROW_RE.fullmatch(line):
+            rows.append(line)
+            line_numbers.append(i)
+            continue
+        toks = tokens(line)
+        if not toks:
+            blank_inside.append(i)
+            continue
+        if not rows and len(toks) == N_COLUMNS and [t.lower() for t in toks] == [
+                c.lower() for c in COLUMN_NAMES]:
+            warn("column header line skipped (real .txy files have none)", i)
+            continue
+        _diagnose_row(toks, path=path, line=i)
+    if not rows:
+        raise CassiInputError("empty file: no data rows", path=path,
+                              line=None if not lines else 1)
+    # Blank lines after the last row are harmless; blank lines between rows are worth a warning.
+    inner = [b for b in blank_inside if line_numbers[0] < b < line_numbers[-1]]
+    if inner:
+        warn(f"{len(inner)} blank line(s) between rows (first at line {inner[0]})", inner[0])
+
+    flat = " ".join(rows).split()
+    values = np.array(flat, dtype=np.float64).reshape(len(rows), N_COLUMNS)
+    time_us = values[:, 0].astype(np.int64)
+    dt = np.diff(time_us)
+    bad_dt = np.flatnonzero(dt <= 0)
+    if bad_dt.size:
+        k = int(bad_dt[0]) + 1
+        raise CassiInputError(
+            f"time not increasing: {time_us[k]} us after {time_us[k - 1]} us",
+            path=path, line=line_numbers[k])
+    if dt.size:
+        off = np.flatnonzero(np.abs(dt - NOMINAL_PERIOD_US) > 2)
+        if off.size:
+            k = int(off[0]) + 1
+            warn(f"{off.size} sample interval(s) differ from the nominal {NOMINAL_PERIOD_US} us "
+                 f"(first: {int(dt[k - 1])} us)", line_numbers[k])
+
+    coords = values[:, 1:].reshape(len(rows), len(PELLETS), 2)
+    bad = coords == BAD_VALUE
+    valid = ~bad.any(axis=2)
+    half = np.argwhere(bad.any(axis=2) & ~bad.all(axis=2))
+    if half.size:
+        r, p = half[0]
+        warn(f"{len(half)} pellet sample(s) with only one coordinate 1000000 treated as invalid "
+             f"(first: {PELLETS[p]})", line_numbers[r])
+    wild = np.argwhere(valid & (np.abs(coords) > _MAX_ABS_UM).any(axis=2))
+    if wild.size:
+        r, p = wild[0]
+        warn(f"{len(wild)} pellet sample(s) farther than {_MAX_ABS_UM // 1000} mm from the origin "
+             f"(first: {PELLETS[p]})", line_numbers[r])
+    xy_mm = np.where(valid[:, :, None], coords / 1000.0, np.nan)
+
+    all_valid = valid.all(axis=1)
+    if not all_valid.any():
+        never = [PELLETS[p] for p in range(len(PELLETS)) if not valid[:, p].any()]
+        why = f" (never valid: {', '.join(never)})" if never else ""
+        msg = f"no row has all eight pellets valid{why}"
+        if require_valid:
+            raise CassiInputError(msg, path=path, line=line_numbers[-1])
+        warn(msg)
+    else:
+        first = int(np.flatnonzero(all_valid)[0])
+        # A pellet lost part-way and never recovered (the thesis's JW29/JW32 cases): record it.
+        for p, name in enumerate(PELLETS):
+            after = valid[first:, p]
+            if not after.all():
+                lost = first + int(np.flatnonzero(~after)[0])
+                if not valid[lost:, p].any():
+                    warn(f"pellet {name} invalid from time {time_us[lost]} us to the end",
+                         line_numbers[lost])
+                else:
+                    n = int((~after).sum())
+                    warn(f"pellet {name} invalid in {n} row(s) after the first valid row",
+                         line_numbers[lost])
+    return TaskRecording(path=None if path is None else Path(path), subject=str(subject),
+                         task=int(task), rep=int(rep), time_us=time_us, xy_mm=xy_mm,
+                         valid=valid, warnings=tuple(warnings))
+
+
+def read_txy(path: str | os.PathLike, *, subject: str | None = None, task: int | None = None,
+             rep: int | None = None, require_valid: bool = True) -> TaskRecording:
+    """Read a task file (see :func:`parse_txy`)."""
+    return parse_txy(read_bytes(path), path=path, subject=subject, task=task, rep=rep,
+                     require_valid=require_valid)
+
+
+def format_txy(rec: TaskRecording) -> str:
+    """The text of a task file: tab-separated integers, LF line ends, final newline.
+
+    Invalid pellets (``valid`` False or NaN coordinates) are written as 1000000 for x and y.
+    Coordinates are rounded to whole micrometres, as in the real files.
+    """
+    t = np.asarray(rec.time_us)
+    xy = np.asarray(rec.xy_mm, dtype=np.float64)
+    valid = np.asarray(rec.valid, dtype=bool)
+    if t.ndim != 1 or xy.shape != (t.shape[0], len(PELLETS), 2) or valid.shape != xy.shape[:2]:
+        raise CassiInputError(f"inconsistent shapes time {t.shape}, xy {xy.shape}, valid "
+                              f"{valid.shape}")
+    if t.size == 0:
+        raise CassiInputError("a task file needs at least one row")
+    if (t < 0).any() or (np.diff(t) <= 0).any():
+        raise CassiInputError("time must be non-negative and strictly increasing")
+    valid = valid & np.isfinite(xy).all(axis=2)
+    um = np.rint(np.where(valid[:, :, None], xy, 0.0) * 1000.0)
+    if (np.abs(um[valid]) >= BAD_VALUE).any():
+        raise CassiInputError("a valid coordinate would collide with the bad value 1000000 um")
+    um = np.where(valid[:, :, None], um, BAD_VALUE).astype(np.int64).reshape(len(t), -1)
+    table = np.column_stack([t.astype(np.int64), um])
+    return "".join("\t".join(map(str, row)) + "\n" for row in table.tolist())
+
+
+def write_txy(path: str | os.PathLike, rec: TaskRecording) -> None:
+    """Write ``rec`` as a task file (atomic)."""
+    atomic_write_text(path, format_txy(rec))
+
+
+# ----------------------------------------------------------------------------- outlines
+def parse_outline(data: bytes | str, *, path: str | os.PathLike | None = None,
+                  what: str = "outline") -> np.ndarray:
+    """Parse ``PAL.DAT`` / ``PHA.DAT`` text: ``x y`` micrometres per line -> float64 (P, 2) mm."""
+    text = decode_ascii(data, path=path)
+    pts: list[tuple[float, float]] = []
+    for line, toks in numbered_rows(text):
+        if len(toks) != 2:
+            raise CassiInputError(f"expected 2 columns (x y), found {len(toks)}", path=path,
+                                  line=line)
+        x = parse_num(toks[0], what="column 1 (x)", path=path, line=line)
+        y = parse_num(toks[1], what="column 2 (y)", path=path, line=line)
+        if BAD_VALUE in (x, y):
+            raise CassiInputError(f"bad value {BAD_VALUE} in a {what}", path=path, line=line)
+        if abs(x) > _MAX_ABS_UM or abs(y) > _MAX_ABS_UM:
+            raise CassiInputError(f"point ({x:g}, {y:g}) um is implausibly far from the origin",
+                                  path=path, line=line)
+        pts.append((x, y))
+    if not pts:
+        raise CassiInputError(f"empty file: no {what} points", path=path)
+    return np.asarray(pts, dtype=np.float64) / 1000.0
+
+
+def format_outline(points_mm: np.ndarray) -> str:
+    pts = np.asarray(points_mm, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 2 or pts.shape[0] == 0:
+        raise CassiInputError(f"outline must be a non-empty (P, 2) array, not {pts.shape}")
+    if not np.isfinite(pts).all():
+        raise CassiInputError("outline has non-finite points")
+    um = np.rint(pts * 1000.0).astype(np.int64)
+    return "".join(f"{x} {y}\n" for x, y in um.tolist())
+
+
+def read_pal(path: str | os.PathLike) -> np.ndarray:
+    """Palatal outline ``PAL.DAT``: float64 (P, 2) mm, front to back (thesis Figure 3.11)."""
+    return parse_outline(read_bytes(path), path=path, what="palate outline")
+
+
+def write_pal(path: str | os.PathLike, points_mm: np.ndarray) -> None:
+    atomic_write_text(path, format_outline(points_mm))
+
+
+def read_pha(path: str | os.PathLike) -> np.ndarray:
+    """Pharynx outline ``PHA.DAT``: float64 (P, 2) mm."""
+    return parse_outline(read_bytes(path), path=path, what="pharynx outline")
+
+
+def write_pha(path: str | os.PathLike, points_mm: np.ndarray) -> None:
+    atomic_write_text(path, format_outline(points_mm))
