@@ -1,0 +1,137 @@
+"""Every number the Parke baseline and CASSI 1.0 use, in one place, each with where it comes from.
+
+Values the thesis states carry their table or section. Values it leaves unstated are marked
+CHOSEN with the reason; tests in ``tests/test_versions_*.py`` check the behaviour they produce.
+Vertex numbers are Parke's 1-based numbers (``FaceModel.vertices[n - 1]``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+# --- vertices the thesis associates with pellets (4.1.1, Figures 4.4-4.7) -------------------
+#: Bottom of the top front teeth: the XRMB origin is translated here (4.1.1 "Mapping").
+V_UPPER_INCISOR_TIP = 226
+#: The MANi pellet's vertex (4.1.1, Figure 4.7).
+V_MANI = 258
+#: The MANm pellet sits halfway between these two vertices (4.1.1, Figure 4.7).
+V_MANM_PAIR = (281, 286)
+#: Upper and lower lip pellets' vertices (4.1.1, Figures 4.4-4.5).
+V_UL = 67
+V_LL = 49
+#: Tongue vertices of T1..T4 (4.1.1, Figure 4.6).
+V_TONGUE_PELLETS = (289, 290, 291, 292)
+#: Parke's fixed jaw pivot (3.1.3, Equations 3.5-3.6).
+V_PARKE_JAW_PIVOT = 107
+
+# --- the mapping (4.1.1) -----------------------------------------------------------------
+#: CHOSEN: p, "the distance between two approximately corresponding points in the model", is
+#: measured in the x-z (midsagittal) projection, because d is measured between pellets that the
+#: XRMB projects onto the midsagittal plane; vertex 281/286 lie off the midline (molars) and their
+#: lateral offset has no XRMB counterpart.
+MAPPING_DISTANCE_PLANE = "xz"
+
+# --- jaw rotation (3.1.3, 4.1.3) ---------------------------------------------------------
+#: CHOSEN: below this |theta| (radians) Equations 4.6-4.7 divide by ~0 and the point of rotation
+#: runs off to infinity; the motion is then the limit of a rotation about a far point, a
+#: translation of each zone by its fraction of the pellet displacement. 1e-9 rad keeps the
+#: cancellation error of Eqs. 3.5-3.6 about a point ~1e9 units away below 1e-6 units.
+THETA_EPS = 1e-9
+#: CHOSEN: Eqs. 4.6-4.7 solve the point of rotation from one jaw point and its rotated image;
+#: we use MANi, point 1 of Figure 4.8, so the lower incisor follows its pellet exactly (with the
+#: teeth's fraction 0.999999 the residual is below 1e-5 units for any real jaw angle).
+ROTATION_ANCHOR_PELLET = "MNI"
+
+
+@dataclass(frozen=True)
+class Zone:
+    """A rotation zone: vertices rotated by ``fraction`` * theta.
+
+    ``axes`` is ``"xz"`` (x and z rotated) or ``"z"`` (only z takes the rotated value; Table 3.2's
+    last column).
+    """
+
+    name: str
+    fraction: float
+    vertices: tuple[int, ...]
+    axes: str = "xz"
+
+    def index(self) -> np.ndarray:
+        return np.asarray(self.vertices, dtype=np.int64) - 1
+
+
+def _r(a: int, b: int) -> tuple[int, ...]:
+    return tuple(range(a, b + 1))
+
+
+#: Parke's rotation zones, Table 3.2 (fractions of the jaw angle, axes adjusted).
+PARKE_ZONES: tuple[Zone, ...] = (
+    Zone("1st jaw", 1.0, _r(14, 43)),
+    Zone("1st lip centerline", 1.0, (49, 52, 55, 58)),
+    Zone("2nd lip", 0.9, (50, 53, 56, 59)),
+    Zone("2nd lower teeth", 0.9, _r(255, 286)),
+    Zone("3rd underneath chin", 0.75, (11, 12, 13), "z"),
+    Zone("3rd lip", 0.75, (51, 54, 57, 60)),
+    Zone("4th neck", 0.5, _r(6, 10), "z"),
+    Zone("5th lower cheek", 0.35, _r(44, 48)),
+    Zone("5th lip corner", 0.35, (70, 287)),
+)
+
+#: CASSI 1.0's factor on Parke's fractions (4.1.3): "Parke's fractions of theta are multiplied by
+#: 1.11111" so that the teeth get (almost) 100 % of the jaw rotation. Table 4.3 prints the
+#: products; they are computed here and checked against the printed values in the tests.
+CASSI_FRACTION_FACTOR = 1.11111
+
+#: CASSI 1.0's zones, Table 4.3: 22 and 30 move from the 1st to the 3rd zone; the lower lip
+#: vertices are no longer rotated (4.1.2). CHOSEN: the axes column, which Table 4.3 omits, is
+#: kept from Table 3.2 (11-13 and the neck z only; 22 and 30, jaw vertices, x and z).
+CASSI10_ZONES: tuple[Zone, ...] = (
+    Zone("1st jaw", 1.0 * CASSI_FRACTION_FACTOR, _r(14, 21) + _r(23, 29) + _r(31, 43)),
+    Zone("2nd lower teeth", 0.9 * CASSI_FRACTION_FACTOR, _r(255, 286)),
+    Zone("3rd underneath chin", 0.75 * CASSI_FRACTION_FACTOR, (11, 12, 13), "z"),
+    Zone("3rd back of jaw", 0.75 * CASSI_FRACTION_FACTOR, (22, 30)),
+    Zone("4th neck", 0.5 * CASSI_FRACTION_FACTOR, _r(6, 10), "z"),
+    Zone("5th lower cheek", 0.35 * CASSI_FRACTION_FACTOR, _r(44, 48)),
+)
+#: Table 4.3 as printed, for the test that the products above match it.
+TABLE_4_3_PRINTED = {"1st": 1.11111, "2nd": 0.999999, "3rd": 0.8333325, "4th": 0.555555,
+                     "5th": 0.3888885}
+#: The zones rotated by the initialisation's teeth rotation (Parke -> first-row jaw pellets);
+#: every other zone is placed by the head-measures jaw rotation (4.1.3, last paragraph).
+CASSI10_TEETH_ZONES = ("2nd lower teeth",)
+
+# --- Parke's baseline (3.1.3) ------------------------------------------------------------
+#: Parameter 4 "is between 0 and 20" degrees (3.1.3): the baseline clips the jaw angle taken from
+#: the pellets to that range, as Parke's parameter could not go outside it.
+PARKE_JAW_RANGE_DEG = (0.0, 20.0)
+
+# --- parameters (Tables 4.1, 4.2) --------------------------------------------------------
+#: Table 4.1: new parameters, their initial value 0.0, and the pellet and axis each follows.
+NEW_PARAMETERS = {
+    55: ("T1", "x"), 56: ("T1", "z"), 57: ("T2", "x"), 58: ("T2", "z"),
+    59: ("T3", "x"), 60: ("T3", "z"), 61: ("T4", "x"), 62: ("T4", "z"),
+    63: ("UL", "x"), 64: ("UL", "z"), 65: ("LL", "x"), 66: ("LL", "z"),
+}
+#: Table 4.2: Parke's parameters disabled in CASSI (lips 13-22, chin 19, 31-36, 46, teeth 47-48).
+DISABLED_PARAMETERS = (13, 14, 16, 17, 18, 19, 21, 22, 31, 32, 35, 36, 46, 47, 48)
+#: Parameter 4 is the jaw rotation; CASSI sets it from the pellets (4.1.2), so it is not settable.
+JAW_PARAMETER = 4
+
+# --- lips, nose and tongue following their pellets (4.1.1-4.1.2) --------------------------
+#: CHOSEN: "the other vertices of the lip are then adjusted accordingly" (4.1.1). Every upper-lip
+#: vertex takes UL's displacement and every lower-lip vertex LL's (Parameters 63-66 move a whole
+#: lip, the thesis having one pellet per lip); the corners, shared by both lips, take this weighted
+#: mix so that they stay between the lips when these part.
+CORNER_WEIGHTS = {"UL": 0.5, "LL": 0.5}
+#: CHOSEN: "a space always exists between the upper lip and the nose" (4.1.1): the nose tip is
+#: raised so that its lowest vertex stays at least this many Parke units above the highest
+#: upper-lip vertex, no more than the lips require (a nose that is already clear never moves).
+#: 2.0 units is the gap between vertex 69 and the nose's lowest vertex on Parke's neutral face
+#: order of magnitude (a few units at Parke's scale, where the lip is ~10 units tall).
+NOSE_LIP_MIN_GAP = 2.0
+#: CHOSEN: the tongue tip follows T1 and every edge vertex follows the centre vertex it is
+#: nearest to on the neutral face (4.1.1: "the other vertices on the tongue are adjusted
+#: accordingly"); the back vertices stay anchored (the rubric's "V shape at the back of the
+#: tongue caused by the anchored back points" is that choice's known consequence).
+TONGUE_BACK_ANCHORED = True

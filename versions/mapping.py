@@ -1,0 +1,80 @@
+"""XRMB coordinates -> Parke's model (thesis 4.1.1, "Mapping the XRMB Coordinate System").
+
+Both systems have x forward; XRMB y (up, toward the roof of the mouth) corresponds to Parke z
+(up). Pellets are scaled by p / d, d being the subject's jaw length (MNI-MNM, mm) and p the
+matching distance on the model (vertex 258 to the midpoint of 281 and 286), then translated so
+that the XRMB origin (between the tips of the upper central incisors) lands on vertex 226, the
+bottom of the model's top front teeth. The pellets lie on the midsagittal plane, Parke's y = 0.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cassi.data.errors import CassiInputError
+from cassi.versions import constants as K
+
+__all__ = ["XrmbToParke", "model_jaw_length"]
+
+
+def model_jaw_length(vertices: np.ndarray) -> float:
+    """p: distance from vertex 258 (MANi) to the midpoint of 281 and 286 (MANm), x-z plane.
+
+    Parameters
+    ----------
+    vertices : float (V, 3)
+        Parke vertices (row i = vertex i + 1), Parke units.
+    """
+    v = np.asarray(vertices, dtype=np.float64)
+    mani = v[K.V_MANI - 1, [0, 2]]
+    manm = 0.5 * (v[K.V_MANM_PAIR[0] - 1, [0, 2]] + v[K.V_MANM_PAIR[1] - 1, [0, 2]])
+    return float(np.hypot(*(mani - manm)))
+
+
+@dataclass(frozen=True)
+class XrmbToParke:
+    """The affine map XRMB (x, y) mm -> Parke (x, z) units.
+
+    Attributes
+    ----------
+    scale : float
+        Parke units per mm, p / d.
+    origin : float64 (2,)
+        Parke (x, z) of vertex 226, where the XRMB origin goes.
+    """
+
+    scale: float
+    origin: np.ndarray
+
+    @classmethod
+    def from_face(cls, vertices: np.ndarray, jaw_length_mm: float) -> "XrmbToParke":
+        """Build the map from the model's vertices (V, 3) and the subject's jaw length d (mm)."""
+        d = float(jaw_length_mm)
+        if not np.isfinite(d) or d <= 0:
+            raise CassiInputError(f"jaw length must be a positive number of mm, got {jaw_length_mm!r}")
+        v = np.asarray(vertices, dtype=np.float64)
+        p = model_jaw_length(v)
+        if not np.isfinite(p) or p <= 0:
+            raise CassiInputError("the face model's jaw length (vertex 258 to 281/286) is zero")
+        return cls(scale=p / d, origin=v[K.V_UPPER_INCISOR_TIP - 1, [0, 2]].copy())
+
+    def to_parke(self, xy_mm: np.ndarray) -> np.ndarray:
+        """XRMB (..., 2) mm (x forward, y up) -> Parke (..., 2) units (x forward, z up)."""
+        return np.asarray(xy_mm, dtype=np.float64) * self.scale + self.origin
+
+    def to_xrmb(self, xz: np.ndarray) -> np.ndarray:
+        """The inverse: Parke (..., 2) (x, z) -> XRMB (..., 2) mm."""
+        return (np.asarray(xz, dtype=np.float64) - self.origin) / self.scale
+
+    def x_to_parke(self, x_mm: np.ndarray | float) -> np.ndarray | float:
+        """An XRMB x alone (mm) -> Parke x (the key x values of 4.2.1 are mapped this way)."""
+        return np.asarray(x_mm, dtype=np.float64) * self.scale + self.origin[0]
+
+    def to_parke3(self, xy_mm: np.ndarray) -> np.ndarray:
+        """XRMB (..., 2) -> Parke (..., 3) on the midsagittal plane (y = 0)."""
+        xz = self.to_parke(xy_mm)
+        out = np.zeros(xz.shape[:-1] + (3,), dtype=np.float64)
+        out[..., 0] = xz[..., 0]
+        out[..., 2] = xz[..., 1]
+        return out

@@ -1,0 +1,255 @@
+"""The one protocol every CASSI version follows, and the staged pipeline the built-in versions
+share.
+
+A *version* turns one task recording into face vertex positions for every frame from the first
+valid row on (thesis Figure 4.1: initialisation, then animation). The built-in versions are
+:class:`StagedVersion` subclasses: a list of :class:`Stage` objects, each owning a part of the
+face (jaw, lips, nose clearance, tongue). Every stage first *initialises* the starting face from
+the first valid row (thesis 4.1.1), then *animates* all frames at once (frames as the leading
+array axis, thesis 4.1.2). CASSI 2.0 is CASSI 1.0 with another lip stage; CASSI 2.1 is 2.0 with
+another thickness rule inside that stage, so no version copies another's code.
+
+Third-party versions only need :class:`Version` (a ``name`` and ``animate``); they need not use
+the stages.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+
+import numpy as np
+import pandas as pd
+
+from cassi.data.errors import CassiInputError
+
+if TYPE_CHECKING:  # only for annotations: the data layer owns these types
+    from cassi.data.face import FaceModel
+    from cassi.data.profile import SubjectProfile
+    from cassi.data.xrmb import TaskRecording
+
+    from cassi.versions.mapping import XrmbToParke
+
+__all__ = [
+    "Animation",
+    "Version",
+    "Stage",
+    "TaskContext",
+    "StagedVersion",
+    "PELLET_INDEX",
+    "held_pellets",
+]
+
+#: Column of each pellet in ``TaskRecording.xy_mm`` (order of ``cassi.data.xrmb.PELLETS``).
+PELLET_INDEX = {"UL": 0, "LL": 1, "T1": 2, "T2": 3, "T3": 4, "T4": 5, "MNI": 6, "MNM": 7}
+
+
+@dataclass(frozen=True, eq=False)
+class Animation:
+    """The result of animating one task with one version.
+
+    Attributes
+    ----------
+    version : str
+        Registered name of the version that produced it.
+    frames : int64 (F,)
+        Rows of the recording animated: the first valid row and every row after it.
+    time_us : int64 (F,)
+        Time of each animated row, microseconds.
+    positions : float32 (F, V, 3)
+        Vertex positions in Parke units, numbered like ``FaceModel.vertices`` (row i is vertex
+        i + 1), left half only.
+    diagnostics : pandas.DataFrame
+        One row per animated frame: ``frame`` (recording row), ``time_us``, jaw angle
+        (``jaw_angle_rad``) and point of rotation (``jaw_point_x``, ``jaw_point_z``), the Table
+        4.1 parameters ``param_55`` .. ``param_66``, ``held_<PELLET>`` flags for pellets held at
+        their last valid value, and what later versions add (ellipse ``a``, ``b``, ``c``,
+        ``c_prime``, ``currthick``, ``outer_abc_branch`` ...).
+    """
+
+    version: str
+    frames: np.ndarray
+    time_us: np.ndarray
+    positions: np.ndarray
+    diagnostics: pd.DataFrame
+
+    def __post_init__(self) -> None:
+        n = len(self.frames)
+        if self.positions.ndim != 3 or self.positions.shape[0] != n or self.positions.shape[2] != 3:
+            raise ValueError(f"positions must be (F={n}, V, 3), got {self.positions.shape}")
+        if len(self.time_us) != n or len(self.diagnostics) != n:
+            raise ValueError("frames, time_us and diagnostics must have one entry per frame")
+
+    @property
+    def n_frames(self) -> int:
+        return int(len(self.frames))
+
+    @property
+    def n_vertices(self) -> int:
+        return int(self.positions.shape[1])
+
+    def vertex(self, number: int) -> np.ndarray:
+        """Positions of Parke vertex ``number`` (1-based) over all frames, float32 (F, 3)."""
+        return self.positions[:, number - 1, :]
+
+
+@runtime_checkable
+class Version(Protocol):
+    """What the harness needs from a version: a name and ``animate``."""
+
+    name: str
+
+    def animate(self, profile: "SubjectProfile", face: "FaceModel", rec: "TaskRecording") -> Animation:
+        """Initialise from ``profile`` and the first valid row of ``rec``; animate every frame."""
+        ...
+
+
+def held_pellets(xy_mm: np.ndarray, valid: np.ndarray, start: int) -> tuple[np.ndarray, np.ndarray]:
+    """Rows ``start:`` of the pellets, each invalid value replaced by that pellet's last valid one.
+
+    Parameters
+    ----------
+    xy_mm : float64 (F, 8, 2)
+        Pellet coordinates in mm (NaN where invalid).
+    valid : bool (F, 8)
+        Validity per row and pellet.
+    start : int
+        First row with all eight pellets valid (so every pellet has a value to hold).
+
+    Returns
+    -------
+    held_xy : float64 (F - start, 8, 2)
+    held : bool (F - start, 8)
+        True where the value is a held one, for the diagnostics.
+    """
+    xy = np.asarray(xy_mm, dtype=np.float64)[start:]
+    ok = np.asarray(valid, dtype=bool)[start:] & np.isfinite(xy).all(axis=-1)
+    n = xy.shape[0]
+    # Index of the last valid row at or before each row, per pellet (a running maximum).
+    idx = np.where(ok, np.arange(n)[:, None], 0)
+    np.maximum.accumulate(idx, axis=0, out=idx)
+    out = np.take_along_axis(xy, idx[:, :, None], axis=0)
+    return out, ~ok
+
+
+@dataclass
+class TaskContext:
+    """Everything the stages of one ``animate`` call share.
+
+    Attributes
+    ----------
+    profile, face, rec
+        The inputs.
+    mapping : XrmbToParke
+        XRMB mm -> Parke units (thesis 4.1.1).
+    rows : int64 (F,)
+        Recording rows animated (first valid row on).
+    pellets_mm : float64 (F, 8, 2)
+        Pellets in XRMB mm, held where invalid.
+    held : bool (F, 8)
+    pellets : float64 (F, 8, 2)
+        Pellets mapped to Parke (x, z).
+    neutral : float64 (V, 3)
+        The face as built (Parke's topology, the subject's palate).
+    start : float64 (V, 3)
+        The initialised face: written by the stages' ``initialise`` in order.
+    diagnostics : dict[str, ndarray (F,)]
+        Columns added by the stages.
+    state : dict
+        Values one stage leaves for a later one (for instance the jaw rotation per frame).
+    """
+
+    profile: Any
+    face: Any
+    rec: Any
+    mapping: "XrmbToParke"
+    rows: np.ndarray
+    pellets_mm: np.ndarray
+    held: np.ndarray
+    pellets: np.ndarray
+    neutral: np.ndarray
+    start: np.ndarray
+    diagnostics: dict[str, np.ndarray] = field(default_factory=dict)
+    state: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def n_frames(self) -> int:
+        return int(self.rows.shape[0])
+
+    def pellet(self, name: str) -> np.ndarray:
+        """Mapped pellet ``name`` over all frames, float64 (F, 2) Parke (x, z)."""
+        return self.pellets[:, PELLET_INDEX[name], :]
+
+    def displacement(self, name: str) -> np.ndarray:
+        """Pellet ``name`` minus its first-valid-row position, float64 (F, 2) Parke (x, z): the
+        animation phase compares each line with the first one (thesis Figure 4.1)."""
+        p = self.pellet(name)
+        return p - p[0]
+
+
+class Stage(Protocol):
+    """One part of the face in a :class:`StagedVersion`."""
+
+    name: str
+
+    def initialise(self, ctx: TaskContext) -> None:
+        """Adjust ``ctx.start`` (float64 (V, 3)) for the subject and the first valid row."""
+        ...
+
+    def animate(self, ctx: TaskContext, positions: np.ndarray) -> None:
+        """Write this stage's vertices of ``positions`` (float64 (F, V, 3), every frame starting
+        as ``ctx.start`` plus what earlier stages wrote) in place, for all frames at once."""
+        ...
+
+
+class StagedVersion:
+    """A version built from stages: initialise in order, then animate in order.
+
+    Subclasses set ``name`` and return their stages from :meth:`stages`. Stages run in list
+    order in both phases, so a later stage sees what earlier ones did (the nose clearance sees the
+    placed lips; the 2.0 lips see the rotated teeth).
+    """
+
+    name: str = ""
+
+    def stages(self) -> list[Stage]:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    # --- the shared skeleton (thesis Figure 4.1) ---------------------------------------------
+    def context(self, profile: "SubjectProfile", face: "FaceModel", rec: "TaskRecording") -> TaskContext:
+        """Find the first valid row, hold missing pellets, map to Parke space (4.1.1)."""
+        from cassi.versions.mapping import XrmbToParke
+
+        first = rec.first_valid_index
+        if first is None:
+            raise CassiInputError("no row with all eight pellets valid: nothing to animate",
+                                  path=getattr(rec, "path", None))
+        xy, held = held_pellets(rec.xy_mm, rec.valid, first)
+        neutral = np.array(face.vertices, dtype=np.float64)
+        mapping = XrmbToParke.from_face(neutral, profile.jaw_length_mm)
+        rows = np.arange(first, xy.shape[0] + first, dtype=np.int64)
+        return TaskContext(profile=profile, face=face, rec=rec, mapping=mapping, rows=rows,
+                           pellets_mm=xy, held=held, pellets=mapping.to_parke(xy), neutral=neutral,
+                           start=neutral.copy())
+
+    def animate(self, profile: "SubjectProfile", face: "FaceModel", rec: "TaskRecording") -> Animation:
+        ctx = self.context(profile, face, rec)
+        stages = self.stages()
+        for stage in stages:            # initialisation phase: the subject's starting face
+            stage.initialise(ctx)
+        positions = np.broadcast_to(ctx.start, (ctx.n_frames,) + ctx.start.shape).copy()
+        for stage in stages:            # animation phase: every line against the first line
+            stage.animate(ctx, positions)
+        return self.finish(ctx, positions)
+
+    def finish(self, ctx: TaskContext, positions: np.ndarray) -> Animation:
+        time_us = np.asarray(ctx.rec.time_us, dtype=np.int64)[ctx.rows]
+        columns: dict[str, np.ndarray] = {"frame": ctx.rows, "time_us": time_us}
+        for name, idx in PELLET_INDEX.items():
+            columns[f"held_{name}"] = ctx.held[:, idx]
+        columns.update(ctx.diagnostics)
+        return Animation(version=self.name, frames=ctx.rows, time_us=time_us,
+                         positions=positions.astype(np.float32),
+                         diagnostics=pd.DataFrame(columns))
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(name={self.name!r})"
