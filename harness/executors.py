@@ -1,0 +1,306 @@
+"""Executors that run the same jobs: a local pool of reused processes, or a Ray cluster.
+
+Both take work items ``(key, fn, args)`` with ``fn`` a picklable module-level function, and hand
+back :class:`Finished` records as items complete. Worker processes live for the whole run, so
+per-process caches (a renderer keeps its Mitsuba scene per subject and view) are built once
+per process, not once per job.
+
+A worker that dies in the middle of an item (a segfault in native code, ``os._exit``, the OOM
+killer) costs only that item: it is retried on a fresh worker up to ``retries`` times, then
+reported failed. Python exceptions are not retried (they are the stage's own answer) - the
+stage wrappers in :mod:`.jobs` already turn them into FAILED outcomes.
+"""
+from __future__ import annotations
+
+import collections
+import multiprocessing as mp
+from dataclasses import dataclass
+from multiprocessing.connection import wait as mp_wait
+from typing import Any, Callable
+
+from cassi.data.errors import CassiInputError
+
+
+@dataclass
+class Finished:
+    key: str
+    ok: bool
+    value: Any = None      # fn's return value when ok
+    error: str = ""        # why not, when not ok
+    attempts: int = 1
+
+
+@dataclass
+class _Item:
+    key: str
+    fn: Callable
+    args: tuple
+    attempts: int = 0
+
+
+def _worker_main(conn, initializer, initargs) -> None:
+    """A worker process: run items sent over ``conn`` until told to stop or the pipe closes."""
+    if initializer is not None:
+        initializer(*initargs)
+    while True:
+        try:
+            msg = conn.recv()
+        except (EOFError, OSError):
+            return
+        if msg is None:
+            return
+        key, fn, args = msg
+        try:
+            value = fn(*args)
+            reply = (key, True, value, "")
+        except BaseException as err:  # noqa: BLE001 - report, keep the worker
+            import traceback  # noqa: PLC0415
+            reply = (key, False, None, f"{type(err).__name__}: {err}\n{traceback.format_exc()}")
+        try:
+            conn.send(reply)
+        except (BrokenPipeError, OSError):
+            return  # the run went away (killed): nothing to report to
+
+
+class LocalExecutor:
+    """``workers`` reused worker processes on this machine.
+
+    Parameters
+    ----------
+    workers : int
+        Number of processes (>= 1).
+    retries : int
+        How often an item whose worker died is retried on a fresh worker.
+    start_method : str
+        ``"spawn"`` by default: native libraries (Mitsuba, Dr.Jit, Ray) do not survive ``fork``
+        of a process that already started their threads.
+    """
+
+    name = "local"
+
+    def __init__(self, workers: int = 1, *, retries: int = 1, start_method: str = "spawn",
+                 initializer: Callable | None = None, initargs: tuple = ()):
+        if int(workers) < 1:
+            raise CassiInputError(f"--workers must be at least 1, not {workers}")
+        self.workers = int(workers)
+        self.retries = int(retries)
+        self._ctx = mp.get_context(start_method)
+        self._init = (initializer, initargs)
+        self._procs: list[tuple[Any, Any]] = []     # (process, conn)
+        self._busy: dict[int, _Item] = {}            # worker index -> item
+        self._queue: collections.deque[_Item] = collections.deque()
+        self.crashes = 0
+
+    def __enter__(self):
+        self.start()
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def _spawn(self) -> tuple[Any, Any]:
+        parent, child = self._ctx.Pipe(duplex=True)
+        proc = self._ctx.Process(target=_worker_main, args=(child, *self._init), daemon=True,
+                                 name="cassi-worker")
+        proc.start()
+        child.close()
+        return proc, parent
+
+    def start(self) -> None:
+        if not self._procs:
+            self._procs = [self._spawn() for _ in range(self.workers)]
+
+    def submit(self, key: str, fn: Callable, *args) -> None:
+        self._queue.append(_Item(key, fn, args))
+        self._dispatch()
+
+    def pending(self) -> int:
+        return len(self._queue) + len(self._busy)
+
+    def _dispatch(self) -> None:
+        for i in range(len(self._procs)):
+            if not self._queue:
+                return
+            if i in self._busy:
+                continue
+            item = self._queue.popleft()
+            item.attempts += 1
+            try:
+                self._procs[i][1].send((item.key, item.fn, item.args))
+            except (BrokenPipeError, OSError):
+                item.attempts -= 1
+                self._queue.appendleft(item)
+                self._replace(i)
+                continue
+            self._busy[i] = item
+
+    def _replace(self, i: int) -> None:
+        proc, conn = self._procs[i]
+        conn.close()
+        proc.join(timeout=5)
+        self._procs[i] = self._spawn()
+
+    def wait(self, timeout: float | None = None) -> list[Finished]:
+        """Block until at least one item finishes (or ``timeout``); return what finished."""
+        self._dispatch()
+        if not self._busy:
+            return []
+        handles = {}
+        for i in self._busy:
+            proc, conn = self._procs[i]
+            handles[conn] = i
+            handles[proc.sentinel] = i
+        ready = mp_wait(list(handles), timeout)
+        done: list[Finished] = []
+        for i in sorted({handles[h] for h in ready}):
+            if i not in self._busy:
+                continue
+            proc, conn = self._procs[i]
+            item = self._busy[i]
+            reply = None
+            try:
+                if conn.poll():
+                    reply = conn.recv()
+            except (EOFError, OSError):
+                reply = None
+            if reply is not None:
+                del self._busy[i]
+                key, ok, value, error = reply
+                done.append(Finished(key, ok, value, error, item.attempts))
+                continue
+            if proc.is_alive():
+                continue
+            # The worker died holding this item: replace it, retry or give up on the item.
+            proc.join(timeout=5)
+            code = proc.exitcode
+            del self._busy[i]
+            self.crashes += 1
+            self._replace(i)
+            if item.attempts <= self.retries:
+                self._queue.appendleft(item)
+            else:
+                done.append(Finished(item.key, False, None,
+                                     f"worker process died (exit code {code}) "
+                                     f"{item.attempts} time(s)", item.attempts))
+        self._dispatch()
+        return done
+
+    def close(self) -> None:
+        for proc, conn in self._procs:
+            try:
+                conn.send(None)
+            except (BrokenPipeError, OSError):
+                pass
+        for proc, conn in self._procs:
+            proc.join(timeout=10)
+            if proc.is_alive():
+                proc.terminate()
+                proc.join(timeout=5)
+            conn.close()
+        self._procs = []
+        self._busy.clear()
+
+
+def _ray_call(fn, args):
+    return fn(*args)
+
+
+class RayExecutor:
+    """Run items as Ray tasks (at-least-once: a task whose worker dies is retried by Ray).
+
+    Parameters
+    ----------
+    address : str or None
+        A running cluster (``ray://...`` or ``host:port`` or ``auto``); None starts a small local
+        cluster (``num_cpus``) for this run and stops it at the end.
+    retries : int
+        Ray's ``max_retries`` for tasks whose worker died.
+    """
+
+    name = "ray"
+
+    def __init__(self, address: str | None = None, *, retries: int = 1, num_cpus: int = 2):
+        self.address = address
+        self.retries = int(retries)
+        self.num_cpus = int(num_cpus)
+        self._refs: dict[Any, _Item] = {}
+        self._owns_cluster = False
+        self._remote = None
+
+    def __enter__(self):
+        self.start()
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def start(self) -> None:
+        import ray  # noqa: PLC0415 - heavy; only when this executor is chosen
+
+        if not ray.is_initialized():
+            if self.address:
+                try:
+                    ray.init(address=self.address, include_dashboard=False,
+                             log_to_driver=False, logging_level="WARNING")
+                except (ConnectionError, ValueError, RuntimeError) as err:
+                    raise CassiInputError(f"cannot reach the Ray cluster at {self.address}: "
+                                          f"{err}") from err
+            else:
+                ray.init(num_cpus=self.num_cpus, include_dashboard=False, log_to_driver=False,
+                         logging_level="WARNING")
+                self._owns_cluster = True
+        self._remote = ray.remote(max_retries=self.retries, retry_exceptions=False)(_ray_call)
+
+    def submit(self, key: str, fn: Callable, *args) -> None:
+        item = _Item(key, fn, args, attempts=1)
+        self._refs[self._remote.remote(fn, args)] = item
+
+    def pending(self) -> int:
+        return len(self._refs)
+
+    def wait(self, timeout: float | None = None) -> list[Finished]:
+        import ray  # noqa: PLC0415
+
+        if not self._refs:
+            return []
+        ready, _ = ray.wait(list(self._refs), num_returns=1, timeout=timeout)
+        if ready:  # collect whatever else is already done, too
+            more, _ = ray.wait([r for r in self._refs if r not in ready],
+                               num_returns=len(self._refs) - len(ready), timeout=0)
+            ready = list(ready) + list(more)
+        done = []
+        for ref in ready:
+            item = self._refs.pop(ref)
+            try:
+                done.append(Finished(item.key, True, ray.get(ref)))
+            except ray.exceptions.RayTaskError as err:
+                done.append(Finished(item.key, False, None, str(err)))
+            except (ray.exceptions.WorkerCrashedError, ray.exceptions.RayError) as err:
+                done.append(Finished(item.key, False, None,
+                                     f"worker died {self.retries + 1} time(s): "
+                                     f"{type(err).__name__}: {err}", self.retries + 1))
+        return done
+
+    def close(self) -> None:
+        import ray  # noqa: PLC0415
+
+        for ref in list(self._refs):
+            try:
+                ray.cancel(ref, force=True)
+            except Exception:  # noqa: BLE001 - best effort at shutdown
+                pass
+        self._refs.clear()
+        if self._owns_cluster and ray.is_initialized():
+            ray.shutdown()
+            self._owns_cluster = False
+
+
+def make_executor(kind: str, *, workers: int = 1, address: str | None = None,
+                  retries: int = 1):
+    """``"local"`` -> :class:`LocalExecutor`, ``"ray"`` -> :class:`RayExecutor`."""
+    if kind == "local":
+        return LocalExecutor(workers, retries=retries)
+    if kind == "ray":
+        # The brief's local cluster: 2 CPUs, or more when more workers were asked for.
+        return RayExecutor(address, retries=retries, num_cpus=max(2, int(workers)))
+    raise CassiInputError(f"unknown executor {kind!r}; valid: local, ray")

@@ -1,0 +1,235 @@
+"""The job model: batch -> job (subject, task, rep, version, view, frames, chunk) -> frame.
+
+Two kinds of job run the rubric on one task file and one version:
+
+- a **geometry** job (view ``"geometry"``) animates every frame, runs the rubric's geometric
+  checks on every frame and picks the frames to render (the first frame, the extreme frames the
+  checks point at, and a stride);
+- a **render** job (one per view and chunk of those frames) renders its frames and runs the
+  image checks on them.
+
+The ratings are derived from the combined rows once every job has finished (:mod:`.runner`).
+A job is a frozen, picklable value; its :meth:`Job.digest` names everything its outputs depend
+on, so a stored output with the same digest can be reused instead of recomputed.
+
+Stage functions are plain module-level callables ``stage(job, ctx, inputs) -> StageOutput`` so
+that tests (and other farms) can plug in their own; :func:`execute_job` is what a worker
+process runs around them: read the parent's outputs, call the stage, store the outputs
+content-addressed, write the manifest last.
+"""
+from __future__ import annotations
+
+import enum
+import hashlib
+import io
+import json
+import time
+import traceback
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Callable, Mapping
+
+import pandas as pd
+
+from . import results as R
+from .store import BlobRef, OutputStore
+
+GEOMETRY_VIEW = "geometry"
+
+
+class State(str, enum.Enum):
+    """Where a job is. PENDING -> RUNNING -> DONE | FAILED; CACHED and SKIPPED never run."""
+
+    PENDING = "pending"
+    RUNNING = "running"
+    DONE = "done"          # ran now, outputs stored
+    CACHED = "cached"      # outputs from an earlier run exist and verify; not rerun
+    SKIPPED = "skipped"    # not runnable (unusable task file, missing geometry ...): reason given
+    FAILED = "failed"      # raised, or its worker died more often than the retries allow
+
+    @property
+    def finished(self) -> bool:
+        return self in (State.DONE, State.CACHED, State.SKIPPED, State.FAILED)
+
+
+@dataclass(frozen=True)
+class Job:
+    """One unit of work.
+
+    Attributes
+    ----------
+    stage : {"geometry", "render"}
+    subject, task, rep : the task file (``tpNNN.txy``; ``rep`` 1, or R for ``tpNNN_R.txy``)
+    version : version name (``cassi-2.1`` ...)
+    view : ``"geometry"`` for geometry jobs, else a render view (front, side, half, top)
+    frames : tuple of int
+        Recording rows to render (render jobs); empty for geometry jobs (every frame).
+    chunk : int
+        Index of this chunk among the view's render jobs for the task file.
+    parent : str or None
+        Key of the job whose outputs this one reads (a render job's geometry job).
+    parent_digest : str
+        Content hash of the parent's outputs, so a changed parent invalidates this job.
+    """
+
+    stage: str
+    subject: str
+    task: int
+    rep: int
+    version: str
+    view: str = GEOMETRY_VIEW
+    frames: tuple[int, ...] = ()
+    chunk: int = 0
+    parent: str | None = None
+    parent_digest: str = ""
+
+    @property
+    def key(self) -> str:
+        """A readable, path-safe, unique name: ``JW11/019-1/cassi-2.1/front/c000``."""
+        return f"{self.subject}/{self.task:03d}-{self.rep}/{self.version}/{self.view}/c{self.chunk:03d}"
+
+    @property
+    def task_key(self) -> tuple[str, int, int, str]:
+        return (self.subject, self.task, self.rep, self.version)
+
+    def digest(self, salt: str = "") -> str:
+        """SHA-256 of the job and ``salt`` (the run settings its outputs depend on)."""
+        doc = json.dumps({"job": asdict(self), "salt": salt}, sort_keys=True, default=str)
+        return hashlib.sha256(doc.encode()).hexdigest()
+
+
+@dataclass(frozen=True)
+class StageContext:
+    """Run settings every stage sees (picklable; sent to worker processes)."""
+
+    out_dir: Path
+    corpus: Path | None = None
+    stride: int = 25
+    chunk_size: int = 16
+    preset: str = "preview"
+    variant: str | None = None
+    synthetic: bool = False
+    options: tuple[tuple[str, object], ...] = ()
+
+    def salt(self) -> str:
+        """The settings that change outputs (not out_dir, which only says where they go)."""
+        return json.dumps({"corpus": str(self.corpus), "stride": self.stride,
+                           "chunk": self.chunk_size, "preset": self.preset,
+                           "variant": self.variant, "synthetic": self.synthetic,
+                           "options": [list(o) for o in self.options]}, sort_keys=True)
+
+    def option(self, name: str, default=None):
+        return dict(self.options).get(name, default)
+
+
+@dataclass
+class StageOutput:
+    """What a stage returns: result rows, extra files (name -> (bytes, suffix)), metadata.
+
+    ``meta`` is stored in the manifest (JSON); a geometry stage puts the frames to render there
+    under ``"render_frames"``.
+    """
+
+    rows: pd.DataFrame | None = None
+    files: dict[str, tuple[bytes, str]] = field(default_factory=dict)
+    meta: dict = field(default_factory=dict)
+    log: list[str] = field(default_factory=list)
+
+
+class SkipJob(Exception):
+    """Raised by a stage when its input is unusable: the job is SKIPPED with this reason."""
+
+
+StageFn = Callable[[Job, StageContext, Mapping[str, bytes]], StageOutput]
+
+
+@dataclass
+class Outcome:
+    """What a worker reports back for one job (small: the outputs are in the store)."""
+
+    key: str
+    state: State
+    seconds: float = 0.0
+    reason: str = ""
+    meta: dict = field(default_factory=dict)
+    log: list[str] = field(default_factory=list)
+
+
+def rows_to_bytes(rows: pd.DataFrame) -> bytes:
+    return R.to_parquet_bytes(rows)
+
+
+def npz_bytes(**arrays) -> bytes:
+    """Deterministic ``.npz`` bytes (no timestamps: ``np.savez`` writes fixed zip dates)."""
+    import numpy as np  # noqa: PLC0415
+
+    buf = io.BytesIO()
+    np.savez(buf, **arrays)
+    return buf.getvalue()
+
+
+def execute_job(stage: StageFn, job: Job, ctx: StageContext, digest: str) -> Outcome:
+    """Run ``stage`` for ``job`` in this (worker) process and store its outputs.
+
+    Idempotent: running it twice for the same job writes the same blobs and manifest.
+    Exceptions other than :class:`SkipJob` propagate (the executor reports them).
+    """
+    t0 = time.perf_counter()
+    store = OutputStore(ctx.out_dir)
+    inputs: dict[str, bytes] = {}
+    if job.parent is not None:
+        parent = store.read_manifest(job.parent)
+        if parent is None:
+            return Outcome(job.key, State.SKIPPED, reason=f"no outputs of {job.parent}")
+        inputs = {name: store.get(ref) for name, ref in parent["outputs"].items()}
+    try:
+        out = stage(job, ctx, inputs)
+    except SkipJob as why:
+        return Outcome(job.key, State.SKIPPED, time.perf_counter() - t0, reason=str(why))
+    refs: dict[str, BlobRef] = {}
+    if out.rows is not None:
+        rows = R.normalize(out.rows, subject=job.subject, task=job.task, rep=job.rep,
+                           version=job.version, view=job.view, synthetic=ctx.synthetic)
+        refs["rows"] = store.put(rows_to_bytes(rows), ".parquet")
+    for name, (data, suffix) in out.files.items():
+        refs[name] = store.put(data, suffix)
+    store.write_manifest(job.key, digest, refs, out.meta)
+    return Outcome(job.key, State.DONE, time.perf_counter() - t0, meta=out.meta, log=out.log)
+
+
+def call_job(stage: StageFn, job: Job, ctx: StageContext, digest: str) -> Outcome:
+    """:func:`execute_job`, with a Python exception turned into a FAILED outcome (with its
+    traceback) instead of propagating; a process crash still ends the worker."""
+    t0 = time.perf_counter()
+    try:
+        return execute_job(stage, job, ctx, digest)
+    except Exception as err:  # noqa: BLE001 - reported per job; the batch goes on
+        return Outcome(job.key, State.FAILED, time.perf_counter() - t0,
+                       reason=f"{type(err).__name__}: {err}",
+                       log=traceback.format_exc().splitlines())
+
+
+def chunk_frames(frames: list[int] | tuple[int, ...], size: int) -> list[tuple[int, ...]]:
+    """Split sorted frame numbers into chunks of at most ``size``."""
+    frames = sorted(set(int(f) for f in frames))
+    size = max(1, int(size))
+    return [tuple(frames[i:i + size]) for i in range(0, len(frames), size)]
+
+
+def select_frames(first: int, last: int, *, stride: int, extremes=()) -> list[int]:
+    """Frames to render: the first animated frame, the extremes the checks point at, a stride.
+
+    Parameters
+    ----------
+    first, last : int
+        First and last animated recording rows (inclusive).
+    stride : int
+        Every ``stride``-th row from ``first``; 0 or less: no stride frames.
+    extremes : iterable of int
+        Rows the geometric checks point at (outside ``first..last`` are dropped).
+    """
+    picked = {int(first)}
+    if stride > 0:
+        picked.update(range(int(first), int(last) + 1, int(stride)))
+    picked.update(int(f) for f in extremes if first <= int(f) <= last)
+    return sorted(picked)

@@ -1,0 +1,105 @@
+"""Progress bars per stage, a log per job and the end-of-run summary."""
+from __future__ import annotations
+
+import json
+from collections import Counter
+from dataclasses import dataclass, field
+
+from tqdm import tqdm
+
+from cassi.data.atomic import atomic_write_text
+
+from .jobs import State
+from .store import OutputStore
+
+
+@dataclass
+class JobRecord:
+    """The harness's view of one job over the run."""
+
+    key: str
+    stage: str
+    state: State = State.PENDING
+    attempts: int = 0
+    seconds: float = 0.0
+    reason: str = ""
+    log: list[str] = field(default_factory=list)
+
+
+@dataclass
+class Summary:
+    """Counts by state, wall time, and the reason for every skipped or failed job."""
+
+    records: dict[str, JobRecord]
+    seconds: float = 0.0
+    worker_crashes: int = 0
+
+    def counts(self) -> dict[str, int]:
+        c = Counter(r.state.value for r in self.records.values())
+        return {s.value: c.get(s.value, 0) for s in State if s not in (State.PENDING, State.RUNNING)}
+
+    @property
+    def failed(self) -> list[JobRecord]:
+        return [r for r in self.records.values() if r.state is State.FAILED]
+
+    @property
+    def skipped(self) -> list[JobRecord]:
+        return [r for r in self.records.values() if r.state is State.SKIPPED]
+
+    def to_dict(self) -> dict:
+        return {"counts": self.counts(), "seconds": round(self.seconds, 3),
+                "jobs": len(self.records), "worker_crashes": self.worker_crashes,
+                "skipped": {r.key: r.reason for r in sorted(self.skipped, key=lambda r: r.key)},
+                "failed": {r.key: r.reason for r in sorted(self.failed, key=lambda r: r.key)}}
+
+    def text(self) -> str:
+        c = self.counts()
+        lines = [f"jobs: {len(self.records)} - {c['done']} done, {c['cached']} skipped as already "
+                 f"done (outputs verified), {c['skipped']} skipped, {c['failed']} failed; "
+                 f"{self.seconds:.1f} s"]
+        if self.worker_crashes:
+            lines.append(f"worker processes that died: {self.worker_crashes}")
+        reasons = Counter(r.reason for r in self.skipped)
+        for reason, n in sorted(reasons.items()):
+            lines.append(f"  skipped x{n}: {reason}")
+        for r in sorted(self.failed, key=lambda r: r.key):
+            lines.append(f"  FAILED {r.key}: {r.reason.splitlines()[0] if r.reason else '?'}")
+        return "\n".join(lines)
+
+
+class Progress:
+    """One tqdm bar per stage (totals grow as jobs are planned); silent when disabled."""
+
+    def __init__(self, stages=("geometry", "render"), *, enabled: bool = True):
+        self.enabled = enabled
+        self.bars = {}
+        if enabled:
+            for i, stage in enumerate(stages):
+                self.bars[stage] = tqdm(total=0, desc=f"{stage:>9}", unit="job", position=i,
+                                        leave=True, dynamic_ncols=True)
+
+    def planned(self, stage: str, n: int = 1) -> None:
+        bar = self.bars.get(stage)
+        if bar is not None:
+            bar.total += n
+            bar.refresh()
+
+    def finished(self, stage: str, state: State) -> None:
+        bar = self.bars.get(stage)
+        if bar is not None:
+            bar.update(1)
+            if state is State.FAILED:
+                bar.set_postfix_str("failures!", refresh=False)
+
+    def close(self) -> None:
+        for bar in self.bars.values():
+            bar.close()
+
+
+def write_job_log(store: OutputStore, record: JobRecord) -> None:
+    """``OUT/logs/<key>.log``: state, attempts, time, reason and the stage's own log lines."""
+    head = {"key": record.key, "stage": record.stage, "state": record.state.value,
+            "attempts": record.attempts, "seconds": round(record.seconds, 3),
+            "reason": record.reason}
+    atomic_write_text(store.log_path(record.key),
+                      json.dumps(head, sort_keys=True) + "\n" + "\n".join(record.log) + "\n")

@@ -1,0 +1,166 @@
+"""The one long results table and the per-table ratings derived from it.
+
+Every measurement of a run is one row: which task file (subject, task, rep), which version and
+view, which frame (-1 = the whole-task aggregate), which rubric check, its value and unit, the
+threshold it was compared with and the negatives it earned. Reports and gates are groupbys over
+this table, so it has real columns, never keys packed into strings.
+"""
+from __future__ import annotations
+
+import io
+import os
+from pathlib import Path
+from typing import Callable, Iterable
+
+import pandas as pd
+
+from cassi.data.atomic import atomic_tmp_path, atomic_write_bytes
+
+#: Columns of the results table, in order (CONTRACTS.tmp.md).
+COLUMNS = ("subject", "task", "rep", "version", "view", "frame", "check", "table", "component",
+           "value", "unit", "threshold", "negatives", "detail", "synthetic")
+
+_DTYPES = {"subject": "string", "task": "int64", "rep": "int64", "version": "string",
+           "view": "string", "frame": "int64", "check": "string", "table": "string",
+           "component": "string", "value": "float64", "unit": "string", "threshold": "float64",
+           "negatives": "int64", "detail": "string", "synthetic": "bool"}
+
+#: Columns that identify one row; a retried job can never add a second row with the same key.
+KEY = ("subject", "task", "rep", "version", "view", "frame", "check", "component")
+
+#: Columns of the ratings table.
+RATING_COLUMNS = ("subject", "task", "rep", "version", "table", "component", "negatives",
+                  "rating", "synthetic")
+
+
+def normalize(rows: pd.DataFrame | Iterable[dict], **defaults) -> pd.DataFrame:
+    """Return ``rows`` as a results table: every column present, fixed dtypes, column order.
+
+    Parameters
+    ----------
+    rows : DataFrame or iterable of dicts
+        Rows from a check function; missing columns are taken from ``defaults`` or left empty
+        (NaN / ``<NA>``; ``negatives`` 0, ``frame`` -1).
+    **defaults
+        Values for columns the rows lack or leave missing (e.g. ``subject="JW11"``).
+    """
+    df = rows.copy() if isinstance(rows, pd.DataFrame) else pd.DataFrame(list(rows))
+    unknown = [c for c in df.columns if c not in _DTYPES]
+    if unknown:
+        # Extra fields are not lost: they are folded into `detail` as key=value text.
+        extra = df[unknown].astype(str).apply(
+            lambda r: "; ".join(f"{k}={v}" for k, v in r.items()), axis=1)
+        base = df["detail"].fillna("").astype(str) if "detail" in df else ""
+        df["detail"] = (base + ("; " if "detail" in df else "") + extra).str.strip("; ")
+        df = df.drop(columns=unknown)
+    for col in COLUMNS:
+        if col in defaults:
+            if col not in df:
+                df[col] = defaults[col]
+            else:
+                df[col] = df[col].where(df[col].notna(), defaults[col])
+        elif col not in df:
+            df[col] = {"frame": -1, "negatives": 0, "synthetic": False}.get(col, pd.NA)
+    df["frame"] = df["frame"].fillna(-1)
+    df["negatives"] = df["negatives"].fillna(0)
+    df["synthetic"] = df["synthetic"].fillna(False)
+    for col, dtype in _DTYPES.items():
+        if dtype == "float64":
+            df[col] = pd.to_numeric(df[col], errors="coerce").astype("float64")
+        else:
+            df[col] = df[col].astype(dtype)
+    return df[list(COLUMNS)].reset_index(drop=True)
+
+
+def empty() -> pd.DataFrame:
+    """An empty results table with the right columns and dtypes."""
+    return normalize(pd.DataFrame(columns=list(COLUMNS)))
+
+
+def combine(frames: Iterable[pd.DataFrame]) -> pd.DataFrame:
+    """Concatenate job tables into one, sorted by key, duplicates (same key) removed.
+
+    Sorting makes the table independent of the order in which jobs finished, so an interrupted
+    and resumed batch yields the same table as an uninterrupted one.
+    """
+    frames = [normalize(f) for f in frames if f is not None and len(f)]
+    if not frames:
+        return empty()
+    df = pd.concat(frames, ignore_index=True)
+    df = df.drop_duplicates(subset=list(KEY), keep="last")
+    return df.sort_values(list(KEY), kind="mergesort").reset_index(drop=True)
+
+
+def to_parquet_bytes(df: pd.DataFrame) -> bytes:
+    """Serialize a results table to Parquet bytes (deterministic for equal tables)."""
+    buf = io.BytesIO()
+    normalize(df).to_parquet(buf, index=False, engine="pyarrow")
+    return buf.getvalue()
+
+
+def from_parquet_bytes(data: bytes) -> pd.DataFrame:
+    return normalize(pd.read_parquet(io.BytesIO(data), engine="pyarrow"))
+
+
+def write_table(df: pd.DataFrame, path: str | os.PathLike) -> tuple[Path, Path]:
+    """Write ``df`` atomically as ``path`` (Parquet) and a CSV copy beside it.
+
+    Returns
+    -------
+    (parquet_path, csv_path)
+    """
+    path = Path(path)
+    if path.suffix != ".parquet":
+        path = path.with_suffix(".parquet")
+    tmp = atomic_tmp_path(path)
+    try:
+        df.to_parquet(tmp, index=False, engine="pyarrow")
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    csv_path = path.with_suffix(".csv")
+    atomic_write_bytes(csv_path, df.to_csv(index=False, lineterminator="\n").encode("utf-8"))
+    return path, csv_path
+
+
+def read_results(path: str | os.PathLike) -> pd.DataFrame:
+    """Read a results table written by :func:`write_table` (Parquet)."""
+    return normalize(pd.read_parquet(path, engine="pyarrow"))
+
+
+def default_rate(negatives: int) -> str:
+    """Thesis Table 5.2 (used only when the rubric package is absent)."""
+    scale = ("EXCELLENT", "VERY GOOD", "GOOD", "FAIR", "POOR", "VERY POOR")
+    return scale[negatives] if 0 <= negatives < len(scale) else "UNACCEPTABLE"
+
+
+def ratings(results: pd.DataFrame, rate: Callable[[int], str] | None = None) -> pd.DataFrame:
+    """Per task file, version, rubric table and component: total negatives and the rating.
+
+    Only whole-task rows (``frame == -1``) count: per-frame rows are the evidence behind them,
+    and counting them too would charge one fault once per frame.
+
+    Parameters
+    ----------
+    results : DataFrame
+        A results table.
+    rate : callable, optional
+        Negatives -> rating words; default :func:`cassi.harness.rubric.rate` when present.
+    """
+    if rate is None:
+        try:
+            from cassi.harness.rubric import rate  # noqa: PLC0415 - optional sibling module
+        except ImportError:
+            rate = default_rate
+    df = normalize(results)
+    df = df[(df["frame"] == -1) & df["table"].notna()]
+    if df.empty:
+        return pd.DataFrame({c: pd.Series(dtype="object") for c in RATING_COLUMNS})
+    group = ["subject", "task", "rep", "version", "table", "component"]
+    out = (df.groupby(group, dropna=False, sort=True)
+             .agg(negatives=("negatives", "sum"), synthetic=("synthetic", "any"))
+             .reset_index())
+    out["negatives"] = out["negatives"].astype("int64")
+    out["rating"] = [rate(int(n)) for n in out["negatives"]]
+    return out[list(RATING_COLUMNS)]

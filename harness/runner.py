@@ -1,0 +1,172 @@
+"""Run a batch: plan jobs, skip the ones already done, execute the rest, derive the tables.
+
+The run loop is executor-agnostic: it submits ``(key, call_job, (stage, job, ctx, digest))``
+items and reacts to finished ones. Render jobs of a task file are planned as soon as its
+geometry job finishes (or is found already done), so renders overlap with other geometry.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Iterable
+
+import pandas as pd
+
+from . import results as R
+from .jobs import GEOMETRY_VIEW, Job, Outcome, StageContext, StageFn, State, call_job, chunk_frames
+from .progress import JobRecord, Progress, Summary, write_job_log
+from .store import OutputStore
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    """A task file of the batch; ``usable`` False makes its jobs SKIPPED with ``reason``."""
+
+    subject: str
+    task: int
+    rep: int = 1
+    usable: bool = True
+    reason: str = ""
+
+
+@dataclass(frozen=True)
+class Pipeline:
+    """The pluggable stages of a run.
+
+    geometry : stage for geometry jobs (animate, geometric checks, pick the frames to render:
+        ``meta["render_frames"]``).
+    render : stage for render jobs (render ``job.frames`` of ``job.view``, image checks), or
+        None for geometry-only runs.
+    aggregate : rows of the whole run -> extra rows (e.g. whole-task aggregates of per-frame
+        image checks that span several render chunks), or None.
+    rate : negatives -> rating words (thesis Table 5.2), or None for the rubric's.
+    """
+
+    geometry: StageFn
+    render: StageFn | None = None
+    aggregate: Callable[[pd.DataFrame], pd.DataFrame] | None = None
+    rate: Callable[[int], str] | None = None
+
+
+@dataclass
+class RunResult:
+    summary: Summary
+    results: pd.DataFrame
+    ratings: pd.DataFrame
+    records: dict[str, JobRecord] = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        return not self.summary.failed
+
+
+def _outputs_digest(manifest: dict) -> str:
+    doc = json.dumps({n: r.sha256 for n, r in sorted(manifest["outputs"].items())})
+    return hashlib.sha256(doc.encode()).hexdigest()
+
+
+def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterable[str],
+              pipeline: Pipeline, ctx: StageContext, executor, *, progress: bool = True,
+              extra_meta: dict | None = None) -> RunResult:
+    """Run every (task file x version) geometry job and every (view x chunk) render job.
+
+    The caller prepares ``ctx.out_dir`` (:meth:`OutputStore.prepare`) and holds its lock.
+    Writes ``results.parquet/.csv``, ``ratings.parquet/.csv`` and ``summary.json`` there.
+    """
+    t0 = time.perf_counter()
+    store = OutputStore(ctx.out_dir)
+    salt = ctx.salt()
+    views = [v for v in views if v != GEOMETRY_VIEW] if pipeline.render is not None else []
+    records: dict[str, JobRecord] = {}
+    jobs: dict[str, Job] = {}
+    digests: dict[str, str] = {}
+    bars = Progress(enabled=progress)
+
+    def record(job: Job, state: State, reason: str = "", **kw) -> JobRecord:
+        rec = records.setdefault(job.key, JobRecord(job.key, job.stage))
+        rec.state, rec.reason = state, reason
+        for k, v in kw.items():
+            setattr(rec, k, v)
+        return rec
+
+    def schedule(job: Job) -> None:
+        """Mark CACHED if its outputs verify, else submit it."""
+        jobs[job.key] = job
+        digest = digests[job.key] = job.digest(salt)
+        bars.planned(job.stage)
+        manifest = store.verified(job.key, digest)
+        if manifest is not None:
+            record(job, State.CACHED)
+            bars.finished(job.stage, State.CACHED)
+            if job.stage == "geometry":
+                plan_renders(job, manifest)
+            return
+        record(job, State.PENDING)
+        stage = pipeline.geometry if job.stage == "geometry" else pipeline.render
+        executor.submit(job.key, call_job, stage, job, ctx, digest)
+        records[job.key].state = State.RUNNING
+
+    def plan_renders(geom: Job, manifest: dict) -> None:
+        frames = manifest.get("meta", {}).get("render_frames", [])
+        parent_digest = _outputs_digest(manifest)
+        for view in views:
+            for i, chunk in enumerate(chunk_frames(frames, ctx.chunk_size)):
+                schedule(Job("render", geom.subject, geom.task, geom.rep, geom.version, view,
+                             chunk, i, parent=geom.key, parent_digest=parent_digest))
+
+    def finish(key: str, outcome: Outcome | None, ok: bool, error: str, attempts: int) -> None:
+        job = jobs[key]
+        if not ok or outcome is None:
+            rec = record(job, State.FAILED, error.strip().splitlines()[0] if error else "failed",
+                         attempts=attempts, log=error.splitlines())
+        else:
+            rec = record(job, outcome.state, outcome.reason, attempts=attempts,
+                         seconds=outcome.seconds, log=outcome.log)
+        write_job_log(store, rec)
+        bars.finished(job.stage, rec.state)
+        if rec.state is State.DONE and job.stage == "geometry":
+            manifest = store.verified(job.key, digests[job.key])
+            if manifest is None:
+                record(job, State.FAILED, "outputs missing or corrupt after the job finished")
+            else:
+                plan_renders(job, manifest)
+
+    try:
+        executor.start()
+        for spec in tasks:
+            for version in versions:
+                job = Job("geometry", spec.subject, spec.task, spec.rep, version)
+                if not spec.usable:
+                    jobs[job.key] = job
+                    rec = record(job, State.SKIPPED, spec.reason or "task file not usable")
+                    write_job_log(store, rec)
+                    continue
+                schedule(job)
+        while executor.pending():
+            for fin in executor.wait(timeout=1.0):
+                finish(fin.key, fin.value, fin.ok, fin.error, fin.attempts)
+    finally:
+        bars.close()
+
+    # The ratings stage: the rows of every finished job, combined, aggregated and rated.
+    frames = []
+    for key, rec in sorted(records.items()):
+        if rec.state in (State.DONE, State.CACHED):
+            manifest = store.verified(key, digests[key])
+            if manifest is not None and "rows" in manifest["outputs"]:
+                frames.append(R.from_parquet_bytes(store.get(manifest["outputs"]["rows"])))
+    table = R.combine(frames)
+    if pipeline.aggregate is not None and len(table):
+        table = R.combine([table, pipeline.aggregate(table)])
+    rated = R.ratings(table, pipeline.rate)
+    R.write_table(table, store.root / "results.parquet")
+    R.write_table(rated, store.root / "ratings.parquet")
+    summary = Summary(records, time.perf_counter() - t0,
+                      worker_crashes=getattr(executor, "crashes", 0))
+    from cassi.data.atomic import atomic_write_text  # noqa: PLC0415
+    atomic_write_text(store.root / "summary.json",
+                      json.dumps({**summary.to_dict(), **(extra_meta or {})}, indent=1,
+                                 sort_keys=True, default=str))
+    return RunResult(summary, table, rated, records)

@@ -1,0 +1,186 @@
+"""Content-addressed, atomically written job outputs, a run lock, and resume checks.
+
+Layout of an output directory::
+
+    OUT/.cassi-run.lock          held (flock) by the run writing OUT; gone with the process
+    OUT/objects/ab/abcdef...ext  blobs named by the SHA-256 of their bytes
+    OUT/jobs/<job key>.json      a job's manifest: its input digest and {name: blob} map
+    OUT/logs/<job key>.log       a job's log
+    OUT/results.parquet|csv, ratings.parquet|csv, run.json, summary.json
+
+A job is done when its manifest exists, names the same input digest as the job about to run,
+and every blob it lists exists and hashes to its name. The manifest is written last, so a
+killed job leaves at most unreferenced blobs (harmless, reused) and temporary files (removed
+at the next start), never a manifest that points at missing or partial data. Writing the same
+job twice writes the same bytes to the same names, which is what makes retries (Ray is
+at-least-once) idempotent.
+"""
+from __future__ import annotations
+
+import contextlib
+import errno
+import fcntl
+import hashlib
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterator, Mapping
+
+from cassi.data.atomic import atomic_write_bytes, atomic_write_text
+from cassi.data.errors import CassiInputError
+
+LOCK_NAME = ".cassi-run.lock"
+
+
+def sha256_bytes(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def sha256_file(path: str | os.PathLike) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _safe_key(key: str) -> str:
+    """Check a job key before it becomes a path: relative, no '..', plain characters."""
+    parts = key.split("/")
+    if not key or any(p in ("", ".", "..") for p in parts) or any(
+            not all(ch.isalnum() or ch in "-_.+" for ch in p) for p in parts):
+        raise ValueError(f"unsafe job key {key!r}")
+    return key
+
+
+@dataclass(frozen=True)
+class BlobRef:
+    """A stored output: its SHA-256 and file suffix (``.parquet``, ``.npz``, ``.png`` ...)."""
+
+    sha256: str
+    suffix: str
+
+    @property
+    def relpath(self) -> str:
+        return f"objects/{self.sha256[:2]}/{self.sha256}{self.suffix}"
+
+
+class OutputStore:
+    """The outputs of one run directory (see the module docstring for the layout)."""
+
+    def __init__(self, root: str | os.PathLike):
+        self.root = Path(root)
+
+    # -- set-up -------------------------------------------------------------------------------
+    def prepare(self) -> None:
+        """Create the directory and prove it writable; a clear :class:`CassiInputError` if not."""
+        try:
+            self.root.mkdir(parents=True, exist_ok=True)
+            for sub in ("objects", "jobs", "logs"):
+                (self.root / sub).mkdir(exist_ok=True)
+            probe = self.root / f".write-probe-{os.getpid()}"
+            probe.write_bytes(b"ok")
+            probe.unlink()
+        except OSError as err:
+            why = "no space left on the device" if err.errno == errno.ENOSPC else (
+                err.strerror or str(err))
+            raise CassiInputError(f"output directory is not writable: {why}",
+                                  path=self.root) from err
+        if not self.root.is_dir():
+            raise CassiInputError("output path is not a directory", path=self.root)
+
+    @contextlib.contextmanager
+    def lock(self) -> Iterator[None]:
+        """Hold the run lock for OUT; a second run on the same OUT fails at once.
+
+        ``flock`` is released by the kernel when the holder dies, even by ``kill -9``, so a
+        stale lock file never blocks a rerun.
+        """
+        path = self.root / LOCK_NAME
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as err:
+            raise CassiInputError(f"cannot create the run lock: {err.strerror}", path=path) from err
+        try:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = os.pread(fd, 64, 0).decode(errors="replace").strip() or "?"
+                raise CassiInputError(
+                    f"another cassi run (pid {holder}) is writing this output directory",
+                    path=self.root) from None
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+            yield
+        finally:
+            with contextlib.suppress(OSError):
+                fcntl.flock(fd, fcntl.LOCK_UN)
+            os.close(fd)
+
+    def remove_partials(self) -> list[Path]:
+        """Delete temporary files a killed writer left (``.<name>.*.tmp*``); call under the lock."""
+        removed = []
+        for path in self.root.rglob(".*"):
+            if path.is_file() and ".tmp" in path.name and path.name != LOCK_NAME:
+                with contextlib.suppress(FileNotFoundError):
+                    path.unlink()
+                    removed.append(path)
+        return removed
+
+    # -- blobs --------------------------------------------------------------------------------
+    def put(self, data: bytes, suffix: str) -> BlobRef:
+        """Store ``data``; an existing blob with the right hash is left alone."""
+        ref = BlobRef(sha256_bytes(data), suffix)
+        path = self.root / ref.relpath
+        if not (path.exists() and path.stat().st_size == len(data) and sha256_file(path) == ref.sha256):
+            atomic_write_bytes(path, data)
+        return ref
+
+    def get(self, ref: BlobRef) -> bytes:
+        data = (self.root / ref.relpath).read_bytes()
+        if sha256_bytes(data) != ref.sha256:
+            raise OSError(f"corrupt blob {ref.relpath}")
+        return data
+
+    def path(self, ref: BlobRef) -> Path:
+        return self.root / ref.relpath
+
+    # -- manifests ----------------------------------------------------------------------------
+    def manifest_path(self, key: str) -> Path:
+        return self.root / "jobs" / f"{_safe_key(key)}.json"
+
+    def log_path(self, key: str) -> Path:
+        return self.root / "logs" / f"{_safe_key(key)}.log"
+
+    def write_manifest(self, key: str, digest: str, outputs: Mapping[str, BlobRef],
+                       meta: Mapping | None = None) -> None:
+        """Record a finished job (after its blobs are stored)."""
+        doc = {"key": key, "digest": digest,
+               "outputs": {n: {"sha256": r.sha256, "suffix": r.suffix}
+                           for n, r in sorted(outputs.items())},
+               "meta": dict(meta or {})}
+        atomic_write_text(self.manifest_path(key), json.dumps(doc, indent=1, sort_keys=True))
+
+    def read_manifest(self, key: str) -> dict | None:
+        path = self.manifest_path(key)
+        try:
+            doc = json.loads(path.read_text(encoding="utf-8"))
+        except (FileNotFoundError, json.JSONDecodeError, UnicodeDecodeError):
+            return None
+        doc["outputs"] = {n: BlobRef(o["sha256"], o["suffix"]) for n, o in doc["outputs"].items()}
+        return doc
+
+    def verified(self, key: str, digest: str) -> dict | None:
+        """The manifest of ``key`` if it was made from the same inputs and every blob verifies."""
+        doc = self.read_manifest(key)
+        if doc is None or doc.get("digest") != digest:
+            return None
+        for ref in doc["outputs"].values():
+            path = self.root / ref.relpath
+            try:
+                if sha256_file(path) != ref.sha256:
+                    return None
+            except OSError:
+                return None
+        return doc

@@ -1,0 +1,245 @@
+"""The farm machinery with small real stages of its own: caching, resume after kill -9,
+crashing workers, retries without duplicate rows, skipped inputs, the run lock.
+
+The stages below are real (they compute rows and files from the job and write through the
+store); they stand in for the CASSI pipeline so that these tests check the machinery alone.
+"""
+from __future__ import annotations
+
+import io
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from cassi.data.errors import CassiInputError
+from cassi.harness import results as R
+from cassi.harness.executors import LocalExecutor
+from cassi.harness.jobs import Job, SkipJob, StageContext, StageOutput, State, npz_bytes, select_frames
+from cassi.harness.runner import Pipeline, TaskSpec, run_batch
+from cassi.harness.store import OutputStore
+
+TESTS = Path(__file__).resolve().parent
+N_FRAMES = 30
+
+
+def _marker(ctx: StageContext, name: str) -> Path:
+    return Path(ctx.out_dir) / f"marker-{name}"
+
+
+def geom_stage(job: Job, ctx: StageContext, inputs) -> StageOutput:
+    """Per-frame 'lip gap' from the job's numbers; picks the largest as an extreme frame."""
+    time.sleep(float(os.environ.get("FARM_TEST_SLEEP", 0)))
+    if job.task == 99:
+        raise SkipJob("task 99 has no valid row")
+    crash_once = ctx.option("crash_once")
+    if crash_once == job.key and not _marker(ctx, "crashed").exists():
+        _marker(ctx, "crashed").write_text("x")
+        os._exit(3)
+    if ctx.option("crash_always") == job.key:
+        os._exit(4)
+    if ctx.option("raise_on") == job.key:
+        raise RuntimeError("planted failure")
+    seed = job.task * 31 + job.rep * 7 + sum(map(ord, job.subject + job.version))
+    gap = (np.arange(N_FRAMES) * seed % 17).astype(float)
+    rows = [dict(frame=f, check="lip_gap", table="A", component="lips", value=g, unit="mm",
+                 threshold=12.0, negatives=int(g > 12)) for f, g in enumerate(gap)]
+    rows.append(dict(frame=-1, check="lip_gap", table="A", component="lips",
+                     value=float(gap.max()), unit="mm", threshold=12.0,
+                     negatives=int(gap.max() > 12) + int(gap.max() > 15)))
+    positions = np.stack([gap, gap * 2, -gap], axis=1).astype(np.float32)
+    return StageOutput(rows=pd.DataFrame(rows), files={"positions": (npz_bytes(p=positions), ".npz")},
+                       meta={"render_frames": select_frames(0, N_FRAMES - 1, stride=ctx.stride,
+                                                            extremes=[int(gap.argmax())])},
+                       log=[f"max gap {gap.max()}"])
+
+
+def render_stage(job: Job, ctx: StageContext, inputs) -> StageOutput:
+    """'Renders' a tiny image per frame from the parent's positions; one image check row each."""
+    time.sleep(float(os.environ.get("FARM_TEST_SLEEP", 0)))
+    pos = np.load(io.BytesIO(inputs["positions"]))["p"]
+    rows, files = [], {}
+    for f in job.frames:
+        img = np.full((4, 4), pos[f].sum() + len(job.view), dtype=np.float32)
+        files[f"frame{f:05d}"] = (npz_bytes(img=img), ".npz")
+        rows.append(dict(frame=f, check="teeth_visible", table="A", component="teeth",
+                         value=float(img.mean()), unit="px", threshold=0.0, negatives=0))
+    return StageOutput(rows=pd.DataFrame(rows), files=files)
+
+
+PIPE = Pipeline(geometry=geom_stage, render=render_stage)
+TASKS = [TaskSpec("JW11", 19), TaskSpec("JW11", 21), TaskSpec("JW12", 2), TaskSpec("JW12", 5)]
+
+
+def _run(out: Path, *, workers=1, tasks=TASKS, options=(), versions=("v1", "v2"),
+         views=("front", "half"), retries=1):
+    ctx = StageContext(out_dir=out, stride=10, chunk_size=2, options=tuple(options))
+    store = OutputStore(out)
+    store.prepare()
+    with store.lock():
+        store.remove_partials()
+        with LocalExecutor(workers, retries=retries) as ex:
+            return run_batch(tasks, versions, views, PIPE, ctx, ex, progress=False)
+
+
+def _drive(out: str, workers: int, sleep: float) -> None:
+    """Entry point for the kill -9 test's child process (slowed so that it can be killed
+    mid-batch; the delay is not a run setting, so the rerun can reuse its outputs)."""
+    os.environ["FARM_TEST_SLEEP"] = str(sleep)
+    _run(Path(out), workers=workers)
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    out = tmp_path_factory.mktemp("reference")
+    res = _run(out, workers=2)
+    return out, res
+
+
+def test_batch_runs_and_tables_are_consistent(reference):
+    out, res = reference
+    c = res.summary.counts()
+    # 4 files x 2 versions geometry jobs; renders: frames {0,10,20,argmax} in chunks of 2, 2 views
+    assert c["failed"] == 0 and c["skipped"] == 0
+    assert c["done"] == len(res.records) > 8
+    df = R.read_results(out / "results.parquet")
+    assert list(df.columns) == list(R.COLUMNS)
+    assert not df.duplicated(list(R.KEY)).any()
+    csv = pd.read_csv(out / "results.csv")
+    assert len(csv) == len(df)
+    assert set(df["view"]) == {"geometry", "front", "half"}
+    # every render frame was picked by the geometry stage (first, stride, extreme)
+    front = df[(df.view == "front") & (df.subject == "JW11") & (df.task == 19) & (df.version == "v1")]
+    geo = df[(df.view == "geometry") & (df.subject == "JW11") & (df.task == 19) & (df.version == "v1")
+             & (df.frame >= 0)]
+    extreme = int(geo.loc[geo.value.idxmax(), "frame"])
+    assert set(front.frame) == {0, 10, 20, extreme}
+    rt = pd.read_parquet(out / "ratings.parquet")
+    assert len(rt) == 8  # one (table A, lips) rating per file x version: only frame -1 rows count
+    assert set(rt["rating"]) <= {"EXCELLENT", "VERY GOOD", "GOOD"}
+    assert (out / "logs" / "JW11" / "019-1" / "v1" / "geometry" / "c000.log").is_file()
+
+
+def test_rerun_skips_everything_and_gives_identical_tables(reference, tmp_path):
+    out, first = reference
+    before = (out / "results.csv").read_bytes()
+    res = _run(out, workers=1)
+    c = res.summary.counts()
+    assert c["cached"] == len(first.records) and c["done"] == 0
+    assert (out / "results.csv").read_bytes() == before
+
+
+def test_corrupt_output_is_recomputed(reference, tmp_path):
+    out, first = reference
+    blobs = sorted((out / "objects").rglob("*.npz"))
+    blobs[0].write_bytes(b"garbage")
+    res = _run(out, workers=1)
+    assert res.summary.counts()["done"] >= 1
+    assert res.summary.counts()["failed"] == 0
+    pd.testing.assert_frame_equal(res.results, first.results)
+
+
+def test_kill_9_then_rerun_is_identical(reference, tmp_path):
+    ref_out, _ = reference
+    out = tmp_path / "killed"
+    code = (f"import sys; sys.path.insert(0, {str(TESTS)!r}); import test_harness_farm as t; "
+            f"t._drive({str(out)!r}, 2, 0.15)")
+    proc = subprocess.Popen([sys.executable, "-c", code], start_new_session=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 60
+    try:
+        while time.time() < deadline:
+            if len(list((out / "jobs").rglob("*.json"))) >= 6 if (out / "jobs").exists() else False:
+                break
+            if proc.poll() is not None:
+                break
+            time.sleep(0.05)
+        assert proc.poll() is None, "the batch finished before it could be killed"
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)  # the run and its workers, as a machine crash would
+        proc.wait()
+    assert not (out / "results.parquet").exists()
+    res = _run(out, workers=2)
+    c = res.summary.counts()
+    assert c["cached"] >= 6 and c["done"] >= 1 and c["failed"] == 0
+    assert (out / "results.csv").read_bytes() == (ref_out / "results.csv").read_bytes()
+    pd.testing.assert_frame_equal(R.read_results(out / "results.parquet"),
+                                  R.read_results(ref_out / "results.parquet"))
+    assert not [p for p in out.rglob(".*") if ".tmp" in p.name]
+
+
+def test_worker_crash_is_retried_and_nothing_else_lost(reference, tmp_path):
+    ref_out, first = reference
+    out = tmp_path / "crash"
+    res = _run(out, workers=2, options=(("crash_once", "JW11/021-1/v2/geometry/c000"),))
+    assert (out / "marker-crashed").exists()
+    assert res.summary.worker_crashes == 1
+    assert res.summary.counts()["failed"] == 0
+    assert res.records["JW11/021-1/v2/geometry/c000"].attempts == 2
+    assert (out / "results.csv").read_bytes() == (ref_out / "results.csv").read_bytes()
+
+
+def test_worker_crashing_every_time_fails_only_that_job(reference, tmp_path):
+    _, first = reference
+    out = tmp_path / "crash-always"
+    bad = "JW12/002-1/v1/geometry/c000"
+    res = _run(out, workers=2, options=(("crash_always", bad),), retries=1)
+    assert not res.ok
+    assert [r.key for r in res.summary.failed] == [bad]
+    assert "worker process died" in res.records[bad].reason
+    assert "FAILED " + bad in res.summary.text()
+    expected = first.results[~((first.results.subject == "JW12") & (first.results.task == 2)
+                               & (first.results.version == "v1"))].reset_index(drop=True)
+    pd.testing.assert_frame_equal(res.results, expected)
+
+
+def test_exception_fails_job_with_traceback_in_log(tmp_path):
+    bad = "JW11/019-1/v1/geometry/c000"
+    res = _run(tmp_path, tasks=TASKS[:1], versions=("v1",), views=(),
+               options=(("raise_on", bad),))
+    assert res.records[bad].state is State.FAILED
+    assert "planted failure" in res.records[bad].reason
+    log = (tmp_path / "logs" / f"{bad}.log").read_text()
+    assert "Traceback" in log and "RuntimeError" in log
+
+
+def test_unusable_inputs_become_skipped_jobs_with_reasons(tmp_path):
+    tasks = [TaskSpec("JW11", 19), TaskSpec("JW11", 7, usable=False, reason="file has no valid row"),
+             TaskSpec("JW11", 99)]
+    res = _run(tmp_path, tasks=tasks, versions=("v1",), views=("front",))
+    s = res.summary
+    assert s.counts()["skipped"] == 2 and s.counts()["failed"] == 0
+    text = s.text()
+    assert "file has no valid row" in text and "task 99 has no valid row" in text
+    assert set(res.results["task"]) == {19}
+
+
+def test_lock_stops_a_second_run(tmp_path):
+    store = OutputStore(tmp_path)
+    store.prepare()
+    with store.lock():
+        with pytest.raises(CassiInputError, match="another cassi run"):
+            with OutputStore(tmp_path).lock():
+                pass
+    with OutputStore(tmp_path).lock():  # released again
+        pass
+
+
+def test_unwritable_out_dir_is_a_clear_error(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a directory")
+    with pytest.raises(CassiInputError, match="not writable"):
+        OutputStore(blocker / "out").prepare()
+
+
+def test_results_normalize_folds_extra_columns_into_detail():
+    df = R.normalize([{"check": "x", "value": 1, "where": "UL"}], subject="S", task=1, rep=1)
+    assert df.loc[0, "detail"] == "where=UL"
+    assert df.loc[0, "frame"] == -1 and df.loc[0, "negatives"] == 0
+    assert list(df.columns) == list(R.COLUMNS)
