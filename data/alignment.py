@@ -1,0 +1,115 @@
+"""Praat TextGrid alignments of a task (phone and word tiers), read with praatio.
+
+The XRMB annotations (rsprouse/xray_microbeam_database) name them ``SUBJECT/tpNNN[_R].TextGrid``
+with interval tiers ``phone`` and ``word``, times in seconds from the start of the recording.
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from cassi.data.errors import CassiInputError
+from cassi.data.textlines import read_bytes
+
+PHONE_TIERS = ("phone", "phones")
+WORD_TIERS = ("word", "words")
+_COLUMNS = ["start_s", "end_s", "label"]
+
+
+@dataclass(frozen=True, eq=False)
+class Alignment:
+    """Phone and word intervals of one task.
+
+    Attributes
+    ----------
+    phones, words : pandas.DataFrame
+        Columns ``start_s, end_s, label`` (seconds, float64; label str), in time order; silence
+        intervals (``sp``, ``sil`` or empty) are kept so durations add up.
+    xmin_s, xmax_s : float
+        The TextGrid's time domain in seconds.
+    path : Path or None
+    """
+
+    phones: pd.DataFrame
+    words: pd.DataFrame
+    xmin_s: float
+    xmax_s: float
+    path: Path | None = None
+
+
+def _decode(data: bytes, path) -> str:
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        try:
+            return data.decode("utf-16")
+        except UnicodeDecodeError:
+            raise CassiInputError("not valid UTF-16 text", path=path) from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as err:
+        line = data.count(b"\n", 0, err.start) + 1
+        raise CassiInputError("not valid UTF-8 text", path=path, line=line) from None
+
+
+def _tier_frame(tier: dict, *, path) -> pd.DataFrame:
+    rows = []
+    prev_end = -math.inf
+    for entry in tier.get("entries", []):
+        if len(entry) != 3:
+            raise CassiInputError(f"tier {tier.get('name')!r}: not an interval tier", path=path)
+        start, end, label = entry
+        try:
+            start, end = float(start), float(end)
+        except (TypeError, ValueError):
+            raise CassiInputError(f"tier {tier.get('name')!r}: non-numeric time", path=path) from None
+        if not (math.isfinite(start) and math.isfinite(end)) or end < start:
+            raise CassiInputError(f"tier {tier.get('name')!r}: bad interval {start}..{end}",
+                                  path=path)
+        if start < prev_end - 1e-9:
+            raise CassiInputError(f"tier {tier.get('name')!r}: overlapping intervals at {start} s",
+                                  path=path)
+        prev_end = end
+        rows.append((start, end, str(label)))
+    return pd.DataFrame(rows, columns=_COLUMNS).astype({"start_s": "float64", "end_s": "float64",
+                                                        "label": "object"})
+
+
+def parse_alignment(data: bytes | str, *, path: str | os.PathLike | None = None) -> Alignment:
+    """Parse TextGrid text (long, short or praatio JSON form) into an :class:`Alignment`.
+
+    Raises :class:`CassiInputError` for anything praatio cannot read or a grid without a phone
+    and a word interval tier.
+    """
+    from praatio.utilities import textgrid_io  # praatio's own parser (long/short/JSON forms)
+
+    text = data if isinstance(data, str) else _decode(data, path)
+    if not text.strip():
+        raise CassiInputError("empty file", path=path)
+    try:
+        tg = textgrid_io.parseTextgridStr(text, includeEmptyIntervals=True)
+        tiers = {str(t["name"]).lower(): t for t in tg["tiers"]}
+        xmin, xmax = float(tg["xmin"]), float(tg["xmax"])
+    except CassiInputError:
+        raise
+    except Exception as err:  # noqa: BLE001 - praatio raises many kinds on malformed text
+        raise CassiInputError(f"not a readable TextGrid ({type(err).__name__}: "
+                              f"{str(err)[:120]})", path=path) from None
+
+    def pick(names):
+        for n in names:
+            if n in tiers:
+                return tiers[n]
+        raise CassiInputError(f"no {names[0]!r} tier (tiers: {', '.join(sorted(tiers)) or 'none'})",
+                              path=path)
+
+    return Alignment(phones=_tier_frame(pick(PHONE_TIERS), path=path),
+                     words=_tier_frame(pick(WORD_TIERS), path=path),
+                     xmin_s=xmin, xmax_s=xmax, path=None if path is None else Path(path))
+
+
+def read_alignment(path: str | os.PathLike) -> Alignment:
+    """Read a task's TextGrid -> :class:`Alignment` (``.phones``, ``.words`` tables)."""
+    return parse_alignment(read_bytes(path), path=path)

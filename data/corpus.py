@@ -1,0 +1,472 @@
+"""An XRMB corpus on disk: a directory of subject directories (thesis 3.2.5).
+
+Layout::
+
+    CORPUS/
+      corpus.json            optional metadata; generated corpora say {"synthetic": true, ...}
+      Headmeasures.txt       optional, all subjects (format: cassi.data.headmeasures)
+      JW12/
+        tp001.txy ... tp118.txy, tp015_2.txy    task files (any case; JW12_001.TXY also read)
+        PAL.DAT  PHA.DAT  Mis.dat               subject files (any case)
+        Headmeasures.txt                        optional, this subject (overrides the root one)
+        tp001.TextGrid ...                      optional alignments (phone and word tiers)
+
+Every path the corpus opens is checked to stay inside the corpus directory (a symlink or a name
+that leads outside is an error), and every problem met is either raised as
+:class:`~cassi.data.errors.CassiInputError` or recorded in ``problems``/``warnings``.
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from cassi.data.alignment import Alignment, read_alignment  # noqa: F401 (re-exported)
+from cassi.data.errors import CassiInputError
+from cassi.data.headmeasures import HEAD_MEASURES_FILE, HeadMeasures, read_head_measures
+from cassi.data.mis import MistrackEntry, read_mis
+from cassi.data.textlines import read_bytes
+from cassi.data.xrmb import PELLETS, TaskRecording, parse_task_name, read_pha, read_pal, read_txy
+
+METADATA_FILE = "corpus.json"
+SUBJECT_FILES = {"pal": "PAL.DAT", "pha": "PHA.DAT", "mis": "Mis.dat"}
+_SUBJECT_NAME_RE = re.compile(r"[A-Za-z][A-Za-z0-9_-]{0,31}", re.ASCII)
+
+
+def natural_key(name: str):
+    return [int(p) if p.isdigit() else p.lower() for p in re.split(r"(\d+)", name)]
+
+
+def ensure_inside(root: Path, path: Path) -> Path:
+    """Resolve ``path`` and make sure it lies inside ``root`` (symlinks followed).
+
+    Raises :class:`CassiInputError` naming the path when it would escape the corpus directory.
+    """
+    real_root = root.resolve()
+    real = path.resolve()
+    if real != real_root and real_root not in real.parents:
+        raise CassiInputError(f"leads outside the corpus directory {root} (to {real})", path=path)
+    return real
+
+
+@dataclass(frozen=True)
+class Usability:
+    """Whether a task file can be used (thesis 3.2.5 and 4.2.1).
+
+    ``usable``: readable, with at least one row where all eight pellets are valid.
+    ``error_free``: usable, not listed in Mis.dat, and no pellet missing after the first valid row
+    (the preprocessing selection of thesis 4.2.1 takes only error-free files).
+    ``reasons``: why not (empty when error-free).
+    """
+
+    usable: bool
+    error_free: bool
+    reasons: tuple[str, ...] = ()
+
+
+class SubjectData:
+    """One subject directory of a :class:`Corpus`."""
+
+    def __init__(self, corpus: "Corpus", name: str, directory: Path):
+        self.corpus = corpus
+        self.name = name
+        self.directory = directory
+        self.warnings: list[str] = []
+        self.problems: list[str] = []
+        self._files = self._scan()
+
+    def __repr__(self) -> str:
+        return f"SubjectData({self.name!r}, {self.directory})"
+
+    # ------------------------------------------------------------------ files
+    def _scan(self) -> dict[str, Path]:
+        files: dict[str, Path] = {}
+        try:
+            entries = sorted(os.scandir(self.directory), key=lambda e: e.name)
+        except OSError as err:
+            raise CassiInputError(f"cannot list subject directory: {err.strerror or err}",
+                                  path=self.directory) from None
+        for e in entries:
+            if e.name.startswith("."):
+                continue
+            key = e.name.lower()
+            if key in files:
+                self.warnings.append(f"{self.directory / e.name}: same name as "
+                                     f"{files[key].name} up to case; ignored")
+                continue
+            files[key] = self.directory / e.name
+        return files
+
+    def _file(self, name: str, *, required: bool = True) -> Path | None:
+        path = self._files.get(name.lower())
+        if path is None:
+            if required:
+                raise CassiInputError(f"missing subject file {name}", path=self.directory)
+            return None
+        ensure_inside(self.corpus.root, path)
+        if not path.is_file():
+            raise CassiInputError("is not a regular file", path=path)
+        return path
+
+    @cached_property
+    def _task_index(self) -> dict[tuple[int, int], Path]:
+        index: dict[tuple[int, int], Path] = {}
+        for key, path in sorted(self._files.items(), key=lambda kv: natural_key(kv[0])):
+            if not key.endswith(".txy"):
+                continue
+            try:
+                subj, task, rep = parse_task_name(path.name)
+            except CassiInputError as err:
+                self.warnings.append(f"{path}: {err.reason}; ignored")
+                continue
+            if subj is not None and subj != self.name.upper():
+                self.warnings.append(f"{path}: names subject {subj} but is in {self.name}; "
+                                     f"read as {self.name}")
+            try:
+                ensure_inside(self.corpus.root, path)
+            except CassiInputError as err:
+                self.problems.append(str(err))
+                continue
+            if (task, rep) in index:
+                self.warnings.append(f"{path}: task {task} repetition {rep} already read from "
+                                     f"{index[(task, rep)].name}; ignored")
+                continue
+            index[(task, rep)] = path
+        return dict(sorted(index.items()))
+
+    def task_files(self) -> dict[tuple[int, int], Path]:
+        """``{(task, rep): path}`` for every task file, sorted by task then repetition."""
+        return dict(self._task_index)
+
+    def tasks(self) -> list[tuple[int, int]]:
+        return list(self._task_index)
+
+    def task_path(self, task: int, rep: int = 1) -> Path:
+        try:
+            return self._task_index[(task, rep)]
+        except KeyError:
+            raise CassiInputError(f"subject {self.name} has no task {task}"
+                                  + (f" repetition {rep}" if rep != 1 else ""),
+                                  path=self.directory) from None
+
+    def alignment_path(self, task: int, rep: int = 1) -> Path | None:
+        stem = f"tp{task:03d}" if rep == 1 else f"tp{task:03d}_{rep}"
+        return self._file(stem + ".TextGrid", required=False)
+
+    def alignment(self, task: int, rep: int = 1) -> Alignment | None:
+        """The task's phone/word TextGrid if the subject directory has one."""
+        path = self.alignment_path(task, rep)
+        return None if path is None else read_alignment(path)
+
+    # ------------------------------------------------------------------ subject files
+    @cached_property
+    def palate_mm(self) -> np.ndarray:
+        """float64 (P, 2) mm: PAL.DAT, front to back."""
+        return read_pal(self._file(SUBJECT_FILES["pal"]))
+
+    @cached_property
+    def pharynx_mm(self) -> np.ndarray:
+        """float64 (P, 2) mm: PHA.DAT."""
+        return read_pha(self._file(SUBJECT_FILES["pha"]))
+
+    @cached_property
+    def mistracking(self) -> list[MistrackEntry]:
+        """Entries of Mis.dat (an error if the file is missing: usability needs it)."""
+        return read_mis(self._file(SUBJECT_FILES["mis"]))
+
+    @cached_property
+    def mistracked_tasks(self) -> frozenset[int]:
+        return frozenset(e.task for e in self.mistracking)
+
+    @cached_property
+    def head_measures(self) -> HeadMeasures | None:
+        """Gonion and gnathion from the subject's or the corpus's head-measures file, or None."""
+        own = self._file(HEAD_MEASURES_FILE, required=False)
+        if own is not None:
+            table = read_head_measures(own)
+            if self.name.upper() in table:
+                return table[self.name.upper()]
+            if len(table) == 1:
+                self.warnings.append(f"{own}: names subject {next(iter(table))}, used for "
+                                     f"{self.name}")
+                return next(iter(table.values()))
+            raise CassiInputError(f"does not list subject {self.name}", path=own)
+        return self.corpus.head_measures_table.get(self.name.upper())
+
+    # ------------------------------------------------------------------ tasks
+    def load(self, task: int, rep: int = 1, *, require_valid: bool = True) -> TaskRecording:
+        """Read one task file (see :func:`cassi.data.xrmb.read_txy`)."""
+        return read_txy(self.task_path(task, rep), subject=self.name, task=task, rep=rep,
+                        require_valid=require_valid)
+
+    def usability(self, task: int, rep: int = 1, *,
+                  recording: TaskRecording | None = None) -> Usability:
+        """Usable / error-free per thesis 3.2.5 and 4.2.1, with the reasons."""
+        reasons: list[str] = []
+        if recording is None:
+            try:
+                recording = self.load(task, rep, require_valid=False)
+            except CassiInputError as err:
+                return Usability(False, False, (str(err),))
+        usable = recording.first_valid_index is not None
+        if not usable:
+            reasons.append("no row with all eight pellets valid")
+        if task in self.mistracked_tasks:
+            codes = sorted({e.pellet for e in self.mistracking if e.task == task})
+            reasons.append(f"listed in Mis.dat ({', '.join(codes)})")
+        if usable:
+            first = recording.first_valid_index
+            missing = [PELLETS[p] for p in range(len(PELLETS))
+                       if not recording.valid[first:, p].all()]
+            if missing:
+                reasons.append(f"pellet(s) missing after the first valid row: {', '.join(missing)}")
+        return Usability(usable, usable and not reasons, tuple(reasons))
+
+    def error_free_tasks(self) -> list[tuple[int, int]]:
+        """``(task, rep)`` of every error-free task file, in task order."""
+        return [key for key in self._task_index if self.usability(*key).error_free]
+
+
+class Corpus:
+    """A directory of subject directories.
+
+    Parameters
+    ----------
+    root : path-like
+        The corpus directory. A directory that itself holds task files is read as a one-subject
+        corpus named after the directory.
+    """
+
+    def __init__(self, root: str | os.PathLike):
+        root = Path(root)
+        if not root.exists():
+            raise CassiInputError("corpus directory not found", path=root)
+        if not root.is_dir():
+            raise CassiInputError("not a directory", path=root)
+        self.root = root
+        self.warnings: list[str] = []
+        self.problems: list[str] = []
+        self._subjects: dict[str, Path] = self._discover()
+        self._cache: dict[str, SubjectData] = {}
+
+    def __repr__(self) -> str:
+        return f"Corpus({str(self.root)!r}, subjects={len(self._subjects)})"
+
+    def _discover(self) -> dict[str, Path]:
+        found: dict[str, Path] = {}
+        try:
+            entries = list(os.scandir(self.root))
+        except OSError as err:
+            raise CassiInputError(f"cannot list corpus directory: {err.strerror or err}",
+                                  path=self.root) from None
+        if any(e.name.lower().endswith(".txy") for e in entries):
+            # A single subject directory given directly.
+            return {self.root.resolve().name: self.root}
+        for e in sorted(entries, key=lambda e: natural_key(e.name)):
+            if e.name.startswith(".") or not e.is_dir():
+                continue
+            path = self.root / e.name
+            try:
+                ensure_inside(self.root, path)
+            except CassiInputError as err:
+                self.problems.append(str(err))
+                continue
+            if not _SUBJECT_NAME_RE.fullmatch(e.name):
+                self.warnings.append(f"{path}: not a subject name; skipped")
+                continue
+            try:
+                has_task = any(n.lower().endswith(".txy") for n in os.listdir(path))
+            except OSError as err:
+                self.problems.append(str(CassiInputError(
+                    f"cannot list subject directory: {err.strerror or err}", path=path)))
+                continue
+            if not has_task:
+                self.warnings.append(f"{path}: no task files; not a subject directory")
+                continue
+            if e.name.upper() in {k.upper() for k in found}:
+                self.problems.append(f"{path}: subject name differs from another only in case")
+                continue
+            found[e.name] = path
+        return found
+
+    @cached_property
+    def metadata(self) -> dict:
+        """Contents of ``corpus.json`` ({} when absent)."""
+        path = self.root / METADATA_FILE
+        if not path.exists():
+            return {}
+        ensure_inside(self.root, path)
+        raw = read_bytes(path)
+        try:
+            meta = json.loads(raw.decode("utf-8"))
+        except UnicodeDecodeError:
+            raise CassiInputError("not UTF-8 text", path=path) from None
+        except json.JSONDecodeError as err:
+            raise CassiInputError(f"invalid JSON: {err.msg}", path=path, line=err.lineno) from None
+        if not isinstance(meta, dict):
+            raise CassiInputError("must hold a JSON object", path=path, line=1)
+        return meta
+
+    @property
+    def is_synthetic(self) -> bool:
+        """True when ``corpus.json`` says ``"synthetic": true`` (generated corpora do)."""
+        return self.metadata.get("synthetic") is True
+
+    @cached_property
+    def head_measures_table(self) -> dict[str, HeadMeasures]:
+        """The corpus-level head-measures file ({} when absent)."""
+        for e in os.scandir(self.root):
+            if e.name.lower() == HEAD_MEASURES_FILE.lower():
+                path = self.root / e.name
+                ensure_inside(self.root, path)
+                return read_head_measures(path)
+        return {}
+
+    @property
+    def subjects(self) -> list[str]:
+        """Subject names in natural order (JW11, JW12, ..., JW502)."""
+        return list(self._subjects)
+
+    def subject(self, name: str) -> SubjectData:
+        """The subject named ``name`` (case-insensitive)."""
+        if not isinstance(name, str) or not _SUBJECT_NAME_RE.fullmatch(name):
+            raise CassiInputError(f"bad subject name {str(name)[:40]!r}")
+        match = next((k for k in self._subjects if k.upper() == name.upper()), None)
+        if match is None:
+            raise CassiInputError(f"no subject {name} in the corpus (subjects: "
+                                  f"{', '.join(self._subjects) or 'none'})", path=self.root)
+        if match not in self._cache:
+            self._cache[match] = SubjectData(self, match, self._subjects[match])
+        return self._cache[match]
+
+    def __iter__(self):
+        return (self.subject(s) for s in self._subjects)
+
+    def load(self, subject: str, task: int, rep: int = 1) -> TaskRecording:
+        return self.subject(subject).load(task, rep)
+
+    def array(self, subject: str, task: int, rep: int = 1) -> np.ndarray:
+        """Fast array view: float64 (F, 8, 2) mm, NaN where invalid (pellets in PELLETS order)."""
+        return self.load(subject, task, rep).xy_mm
+
+    def tidy(self, subject: str, task: int, rep: int = 1) -> pd.DataFrame:
+        """Long table of one task: one row per frame and pellet.
+
+        Columns: ``subject, task, rep, frame, time_us, pellet, x, y, valid`` (x, y in mm, NaN
+        where invalid; pellet a categorical in PELLETS order).
+        """
+        return tidy_recording(self.load(subject, task, rep))
+
+
+def tidy_recording(rec: TaskRecording) -> pd.DataFrame:
+    """The long (tidy) table of a :class:`TaskRecording` (see :meth:`Corpus.tidy`)."""
+    n, p = rec.n_frames, len(PELLETS)
+    return pd.DataFrame({
+        "subject": pd.Categorical([rec.subject] * (n * p)),
+        "task": np.full(n * p, rec.task, dtype=np.int64),
+        "rep": np.full(n * p, rec.rep, dtype=np.int64),
+        "frame": np.repeat(np.arange(n, dtype=np.int64), p),
+        "time_us": np.repeat(rec.time_us, p),
+        "pellet": pd.Categorical.from_codes(np.tile(np.arange(p), n), categories=list(PELLETS)),
+        "x": rec.xy_mm[:, :, 0].reshape(-1),
+        "y": rec.xy_mm[:, :, 1].reshape(-1),
+        "valid": rec.valid.reshape(-1),
+    })
+
+
+@dataclass
+class FileReport:
+    """One row of ``cassi corpus check``."""
+
+    path: str
+    subject: str | None
+    task: int | None
+    rep: int | None
+    frames: int | None = None
+    first_valid_us: int | None = None
+    usable: bool = False
+    error_free: bool = False
+    problems: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    error: bool = False  # a malformed file (exit 2), not merely unusable
+
+    def as_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+def check_task_file(path: Path, *, subject: SubjectData | None = None) -> FileReport:
+    """Read one task file and report frames, first valid row, usability and problems."""
+    try:
+        subj, task, rep = parse_task_name(path.name)
+    except CassiInputError:
+        subj, task, rep = None, None, None
+    name = subject.name if subject is not None else subj
+    rep_obj = FileReport(path=str(path), subject=name, task=task, rep=rep)
+    try:
+        rec = read_txy(path, subject=name, require_valid=False)
+    except CassiInputError as err:
+        rep_obj.problems.append(str(err))
+        rep_obj.error = True
+        return rep_obj
+    rep_obj.subject, rep_obj.task, rep_obj.rep = rec.subject, rec.task, rec.rep
+    rep_obj.frames = rec.n_frames
+    rep_obj.first_valid_us = rec.first_valid_time_us
+    rep_obj.warnings.extend(rec.warnings)
+    if rec.first_valid_index is None:
+        # No valid row is a malformed task file for validation purposes (issue 2).
+        rep_obj.problems.append(str(CassiInputError("no row has all eight pellets valid",
+                                                    path=path)))
+        rep_obj.error = True
+        return rep_obj
+    if subject is not None:
+        try:
+            use = subject.usability(rec.task, rec.rep, recording=rec)
+        except CassiInputError as err:  # Mis.dat missing or malformed
+            rep_obj.problems.append(str(err))
+            rep_obj.error = True
+            rep_obj.usable = True
+            return rep_obj
+        rep_obj.usable, rep_obj.error_free = use.usable, use.error_free
+        rep_obj.problems.extend(use.reasons)
+    else:
+        first = rec.first_valid_index
+        missing = [PELLETS[p] for p in range(len(PELLETS)) if not rec.valid[first:, p].all()]
+        rep_obj.usable = True
+        rep_obj.error_free = not missing
+        if missing:
+            rep_obj.problems.append(
+                f"pellet(s) missing after the first valid row: {', '.join(missing)}")
+    return rep_obj
+
+
+def check_corpus(corpus: Corpus) -> tuple[list[FileReport], list[str]]:
+    """Check every subject file and task file of a corpus.
+
+    Returns ``(reports, errors)``: one report per task file, and the corpus-level errors
+    (malformed or missing subject files, paths escaping the corpus, bad metadata) as
+    ``file:line: reason`` strings.
+    """
+    errors: list[str] = list(corpus.problems)
+    try:
+        corpus.metadata
+        corpus.head_measures_table
+    except CassiInputError as err:
+        errors.append(str(err))
+    reports: list[FileReport] = []
+    for name in corpus.subjects:
+        subj = corpus.subject(name)
+        for attr in ("palate_mm", "pharynx_mm", "mistracking", "head_measures"):
+            try:
+                getattr(subj, attr)
+            except CassiInputError as err:
+                errors.append(str(err))
+        for path in subj.task_files().values():
+            reports.append(check_task_file(path, subject=subj))
+        errors.extend(subj.problems)
+    return reports, errors
