@@ -135,3 +135,15 @@ NOSE_LIP_MIN_GAP = 2.0
 #: accordingly"); the back vertices stay anchored (the rubric's "V shape at the back of the
 #: tongue caused by the anchored back points" is that choice's known consequence).
 TONGUE_BACK_ANCHORED = True
+
+# --- vertex sets (thesis 3.1.3 Figure 3.7 and 4.1.1 Figure 4.6) ---------------------------
+#: "The upper lip is shown as vertices 61 to 69, the lower lip as 49 to 60, and the corners as 70
+#: and 287" (3.1.3). CHOSEN: vertex 300, which 2.0 adds between 287 and 70 (4.2) and which the
+#: face model always carries, moves with the corners in 1.0 so it never lags behind them.
+UPPER_LIP_VERTICES = tuple(range(61, 70))
+LOWER_LIP_VERTICES = tuple(range(49, 61))
+LIP_CORNER_VERTICES = (70, 287, 300)
+#: Parke's nose outline (3.1.3: "80 through 101 for the nose").
+NOSE_VERTICES = tuple(range(80, 102))
+#: The 12 tongue vertices added by CASSI (4.1.1): 4 on the pellets, tip, back and 6 edges.
+TONGUE_VERTICES = tuple(range(288, 300))

@@ -66,10 +66,13 @@ def rotation_point(x: np.ndarray, y: np.ndarray, xp: np.ndarray, yp: np.ndarray,
     x, y, xp, yp, theta = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64)
                                                 for v in (x, y, xp, yp, theta)))
     c, s = np.cos(theta), np.sin(theta)
+    # 1 - cos(theta) written as 2 sin^2(theta / 2): the same quantity, but without the
+    # cancellation that makes 1 - cos(1e-8) exactly 0 in floating point.
+    omc = 2.0 * np.sin(0.5 * theta) ** 2
     small = np.abs(theta) < K.THETA_EPS
     with np.errstate(divide="ignore", invalid="ignore"):
-        b = ((yp + x * s - y * c) * (1.0 - c) - (xp - x * c - y * s) * s) / (2.0 - 2.0 * c)
-        a = (yp + x * s - y * c - b * (1.0 - c)) / s
+        b = ((yp + x * s - y * c) * omc - (xp - x * c - y * s) * s) / (2.0 * omc)
+        a = (yp + x * s - y * c - b * omc) / s
     return np.where(small, np.nan, a), np.where(small, np.nan, b)
 
 
