@@ -1,0 +1,471 @@
+"""Algorithm LIP MOVEMENT of CASSI 2.0 (thesis section 4.2.4, Figure 4.28) and its stage.
+
+:func:`lip_frames` is the algorithm as a pure function over frames: the two lip pellets in Parke
+space in, the positions of every lip vertex out (plus the diagnostics). :class:`LipMovementStage`
+plugs it into the staged pipeline of :mod:`cassi.versions.protocol` in place of CASSI 1.0's
+``LipFollowStage``; CASSI 2.1 is the same stage with another :class:`ThicknessPolicy`.
+
+The steps of Figure 4.28, and where each one is done:
+
+1-2. centre-line x: 67, 64, 61 move with UL's x, 49, 52, 55, 58 with LL's x (pm[63], pm[65]);
+3-4. 67 on UL's z and 49 on LL's z (pm[64], pm[66]);
+5.   centre (h, k): h = 0 (the mid-sagittal plane), k midway between 67 and 49;
+6.   OUTER_ABC_CALC (:func:`~cassi.versions.lips_ellipse.outer_abc_sequence`);
+7.   limits on a and c (:func:`~cassi.versions.lips_ellipse.limit_abc`);
+8.   currthick (:func:`~cassi.versions.lips_thickness.current_thickness`);
+9-10. centre-line z from currthick (:func:`~cassi.versions.lips_thickness.centreline_z`);
+11.  front view (y, z) from the outer, middle and inner outlines (Figure 4.17, Eq. 4.16);
+12.  x from the parabolic tracks (Eq. 4.19), one per centre-line vertex.
+
+Vertex roles (Figures 4.5, 4.17): outer outline 67, 68, 69 / 49, 50, 51 with corner 70; middle
+outline 64, 65, 66 / pairs 55-52, 56-53, 57-54 with corner 300 (new, midway between 287 and 70);
+inner outline 61, 62, 63 / 58, 59, 60 with corner 287. Around the lips 71-73 follow 67-69,
+41-43 follow 49-51 and the jaw half each, 44 follows the corner.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from cassi.data.errors import CassiInputError
+
+from . import lips_constants as K
+from .lips_ellipse import (
+    BRANCH_LABELS,
+    OuterAbcParams,
+    OuterAbcState,
+    c_prime,
+    ellipse_z,
+    is_vertical,
+    limit_abc,
+    mid_inner_abc,
+    outer_abc_sequence,
+)
+from .lips_thickness import (
+    EQUAL_THICKNESS,
+    LOW_LIPS_THICKNESS,
+    ThicknessRule,
+    blend_inner_corner_z,
+    centreline_z,
+    current_thickness,
+    is_low_lips,
+    rounding_t,
+    thick_from_lipthick,
+)
+from .lips_track import track_x
+
+if TYPE_CHECKING:
+    from .protocol import TaskContext
+
+__all__ = [
+    "LIP_VERTICES",
+    "LipFrames",
+    "LipRest",
+    "LipSubject",
+    "LipMovementStage",
+    "ThicknessPolicy",
+    "EqualThicknessPolicy",
+    "LowLipsThicknessPolicy",
+    "lip_frames",
+    "lip_subject",
+]
+
+# --- vertex roles (thesis Figures 4.5 and 4.17) ----------------------------------------------
+V_UL, V_LL, V_CORNER, V_INNER_CORNER, V_MID_CORNER = 67, 49, 70, 287, 300
+V_TEETH_TIP = 226
+OUTER_UPPER = (67, 68, 69)
+OUTER_LOWER = (49, 50, 51)
+MIDDLE_UPPER = (64, 65, 66)
+MIDDLE_PAIR_TOP = (55, 56, 57)
+MIDDLE_PAIR_BOTTOM = (52, 53, 54)
+INNER_UPPER = (61, 62, 63)
+INNER_LOWER = (58, 59, 60)
+#: Every vertex the algorithm places, in the column order of :attr:`LipFrames.xyz`.
+LIP_VERTICES: tuple[int, ...] = (
+    OUTER_UPPER + OUTER_LOWER + (V_CORNER,) + MIDDLE_UPPER + MIDDLE_PAIR_TOP + MIDDLE_PAIR_BOTTOM
+    + INNER_UPPER + INNER_LOWER + (V_INNER_CORNER, V_MID_CORNER)
+)
+_COL = {v: i for i, v in enumerate(LIP_VERTICES)}
+#: Vertices around the lips and the lip vertex each follows (section 4.2.1, last paragraph).
+ABOVE_LIP = ((71, 67), (72, 68), (73, 69))
+BELOW_LIP = ((41, 49), (42, 50), (43, 51))
+V_CHEEK = 44
+
+
+@dataclass(frozen=True)
+class LipSubject:
+    """A subject's lip values in Parke units (from maxprotru.txt and lipthick.txt, 4.2.1/4.2.3).
+
+    Attributes
+    ----------
+    x_rest, x_max, x_min : float
+        Key x values of the upper lip for c_rest, c_min and c_max (Eq. 4.13).
+    thick : float
+        Thick: one relaxed lip's thickness.
+    """
+
+    x_rest: float
+    x_max: float
+    x_min: float
+    thick: float
+
+
+def lip_subject(profile, parke_jaw_distance: float, x_origin: float) -> LipSubject:
+    """Map a :class:`~cassi.data.profile.SubjectProfile`'s lip values into Parke space.
+
+    maxprotru.txt and lipthick.txt hold values divided by the XRMB jaw length; "scaling them
+    according to Parke's jaw distance and translating them to the top front tooth, vertex 226"
+    (4.2.1) is ``value * p + x_226`` for x, and ``value * p / 2`` for one lip's thickness (4.2.3).
+
+    Parameters
+    ----------
+    profile : SubjectProfile
+    parke_jaw_distance : float
+        p, Parke units (``cassi.versions.mapping.model_jaw_length``).
+    x_origin : float
+        Parke x of vertex 226.
+    """
+    p = float(parke_jaw_distance)
+    vals = {k: float(getattr(profile, k)) for k in ("rest_ul", "max_ul", "min_ul", "lipthick")}
+    for k, v in vals.items():
+        if not np.isfinite(v):
+            raise CassiInputError(f"subject {getattr(profile, 'subject', '?')}: {k} is {v!r}")
+    return LipSubject(
+        x_rest=vals["rest_ul"] * p + x_origin,
+        x_max=vals["max_ul"] * p + x_origin,
+        x_min=vals["min_ul"] * p + x_origin,
+        thick=thick_from_lipthick(vals["lipthick"], p),
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class LipRest:
+    """The face the lip algorithm starts from (before the lip stage), and what it keeps of it.
+
+    Parameters
+    ----------
+    vertices : float64 (V, 3)
+        Parke vertices (row i = vertex i + 1), V >= 300 (vertex 300 is CASSI 2.0's new corner).
+
+    Attributes (derived)
+    --------------------
+    dx_upper : dict
+        x of 64 and 61 relative to 67 (steps 1-2 move them with UL's x).
+    dx_lower : dict
+        x of 52, 55, 58 relative to 49.
+    inner_corner_ratio : float
+        y287 / y70 on this face: the inside corner keeps this fraction of the outer half-width.
+    inner_corner_dz : float
+        z287 - k (k midway between 67 and 49) on this face.
+    """
+
+    vertices: np.ndarray
+    dx_upper: dict = field(init=False)
+    dx_lower: dict = field(init=False)
+    inner_corner_ratio: float = field(init=False)
+    inner_corner_dz: float = field(init=False)
+
+    def __post_init__(self) -> None:
+        v = np.asarray(self.vertices, dtype=np.float64)
+        if v.ndim != 2 or v.shape[1] != 3 or v.shape[0] < V_MID_CORNER:
+            raise CassiInputError(
+                f"the face needs at least {V_MID_CORNER} vertices (vertex 300 is CASSI 2.0's "
+                f"corner), got shape {v.shape}"
+            )
+        object.__setattr__(self, "vertices", v)
+        p = lambda n: v[n - 1]  # noqa: E731
+        object.__setattr__(self, "dx_upper", {n: p(n)[0] - p(67)[0] for n in (64, 61)})
+        object.__setattr__(self, "dx_lower", {n: p(n)[0] - p(49)[0] for n in (52, 55, 58)})
+        y70 = p(V_CORNER)[1]
+        if not y70 > 0:
+            raise CassiInputError(f"lip corner vertex 70 must lie at y > 0 (left half), got {y70!r}")
+        ratio = p(V_INNER_CORNER)[1] / y70
+        object.__setattr__(self, "inner_corner_ratio", float(np.clip(ratio, 0.0, 1.0)))
+        k = 0.5 * (p(67)[2] + p(49)[2])
+        object.__setattr__(self, "inner_corner_dz", float(p(V_INNER_CORNER)[2] - k))
+
+
+@dataclass(frozen=True, eq=False)
+class LipFrames:
+    """The lips over F frames.
+
+    Attributes
+    ----------
+    vertices : tuple of int
+        :data:`LIP_VERTICES`, the column order of ``xyz``.
+    xyz : float64 (F, len(vertices), 3)
+        Positions, Parke units.
+    diagnostics : dict of str -> array (F,)
+    """
+
+    vertices: tuple[int, ...]
+    xyz: np.ndarray
+    diagnostics: dict
+
+    def vertex(self, number: int) -> np.ndarray:
+        """Positions of one lip vertex, (F, 3)."""
+        return self.xyz[:, _COL[number], :]
+
+
+def lip_frames(
+    ul,
+    ll,
+    rest: LipRest,
+    subject: LipSubject,
+    *,
+    rule: ThicknessRule = EQUAL_THICKNESS,
+    blend_inner_corner: bool = False,
+    params: OuterAbcParams | None = None,
+    state: OuterAbcState | None = None,
+) -> LipFrames:
+    """Algorithm LIP MOVEMENT (Figure 4.28) for F frames at once.
+
+    Parameters
+    ----------
+    ul, ll : float (F, 2)
+        Upper and lower lip pellets mapped to Parke (x, z), units.
+    rest : LipRest
+        The face before the lip stage.
+    subject : LipSubject
+    rule : ThicknessRule
+        How currthick splits between the lips (2.0: equal; 2.1 low-lip subjects: 2/3, 4/3).
+    blend_inner_corner : bool
+        CASSI 2.1's Hermite blend of 287's z toward 60's as the lips round (4.3.3).
+    params : OuterAbcParams, optional
+    state : OuterAbcState, optional
+        OUTER_ABC_CALC's carried state (NewSubject when omitted).
+
+    Returns
+    -------
+    LipFrames
+    """
+    ul = np.asarray(ul, dtype=np.float64).reshape(-1, 2)
+    ll = np.asarray(ll, dtype=np.float64).reshape(-1, 2)
+    if ul.shape != ll.shape:
+        raise ValueError(f"ul and ll differ in shape: {ul.shape} != {ll.shape}")
+    n = ul.shape[0]
+    # Steps 1-4: the centre line follows the pellets.
+    x67, z67 = ul[:, 0], ul[:, 1]
+    x49, z49 = ll[:, 0], ll[:, 1]
+    # Step 5: centre (h = 0, k).
+    k = 0.5 * (z67 + z49)
+    b_signed = 0.5 * (z67 - z49)
+    height = np.abs(b_signed)
+    # Step 6: OUTER_ABC_CALC (c' from Eq. 4.13 on 67's x).
+    cp = c_prime(x67, subject.x_rest, subject.x_max, subject.x_min)
+    track = outer_abc_sequence(height, cp, params=params, state=state)
+    # Step 7: limits.
+    a, c = limit_abc(track.a, track.c)
+    vertical = is_vertical(a, height)
+    # Step 8: currthick; steps 9-10: the centre line's z.
+    currthick = current_thickness(subject.thick, cp)
+    upper_thick, lower_thick = rule.split(currthick)
+    zc = centreline_z(z67, z49, upper_thick, lower_thick)
+    xc = {67: x67, 49: x49}
+    for v, dx in rest.dx_upper.items():
+        xc[v] = x67 + dx
+    for v, dx in rest.dx_lower.items():
+        xc[v] = x49 + dx
+    zc[67], zc[49] = z67, z49
+
+    X = np.empty((n, len(LIP_VERTICES)))
+    Y = np.empty_like(X)
+    Z = np.empty_like(X)
+    def put(v, x, y, z):
+        j = _COL[v]
+        X[:, j], Y[:, j], Z[:, j] = x, y, z
+
+    # Step 11-12, outer outline: 67/49 at 0, 68/50 at a/3, 69/51 at 2a/3, 70 at or beyond a.
+    for frac, vu, vl in zip(K.OUTLINE_FRACTIONS, OUTER_UPPER, OUTER_LOWER):
+        y = frac * a
+        put(vu, track_x(y, x67), y, ellipse_z(y, a, b_signed, k, upper=True))
+        put(vl, track_x(y, x49), y, ellipse_z(y, a, b_signed, k, upper=False))
+    y70 = a + np.where(vertical, 0.0, K.CORNER_STRETCH * c)
+    x70 = track_x(y70, 0.5 * (x67 + x49))
+    put(V_CORNER, x70, y70, k)
+
+    # Inside corner 287 (the inner outline's corner point) and the new vertex 300 midway to 70.
+    y287 = rest.inner_corner_ratio * y70
+    z287 = k + rest.inner_corner_dz
+    x287 = track_x(y287, 0.5 * (xc[61] + xc[58]))
+
+    # Inner outline: 61/58 at 0, 62/59 at a/3, 63/60 at 2a/3 (MID_INNER_ABC_CALC with 287).
+    a_in, b_in, _c_in = mid_inner_abc(zc[61], zc[58], y287)
+    a_in = np.maximum(a_in, 1e-9)
+    k_in = 0.5 * (zc[61] + zc[58])
+    overlap = zc[58] > zc[61]  # the lips cross at the centre line: 4.16 is not used
+    for frac, vu, vl in zip(K.OUTLINE_FRACTIONS, INNER_UPPER, INNER_LOWER):
+        y = frac * a_in
+        zu = np.where(overlap, zc[61], ellipse_z(y, a_in, b_in, k_in, upper=True))
+        zl = np.where(overlap, zc[58], ellipse_z(y, a_in, b_in, k_in, upper=False))
+        put(vu, track_x(y, xc[61]), y, zu)
+        put(vl, track_x(y, xc[58]), y, zl)
+
+    # CASSI 2.1: 287's z blended toward 60's as c' goes from 50 to 0 (Eqs. 4.20-4.21).
+    if blend_inner_corner:
+        z287 = blend_inner_corner_z(z287, Z[:, _COL[60]], cp)
+    put(V_INNER_CORNER, x287, y287, z287)
+    put(V_MID_CORNER, 0.5 * (x287 + x70), 0.5 * (y287 + y70), 0.5 * (z287 + k))
+
+    # Middle outline: upper 64, 65, 66; lower pairs either side of the ellipse, gap tapering.
+    z_low_mid = 0.5 * (zc[52] + zc[55])
+    a_mid, b_mid, _c_mid = mid_inner_abc(zc[64], z_low_mid, Y[:, _COL[V_MID_CORNER]])
+    a_mid = np.maximum(a_mid, 1e-9)
+    k_mid = 0.5 * (zc[64] + z_low_mid)
+    half_gap = 0.5 * (zc[55] - zc[52])
+    for frac, taper, vu, vt, vb in zip(
+        K.OUTLINE_FRACTIONS, K.MIDDLE_PAIR_TAPER, MIDDLE_UPPER, MIDDLE_PAIR_TOP, MIDDLE_PAIR_BOTTOM
+    ):
+        y = frac * a_mid
+        put(vu, track_x(y, xc[64]), y, ellipse_z(y, a_mid, b_mid, k_mid, upper=True))
+        z_on = ellipse_z(y, a_mid, b_mid, k_mid, upper=False)
+        put(vt, track_x(y, xc[55]), y, z_on + taper * half_gap)
+        put(vb, track_x(y, xc[52]), y, z_on - taper * half_gap)
+
+    xyz = np.stack([X, Y, Z], axis=-1)
+    diagnostics = {
+        "a": a,
+        "b": height,
+        "c": c,
+        "c_prime": cp,
+        "a_unlimited": track.a,
+        "c_unlimited": track.c,
+        "outer_abc_branch": track.branch_labels,
+        "ellipse": np.where(vertical, "vertical", "horizontal"),
+        "currthick": currthick,
+        "currthick_upper": upper_thick,
+        "currthick_lower": lower_thick,
+        "a_middle": a_mid,
+        "a_inner": a_in,
+        "lips_overlap": overlap,
+    }
+    if blend_inner_corner:
+        diagnostics["blend_t"] = rounding_t(cp)
+    return LipFrames(vertices=LIP_VERTICES, xyz=xyz, diagnostics=diagnostics)
+
+
+# --- thickness policies: what differs between 2.0 and 2.1 -----------------------------------
+class ThicknessPolicy:
+    """Chooses the thickness rule for a task at initialisation. CASSI 2.0: always equal."""
+
+    name = "equal"
+
+    def choose(self, ul0, ll0, rest: LipRest, subject: LipSubject, z226: float) -> tuple[ThicknessRule, bool]:
+        """(rule, blend_inner_corner) for this subject and task."""
+        return EQUAL_THICKNESS, False
+
+
+class EqualThicknessPolicy(ThicknessPolicy):
+    """CASSI 2.0 (section 4.2.3): both lips currthick thick."""
+
+
+class LowLipsThicknessPolicy(ThicknessPolicy):
+    """CASSI 2.1 (section 4.3): low-lip subjects get 2/3 / 4/3 of currthick and the 287 blend.
+
+    The criterion (4.3.1): with equal thicknesses (as in 2.0), the upper lip's inside edge,
+    vertex 61, starts more than 20 units below vertex 226. Other subjects are exactly 2.0.
+    """
+
+    name = "low-lips"
+
+    def __init__(self, threshold: float = K.LOW_LIPS_THRESHOLD):
+        self.threshold = threshold
+
+    def choose(self, ul0, ll0, rest, subject, z226):
+        first = lip_frames(ul0, ll0, rest, subject, rule=EQUAL_THICKNESS)
+        z61 = float(first.vertex(61)[0, 2])
+        if is_low_lips(z61, z226, threshold=self.threshold):
+            return LOW_LIPS_THICKNESS, True
+        return EQUAL_THICKNESS, False
+
+
+# --- the stage ------------------------------------------------------------------------------
+def _move_neighbours(out: np.ndarray, lips_now: LipFrames, lips_ref: np.ndarray,
+                     base: np.ndarray) -> None:
+    """Move the vertices around the lips by portions of their lip vertices' movement.
+
+    Parameters
+    ----------
+    out : float (F, V, 3)
+        Written in place (71-73, 41-43, 44); on entry it holds what the earlier stages put
+        there (jaw rotation for 41-44).
+    lips_now : LipFrames
+        This call's lip positions.
+    lips_ref : float (len(LIP_VERTICES), 3)
+        Where the lip vertices were before this movement (the face before the stage for the
+        initialisation; the first frame for the animation).
+    base : float (V, 3)
+        The neighbours' own positions at the reference (before the stage / the start face).
+    """
+    move = lips_now.xyz - lips_ref[None]  # (F, L, 3)
+    col = _COL
+    for v, u in ABOVE_LIP:
+        out[:, v - 1, :] += K.ABOVE_LIP_PORTION * move[:, col[u], :]
+    share = K.BELOW_LIP_JAW_SHARE
+    for v, u in BELOW_LIP:
+        jaw = out[:, v - 1, :]
+        lip_xz = base[v - 1, [0, 2]][None] + move[:, col[u], :][:, [0, 2]]
+        out[:, v - 1, 0] = share * jaw[:, 0] + (1.0 - share) * lip_xz[:, 0]
+        out[:, v - 1, 2] = share * jaw[:, 2] + (1.0 - share) * lip_xz[:, 1]
+        out[:, v - 1, 1] += K.BELOW_LIP_Y_PORTION * move[:, col[u], 1]
+    for u, w in K.CHEEK_CORNER_WEIGHTS:
+        out[:, V_CHEEK - 1, :] += w * move[:, col[u], :]
+
+
+@dataclass
+class LipMovementStage:
+    """The lips of CASSI 2.0/2.1 as a stage of :class:`~cassi.versions.protocol.StagedVersion`.
+
+    Initialisation runs the algorithm on the first valid row (NewSubject) and writes that shape
+    into the starting face; animation runs it over every row (the first row again NewSubject,
+    so frame 0 equals the starting face) and writes the lips and their neighbours.
+    """
+
+    policy: ThicknessPolicy = field(default_factory=EqualThicknessPolicy)
+    params: OuterAbcParams = field(default_factory=OuterAbcParams)
+    name: str = "lips"
+
+    def _setup(self, ctx: "TaskContext") -> dict:
+        plan = ctx.state.get("lips20")
+        if plan is None:
+            from .mapping import model_jaw_length
+
+            before = np.array(ctx.start, dtype=np.float64)
+            rest = LipRest(before)
+            subject = lip_subject(ctx.profile, model_jaw_length(ctx.neutral), float(ctx.mapping.origin[0]))
+            ul, ll = ctx.pellet("UL"), ctx.pellet("LL")
+            z226 = float(before[V_TEETH_TIP - 1, 2])
+            rule, blend = self.policy.choose(ul[:1], ll[:1], rest, subject, z226)
+            plan = {"rest": rest, "subject": subject, "rule": rule, "blend": blend,
+                    "before": before}
+            ctx.state["lips20"] = plan
+        return plan
+
+    def _frames(self, plan: dict, ul, ll) -> LipFrames:
+        return lip_frames(ul, ll, plan["rest"], plan["subject"], rule=plan["rule"],
+                          blend_inner_corner=plan["blend"], params=self.params)
+
+    def initialise(self, ctx: "TaskContext") -> None:
+        plan = self._setup(ctx)
+        before = plan["before"]
+        first = self._frames(plan, ctx.pellet("UL")[:1], ctx.pellet("LL")[:1])
+        idx = np.asarray(LIP_VERTICES) - 1
+        out = before[None].copy()
+        _move_neighbours(out, first, before[idx], before)
+        out[0, idx, :] = first.xyz[0]
+        ctx.start[:] = out[0]
+        plan["start_lips"] = first.xyz[0].copy()
+
+    def animate(self, ctx: "TaskContext", positions: np.ndarray) -> None:
+        plan = self._setup(ctx)
+        lips = self._frames(plan, ctx.pellet("UL"), ctx.pellet("LL"))
+        idx = np.asarray(LIP_VERTICES) - 1
+        _move_neighbours(positions, lips, lips.xyz[0], ctx.start)
+        positions[:, idx, :] = lips.xyz
+        ctx.diagnostics.update(lips.diagnostics)
+        ctx.diagnostics["thickness_rule"] = np.full(len(lips.xyz), plan["rule"].name, dtype=object)
+        for number, (pellet, axis) in {63: ("UL", 0), 64: ("UL", 1), 65: ("LL", 0),
+                                       66: ("LL", 1)}.items():
+            ctx.diagnostics[f"param_{number}"] = ctx.displacement(pellet)[:, axis]

@@ -1,0 +1,121 @@
+"""Every constant of CASSI 2.0/2.1's lip movement (thesis sections 4.2 and 4.3), in one place.
+
+Two kinds of value live here:
+
+* values the thesis STATES (cited with section and equation): the key c values of Eq. 4.13,
+  the parabolic track's p (Eq. 4.19), the rounding onset c' < 50 (step 8 of Algorithm
+  LIP MOVEMENT, Figure 4.28), the 1/10 width rate of Algorithm OUTER_ABC_CALC, the 2.1 low-lips
+  threshold of 20 units and its 2/3 and 4/3 thickness split (section 4.3);
+* values the thesis LEAVES UNSTATED (rho, "near c_rest", "c' is small", the limits of step 7,
+  how far vertex 70 moves beyond a, how much lips thicken, the influence weights of the
+  vertices around the lips). Each carries the reason for the value chosen, and a test in
+  ``tests/test_versions_lips*.py`` pins the behaviour it produces.
+
+All lengths are in Parke units (the face model's units; the thesis's c_rest = 65 is in them).
+"""
+from __future__ import annotations
+
+# --- Stated by the thesis -------------------------------------------------------------------
+
+#: Key c values of Eq. 4.13 (section 4.2.1): resting, fully rounded and fully stretched lips.
+C_REST: float = 65.0
+C_MIN: float = 0.0
+C_MAX: float = 85.0
+
+#: Rate at which the outer width follows a change of height in branches 3(a), 3(b) and
+#: 3(c)iii of OUTER_ABC_CALC (Figure 4.18): ``a := prev_a +/- (prev_b - b) / 10.0``.
+WIDTH_RATE_DIVISOR: float = 10.0
+
+#: p of the parabolic track, Eq. 4.19 (section 4.2.2): "the chosen p value was -37".
+TRACK_P: float = -37.0
+
+#: Step 8 of Algorithm LIP MOVEMENT: the lips are rounding (and thicken) when c' < 50.
+#: The same 50 bounds the 2.1 blend: "the c' values occur between 0 and 50" (section 4.3.3).
+ROUNDING_ONSET_C: float = 50.0
+
+#: Section 4.3.1: a subject's lips are "centered low" when the inside edge of the upper lip
+#: (vertex 61, placed with 2.0's equal thicknesses) starts more than 20 units below vertex 226.
+LOW_LIPS_THRESHOLD: float = 20.0
+
+#: Section 4.3.2: for low-lip subjects the upper lip gets 2/3 and the lower lip 4/3 of
+#: currthick (one third and two thirds of the combined 2*currthick).
+UPPER_THICK_FRACTION_LOW: float = 2.0 / 3.0
+LOWER_THICK_FRACTION_LOW: float = 4.0 / 3.0
+
+#: Section 4.2.3: the upper lip's centreline vertices sit at 1/2 and 1 currthick below 67
+#: (64, 61); the lower lip's at 1/3, 2/3 and 1 currthick above 49 (52, 55, 58).
+UPPER_CENTRELINE_FRACTIONS: tuple[float, float] = (0.5, 1.0)
+LOWER_CENTRELINE_FRACTIONS: tuple[float, float, float] = (1.0 / 3.0, 2.0 / 3.0, 1.0)
+
+#: Section 4.2.1: outline vertices at 0, a/3 and 2a/3 across the front view.
+OUTLINE_FRACTIONS: tuple[float, float, float] = (0.0, 1.0 / 3.0, 2.0 / 3.0)
+
+# --- Left unstated by the thesis: chosen here, with the reason ------------------------------
+
+#: rho, the "rate of change for c" of OUTER_ABC_CALC step 3(c)i: c := rho c' + (1 - rho) prev_c.
+#: Reason: XRMB rows come every ~6.9 ms; rho = 0.3 gives a time constant of about 2.8 rows
+#: (~19 ms), short against lip gestures (~100 ms) so rounding is not visibly late, yet it
+#: bounds the jump of c at a horizontal/vertical ellipse switch to 30 % of the gap between c'
+#: and the previous c (section 4.2.5 asks for "smooth motion, without sudden changes").
+RHO: float = 0.3
+
+#: "c' is near c_rest" (steps 3(a), 3(b)): |c' - c_rest| <= NEAR_C_REST.
+#: Reason: c spans 20 units between rest (65) and fully stretched (85); a quarter of that span
+#: (5 units) is a lip that has barely moved forward or back, which is what "lips dropping /
+#: rising with little side to side movement of the corners" describes.
+NEAR_C_REST: float = 5.0
+
+#: "c' is small (for round lips)" in step 3(c)ii: c' < SMALL_C_PRIME.
+#: Reason: half of the rounding onset (50): the lips are more than half way from the start
+#: of rounding to fully rounded, so the width follows Eq. 4.8 (a near-circle) even when the
+#: mouth is open tall, instead of the slow vertical-ellipse rule.
+SMALL_C_PRIME: float = 25.0
+
+#: Step 7 of LIP MOVEMENT: "place limits on the a and c values ... to restrict the shape".
+#: A_MIN: 40 units, about 60 % of a resting half-width (a ~ c_rest = 65 with closed lips):
+#: real lips at full protrusion keep roughly that fraction of their resting width; without
+#: it Eq. 4.8 with c' = 0 and closed lips gives a pinhole mouth (a = b ~ 0).
+A_MIN: float = 40.0
+#: A_MAX: 110 units = sqrt(c_max^2 + 70^2): fully stretched lips (c = 85) opened to the
+#: widest jaw-wagging height seen on the face model (b ~ 70) and no wider, so the corners
+#: never leave the cheeks.
+A_MAX: float = 110.0
+#: C_LIMIT: c never exceeds c_max = 85, the most stretched shape the thesis defines; it also
+#: caps the focal distance of tall vertical ellipses (Eq. 4.14 'otherwise').
+C_LIMIT: float = C_MAX
+
+#: Vertex 70 "is placed at a when c = 0; otherwise ... increasingly far from a as c becomes
+#: larger" (section 4.2.1): y70 = a + CORNER_STRETCH * c for a horizontal ellipse.
+#: Reason: 0.15 moves the corner 9.75 units beyond a at rest (c = 65) and 12.75 when fully
+#: stretched: a visible sharpening (a tenth of the half-width) without a beak. For a vertical
+#: ellipse c measures height, not stretch, so the corner stays at a (a stretched corner on a
+#: wide open mouth is the "diamond-shaped lips" fault of thesis Table 5.9); both rules meet
+#: at c = 0, the switch, so the corner does not jump there.
+CORNER_STRETCH: float = 0.15
+
+#: Middle outline (section 4.2.1): the lower-lip pairs 55/52, 56/53, 57/54 sit at equal
+#: distance either side of the ellipse, the distance shrinking toward the corner, 57/54
+#: "much closer to each other" than 55/52. Linear taper 1, 2/3, 1/3 of the centreline gap:
+#: the pair would close at the corner (y = a) where the outline itself ends.
+MIDDLE_PAIR_TAPER: tuple[float, float, float] = (1.0, 2.0 / 3.0, 1.0 / 3.0)
+
+#: Step 8: currthick = Thick * (1 + THICKEN_GAIN * t), t = (50 - c') / 50 clipped to [0, 1].
+#: Reason: continuous with Thick at the onset c' = 50 and 40 % thicker when fully rounded,
+#: visibly pouted yet short of "lips too big at maximum protrusion" (thesis Table 5.8).
+THICKEN_GAIN: float = 0.4
+
+#: Vertices 71, 72, 73 "are moved by portions of the movement" of 67, 68, 69 (section 4.2.1).
+#: Reason: 0.5 (the skin just above the vermilion moves about half as far as the lip edge);
+#: the same portion for all three keeps the row above the lip parallel to it.
+ABOVE_LIP_PORTION: float = 0.5
+
+#: Vertices 41, 42, 43: x and z are "half the influence of the jaw rotation algorithm and half
+#: the influence of the lower lip vertices 49, 50, 51" (stated: 0.5); their y is "also
+#: influenced" by 49-51 with an unstated weight, chosen equal to the stated x/z half.
+BELOW_LIP_JAW_SHARE: float = 0.5
+BELOW_LIP_Y_PORTION: float = 0.5
+
+#: Vertex 44, "although influenced by other vertices, is most influenced by vertex 70": it
+#: follows the movement of 70 with weight 0.6 and of its outline neighbours 69 and 51 with
+#: 0.2 each (weights sum to 1: 44 moves rigidly with the lips' corner region).
+CHEEK_CORNER_WEIGHTS: tuple[tuple[int, float], ...] = ((70, 0.6), (69, 0.2), (51, 0.2))
