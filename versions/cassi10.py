@@ -212,7 +212,7 @@ def nose_tip_vertices(neutral: np.ndarray) -> np.ndarray:
 class NoseClearanceStage:
     """Keep a space between the top of the upper lip and the nose tip (4.1.1)."""
 
-    min_gap: float = K.NOSE_LIP_MIN_GAP
+    min_gap_mm: float = K.NOSE_LIP_MIN_GAP_MM
     name: str = "nose"
 
     def _setup(self, ctx: TaskContext) -> tuple[np.ndarray, np.ndarray, float]:
@@ -222,7 +222,8 @@ class NoseClearanceStage:
             neutral_gap = ctx.neutral[tip, 2].min() - ctx.neutral[upper, 2].max()
             # Never demand more space than Parke's neutral face has, so a neutral lip never
             # moves the nose.
-            ctx.state["nose_tip"] = (tip, upper, float(min(self.min_gap, max(neutral_gap, 0.0))))
+            want = self.min_gap_mm * ctx.mapping.scale
+            ctx.state["nose_tip"] = (tip, upper, float(min(want, max(neutral_gap, 0.0))))
         return ctx.state["nose_tip"]
 
     def initialise(self, ctx: TaskContext) -> None:

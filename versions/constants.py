@@ -125,11 +125,11 @@ JAW_PARAMETER = 4
 #: mix so that they stay between the lips when these part.
 CORNER_WEIGHTS = {"UL": 0.5, "LL": 0.5}
 #: CHOSEN: "a space always exists between the upper lip and the nose" (4.1.1): the nose tip is
-#: raised so that its lowest vertex stays at least this many Parke units above the highest
-#: upper-lip vertex, no more than the lips require (a nose that is already clear never moves).
-#: 2.0 units is the gap between vertex 69 and the nose's lowest vertex on Parke's neutral face
-#: order of magnitude (a few units at Parke's scale, where the lip is ~10 units tall).
-NOSE_LIP_MIN_GAP = 2.0
+#: raised so that its lowest vertex stays at least this far (mm of the subject, turned into Parke
+#: units with the mapping's p / d) above the highest upper-lip vertex, and never demands more than
+#: the neutral face's own gap, so a lip at or below its neutral height never moves the nose.
+#: 2 mm: a visible space at the scale of the lips (~10 mm tall), small enough not to reshape it.
+NOSE_LIP_MIN_GAP_MM = 2.0
 #: CHOSEN: the tongue tip follows T1 and every edge vertex follows the centre vertex it is
 #: nearest to on the neutral face (4.1.1: "the other vertices on the tongue are adjusted
 #: accordingly"); the back vertices stay anchored (the rubric's "V shape at the back of the
