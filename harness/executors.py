@@ -296,10 +296,13 @@ class RayExecutor:
 
 
 def make_executor(kind: str, *, workers: int = 1, address: str | None = None,
-                  retries: int = 1):
-    """``"local"`` -> :class:`LocalExecutor`, ``"ray"`` -> :class:`RayExecutor`."""
+                  retries: int = 1, initializer: Callable | None = None):
+    """``"local"`` -> :class:`LocalExecutor`, ``"ray"`` -> :class:`RayExecutor`.
+
+    ``initializer`` runs once in each local worker process before its first item.
+    """
     if kind == "local":
-        return LocalExecutor(workers, retries=retries)
+        return LocalExecutor(workers, retries=retries, initializer=initializer)
     if kind == "ray":
         # The brief's local cluster: 2 CPUs, or more when more workers were asked for.
         return RayExecutor(address, retries=retries, num_cpus=max(2, int(workers)))

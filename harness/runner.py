@@ -19,6 +19,10 @@ from .jobs import GEOMETRY_VIEW, Job, Outcome, StageContext, StageFn, State, cal
 from .progress import JobRecord, Progress, Summary, write_job_log
 from .store import OutputStore
 
+#: Outputs named ``render-<frame>`` are images; they are listed in ``renders.parquet``.
+RENDER_PREFIX = "render-"
+RENDER_COLUMNS = ("subject", "task", "rep", "version", "view", "frame", "path")
+
 
 @dataclass(frozen=True)
 class TaskSpec:
@@ -151,18 +155,29 @@ def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterabl
         bars.close()
 
     # The ratings stage: the rows of every finished job, combined, aggregated and rated.
-    frames = []
+    frames, renders = [], []
     for key, rec in sorted(records.items()):
         if rec.state in (State.DONE, State.CACHED):
             manifest = store.verified(key, digests[key])
-            if manifest is not None and "rows" in manifest["outputs"]:
+            if manifest is None:
+                continue
+            if "rows" in manifest["outputs"]:
                 frames.append(R.from_parquet_bytes(store.get(manifest["outputs"]["rows"])))
+            job = jobs[key]
+            for name, ref in manifest["outputs"].items():
+                if name.startswith(RENDER_PREFIX) and name[len(RENDER_PREFIX):].isdigit():
+                    renders.append({"subject": job.subject, "task": job.task, "rep": job.rep,
+                                    "version": job.version, "view": job.view,
+                                    "frame": int(name[len(RENDER_PREFIX):]), "path": ref.relpath})
     table = R.combine(frames)
     if pipeline.aggregate is not None and len(table):
         table = R.combine([table, pipeline.aggregate(table)])
     rated = R.ratings(table, pipeline.rate)
     R.write_table(table, store.root / "results.parquet")
     R.write_table(rated, store.root / "ratings.parquet")
+    R.write_table(pd.DataFrame(renders, columns=list(RENDER_COLUMNS)).sort_values(
+        ["subject", "task", "rep", "version", "view", "frame"], kind="mergesort"),
+        store.root / "renders.parquet")
     summary = Summary(records, time.perf_counter() - t0,
                       worker_crashes=getattr(executor, "crashes", 0))
     from cassi.data.atomic import atomic_write_text  # noqa: PLC0415

@@ -67,7 +67,7 @@ def render_stage(job: Job, ctx: StageContext, inputs) -> StageOutput:
     rows, files = [], {}
     for f in job.frames:
         img = np.full((4, 4), pos[f].sum() + len(job.view), dtype=np.float32)
-        files[f"frame{f:05d}"] = (npz_bytes(img=img), ".npz")
+        files[f"render-{f:06d}"] = (npz_bytes(img=img), ".npz")
         rows.append(dict(frame=f, check="teeth_visible", table="A", component="teeth",
                          value=float(img.mean()), unit="px", threshold=0.0, negatives=0))
     return StageOutput(rows=pd.DataFrame(rows), files=files)

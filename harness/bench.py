@@ -1,0 +1,178 @@
+"""``cassi bench``: the registered benchmarks in one JSON document.
+
+- ``geometry``: :func:`cassi.versions.bench.bench_geometry` (owned by the versions package);
+- ``render``: :func:`cassi.renderer.bench.bench_render` (owned by the renderer package);
+- ``farm``: the same batch run with 1 and 2 local worker processes side by side
+  (``farm_speedup_2_workers``, goal >= 1.6) and through a local Ray cluster (its overhead
+  against the 2-worker local pool).
+
+A benchmark whose package is missing or fails is reported as ``{"error": ...}``, never
+replaced by made-up numbers. Pool and cluster start-up are timed separately from the batch, so
+jobs per second describe the steady state that a long batch sees.
+"""
+from __future__ import annotations
+
+import importlib
+import os
+import platform
+import shutil
+import tempfile
+import time
+import traceback
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .executors import LocalExecutor, RayExecutor
+from .jobs import Job, StageContext, StageOutput
+from .runner import Pipeline, TaskSpec, run_batch
+
+SPEEDUP_GOAL = 1.6
+
+
+def _registered(module: str, func: str, quick: bool) -> dict:
+    try:
+        fn = getattr(importlib.import_module(module), func)
+    except (ImportError, AttributeError) as err:
+        return {"error": f"{module}.{func} not available: {type(err).__name__}: {err}"}
+    try:
+        out = fn(quick)
+    except Exception as err:  # noqa: BLE001 - one failing benchmark must not hide the others
+        return {"error": f"{type(err).__name__}: {err}",
+                "traceback": traceback.format_exc().splitlines()[-6:]}
+    return out if isinstance(out, dict) else {"result": out}
+
+
+# -- a CPU-bound stage, used only when the CASSI pipeline cannot run -------------------------
+def cpu_stage(job: Job, ctx: StageContext, inputs) -> StageOutput:
+    """About ``ctx.option("work")`` seconds of single-threaded numpy work on one core."""
+    rng = np.random.default_rng(job.task * 1000 + job.rep)
+    x = rng.standard_normal(200_000)
+    t_end = time.perf_counter() + float(ctx.option("work", 0.2))
+    n = 0
+    while time.perf_counter() < t_end:
+        x = np.sort(np.sin(x) * 1.0001)
+        n += 1
+    rows = [{"frame": -1, "check": "cpu_work", "table": "bench", "component": "farm",
+             "value": float(x[: 10].sum()), "unit": "1", "negatives": 0}]
+    return StageOutput(rows=pd.DataFrame(rows), meta={"render_frames": [], "iterations": n})
+
+
+def _workload(quick: bool):
+    """The batch to time: the real pipeline (geometry and renders of the default corpus) when
+    its packages are present, else the CPU-bound stage; with a description of which."""
+    try:
+        from .farm import plan  # noqa: PLC0415
+        from .config import RunConfig  # noqa: PLC0415
+        from .pipeline import cassi_pipeline  # noqa: PLC0415
+
+        views = ("front",) if quick else ("front", "half")
+        cfg = RunConfig(versions=("cassi-2.1",) if quick else None, views=views,
+                        stride=0 if quick else 50)
+        corpus, tasks, versions, views = plan(cfg)
+        tasks = [t for t in tasks if t.usable][: 4 if quick else 12]
+        if not tasks:
+            raise RuntimeError("the default corpus gave no usable task file")
+        return {"kind": "cassi pipeline (default corpus, geometry + renders)",
+                "tasks": tasks, "versions": versions, "views": list(views),
+                "pipeline": cassi_pipeline(render=True),
+                "ctx": dict(corpus=Path(corpus.root), stride=cfg.stride, chunk_size=4,
+                            preset="preview", synthetic=True)}, None
+    except Exception as err:  # noqa: BLE001 - fall back, and say why
+        why = f"{type(err).__name__}: {err}"
+    n = 8 if quick else 16
+    return {"kind": "cpu-bound test stage (~0.2 s/job) - the CASSI pipeline was unavailable",
+            "tasks": [TaskSpec("BENCH", i + 1) for i in range(n)], "versions": ["bench"],
+            "views": [], "pipeline": Pipeline(geometry=cpu_stage),
+            "ctx": dict(options=(("work", 0.1 if quick else 0.2),))}, why
+
+
+def _time_batch(work: dict, executor, tmp: Path, name: str) -> dict:
+    out = tmp / name
+    ctx = StageContext(out_dir=out, **work["ctx"])
+    t0 = time.perf_counter()
+    executor.start()
+    # Warm every worker (imports, caches) on a throwaway copy of the batch's first job, so the
+    # timed batch measures steady-state throughput, not process start-up.
+    warm = tmp / f"{name}-warm"
+    first = work["tasks"][:1]
+    run_batch(first, work["versions"][:1], work["views"][:1], work["pipeline"],
+              StageContext(out_dir=warm, **work["ctx"]), executor, progress=False)
+    startup = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    res = run_batch(work["tasks"], work["versions"], work["views"], work["pipeline"], ctx,
+                    executor, progress=False)
+    wall = time.perf_counter() - t1
+    c = res.summary.counts()
+    jobs = c["done"]
+    return {"jobs": jobs, "failed": c["failed"], "skipped": c["skipped"],
+            "seconds": round(wall, 3), "jobs_per_s": round(jobs / wall, 3) if wall else None,
+            "startup_s": round(startup, 3)}
+
+
+def bench_farm(quick: bool = False) -> dict:
+    """Jobs per second with 1 and 2 local workers, and with Ray, on the same batch."""
+    work, fallback_reason = _workload(quick)
+    out: dict = {"workload": work["kind"], "versions": work["versions"], "views": work["views"],
+                 "task_files": len(work["tasks"])}
+    if fallback_reason:
+        out["pipeline_unavailable"] = fallback_reason
+    tmp = Path(tempfile.mkdtemp(prefix="cassi-bench-"))
+    try:
+        for n in (1, 2):
+            with LocalExecutor(n) as ex:
+                out[f"local_{n}"] = _time_batch(work, ex, tmp, f"local{n}")
+        a, b = out["local_1"]["jobs_per_s"], out["local_2"]["jobs_per_s"]
+        out["speedup_2_workers"] = round(b / a, 3) if a and b else None
+        out["speedup_goal"] = SPEEDUP_GOAL
+        try:
+            import ray  # noqa: PLC0415
+
+            owned = not ray.is_initialized()
+            ex = RayExecutor(None, num_cpus=2)
+            try:
+                out["ray_2"] = _time_batch(work, ex, tmp, "ray")
+            finally:
+                ex.close()
+                if owned and ray.is_initialized():
+                    ray.shutdown()
+            r, l2 = out["ray_2"]["jobs_per_s"], out["local_2"]["jobs_per_s"]
+            if r and l2:
+                out["ray_overhead_vs_local"] = round(l2 / r - 1.0, 3)  # extra time fraction
+                out["ray_overhead_ms_per_job"] = round(1000 * (1 / r - 1 / l2), 1)
+        except Exception as err:  # noqa: BLE001
+            out["ray_2"] = {"error": f"{type(err).__name__}: {err}"}
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return out
+
+
+def _variant() -> str:
+    try:
+        from cassi.renderer.variant import choose_variant  # noqa: PLC0415
+
+        return choose_variant()
+    except Exception as err:  # noqa: BLE001
+        return f"error: {type(err).__name__}: {err}"
+
+
+def run_benchmarks(*, quick: bool = False) -> dict:
+    """Every benchmark; the document ``cassi bench`` writes."""
+    report = {"quick": quick, "cpu_count": os.cpu_count(),
+              "cpus_usable": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
+              "python": platform.python_version(), "machine": platform.machine(),
+              "variant": _variant(), "benchmarks": {}}
+    report["benchmarks"]["geometry"] = _registered("cassi.versions.bench", "bench_geometry", quick)
+    report["benchmarks"]["render"] = _registered("cassi.renderer.bench", "bench_render", quick)
+    try:
+        farm = bench_farm(quick)
+    except Exception as err:  # noqa: BLE001
+        farm = {"error": f"{type(err).__name__}: {err}",
+                "traceback": traceback.format_exc().splitlines()[-6:]}
+    report["benchmarks"]["farm"] = farm
+    if "speedup_2_workers" in farm:
+        report["farm_speedup_2_workers"] = farm["speedup_2_workers"]
+    if "ray_overhead_vs_local" in farm:
+        report["ray_overhead_vs_local"] = farm["ray_overhead_vs_local"]
+    return report

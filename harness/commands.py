@@ -1,0 +1,93 @@
+"""``cassi run`` (a batch of subjects x tasks x versions x views) and ``cassi bench``."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from cassi.data.atomic import atomic_write_text
+from cassi.data.errors import CassiInputError
+
+from . import config as C
+
+
+def _add_run(sub) -> None:
+    p = sub.add_parser(
+        "run", help="evaluate subjects x tasks x versions x views (resumable batch)",
+        description="Run the rubric over a batch: geometry and geometric checks on every frame, "
+                    "renders at keyframes and a stride, image checks, ratings. Rerunning into "
+                    "the same --out reuses every finished job whose outputs verify.")
+    p.add_argument("--config", type=Path, help="a run file (.toml, .yaml); flags override it")
+    p.add_argument("--corpus", type=Path, help="corpus directory (default: the embedded synthetic "
+                                                "corpus)")
+    p.add_argument("--subjects", nargs="+", metavar="NAME", help="default: every subject")
+    p.add_argument("--tasks", nargs="+", metavar="N",
+                   help="task numbers (default: the thesis's evaluation set, Table 5.1 + 106, 118)")
+    p.add_argument("--versions", nargs="+", metavar="NAME", help="default: every version")
+    p.add_argument("--views", nargs="+", metavar="NAME",
+                   help="front side half top (default: all four); 'geometry' alone: no renders")
+    p.add_argument("--stride", help="also render every Nth frame (0: first + extremes only)")
+    p.add_argument("--chunk", help="frames per render job (default 16)")
+    p.add_argument("--preset", help="render preset (default preview)")
+    p.add_argument("--variant", help="Mitsuba variant (default: the renderer's choice)")
+    p.add_argument("--executor", choices=C.EXECUTORS, help="local processes (default) or ray")
+    p.add_argument("--address", help="Ray cluster address (default: start a local cluster)")
+    p.add_argument("--workers", help="worker processes (default 1)")
+    p.add_argument("--retries", help="retries of a job whose worker died (default 1)")
+    p.add_argument("--out", type=Path, help="output directory (required here or in --config)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.set_defaults(func=cmd_run)
+
+
+def _add_bench(sub) -> None:
+    p = sub.add_parser("bench", help="benchmarks: geometry, rendering, the farm (JSON)",
+                       description="Run the registered benchmarks and write one JSON file.")
+    p.add_argument("--out", type=Path, default=Path("bench.json"), help="JSON file to write")
+    p.add_argument("--quick", action="store_true", help="small sizes (CI smoke test)")
+    p.set_defaults(func=cmd_bench)
+
+
+def register(sub) -> None:
+    """Add ``run`` and ``bench`` to the ``cassi`` subcommands."""
+    _add_run(sub)
+    _add_bench(sub)
+
+
+def config_from_args(args: argparse.Namespace) -> C.RunConfig:
+    """The run file (if any) with the command-line flags applied over it."""
+    base = C.load_config(args.config) if args.config else C.RunConfig()
+    flags = {k: getattr(args, k, None) for k in C.FIELDS}
+    cfg = C.merge(base, flags)
+    if cfg.out is None:
+        raise CassiInputError("no output directory: give --out DIR (or out = ... in --config)")
+    return cfg
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from .farm import run  # noqa: PLC0415 - heavy imports only for this command
+
+    cfg = config_from_args(args)
+    result = run(cfg, progress=not args.no_progress and sys.stderr.isatty())
+    print(result.summary.text())
+    print(f"results: {cfg.out / 'results.parquet'} (and .csv); ratings: "
+          f"{cfg.out / 'ratings.parquet'}")
+    return 0 if result.ok else 1
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    from .bench import run_benchmarks  # noqa: PLC0415
+
+    report = run_benchmarks(quick=args.quick)
+    out = Path(args.out)
+    try:
+        atomic_write_text(out, json.dumps(report, indent=1, sort_keys=True, default=str) + "\n")
+    except OSError as err:
+        raise CassiInputError(f"cannot write the benchmark file: {err.strerror}", path=out) from err
+    for name, entry in sorted(report["benchmarks"].items()):
+        status = f"error: {entry['error']}" if "error" in entry else "ok"
+        print(f"{name}: {status}")
+    if "farm_speedup_2_workers" in report:
+        print(f"farm_speedup_2_workers: {report['farm_speedup_2_workers']}")
+    print(f"wrote {out}")
+    return 0

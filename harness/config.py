@@ -1,0 +1,258 @@
+"""A run, declared: a TOML or YAML file, or the same fields as ``cassi run`` flags.
+
+Example ``run.toml``::
+
+    out = "runs/nightly"
+    subjects = ["JW11", "JW12"]      # default: every subject of the evaluation set
+    tasks = [19, 21]                 # default: the evaluation set (thesis Table 5.1 + 106, 118)
+    versions = ["cassi-1.0", "cassi-2.1"]   # default: every registered version
+    views = ["front", "half"]        # default: front, side, half, top; ["geometry"]: no renders
+    stride = 25                      # render every 25th frame too (0: only first + extremes)
+    chunk = 16                       # frames per render job
+    preset = "preview"
+    executor = "local"               # or "ray" (with address = "host:port", else a local cluster)
+    workers = 2
+
+Fields are checked when loaded (types and ranges, unknown keys with the list of valid ones);
+names (subjects, tasks, versions, views, presets) are checked against what exists before any
+work starts (:func:`check_names`). The resolved configuration is saved with the results
+(:func:`resolved`), with the package version and the git revision.
+"""
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import re
+import subprocess
+import tomllib
+from dataclasses import dataclass, field
+from importlib.metadata import PackageNotFoundError, version as pkg_version
+from pathlib import Path
+from typing import Any, Mapping
+
+import yaml
+
+from cassi.data.errors import CassiInputError
+
+from .jobs import GEOMETRY_VIEW
+
+EXECUTORS = ("local", "ray")
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """Every setting of a run (see the module docstring); None means "the default set"."""
+
+    out: Path | None = None
+    corpus: Path | None = None
+    subjects: tuple[str, ...] | None = None
+    tasks: tuple[int, ...] | None = None
+    versions: tuple[str, ...] | None = None
+    views: tuple[str, ...] | None = None
+    stride: int = 25
+    chunk: int = 16
+    preset: str = "preview"
+    variant: str | None = None
+    executor: str = "local"
+    address: str | None = None
+    workers: int = 1
+    retries: int = 1
+
+    def replace(self, **changes) -> "RunConfig":
+        return dataclasses.replace(self, **changes)
+
+
+FIELDS = tuple(f.name for f in dataclasses.fields(RunConfig))
+_LISTS = {"subjects": str, "tasks": int, "versions": str, "views": str}
+_INTS = {"stride": 0, "chunk": 1, "workers": 1, "retries": 0}   # name -> minimum
+_STRS = ("preset", "variant", "executor", "address")
+
+
+def _line_of(text: str | None, key: str) -> int | None:
+    """The line where ``key`` is set in a TOML/YAML text (for error messages)."""
+    if not text:
+        return None
+    pat = re.compile(rf"^\s*[\"']?{re.escape(key)}[\"']?\s*[=:]")
+    for i, line in enumerate(text.splitlines(), 1):
+        if pat.match(line):
+            return i
+    return None
+
+
+def _did_you_mean(name: str, valid) -> str:
+    close = difflib.get_close_matches(str(name), [str(v) for v in valid], n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _as_int(value: Any, key: str, where: dict) -> int:
+    if isinstance(value, bool):
+        raise CassiInputError(f"{key}: expected an integer, got {value!r}", **where)
+    if isinstance(value, int):
+        return value
+    if isinstance(value, str) and re.fullmatch(r"\s*[+-]?\d+\s*", value):
+        return int(value)
+    raise CassiInputError(f"{key}: expected an integer, got {value!r}", **where)
+
+
+def validate(raw: Mapping[str, Any], *, source: str | Path | None = None,
+             text: str | None = None) -> RunConfig:
+    """Check types and ranges of raw fields and build a :class:`RunConfig`.
+
+    Raises
+    ------
+    CassiInputError
+        Unknown key (with the valid ones), wrong type, value out of range, unknown executor.
+    """
+    values: dict[str, Any] = {}
+    for key, value in raw.items():
+        where = {"path": source, "line": _line_of(text, key)} if source else {}
+        if key not in FIELDS:
+            raise CassiInputError(f"unknown setting {key!r}{_did_you_mean(key, FIELDS)}; valid "
+                                  f"settings: {', '.join(FIELDS)}", **where)
+        if value is None:
+            continue
+        if key in _LISTS:
+            items = [value] if isinstance(value, (str, int)) and not isinstance(value, bool) else value
+            if not isinstance(items, (list, tuple)):
+                raise CassiInputError(f"{key}: expected a list, got {value!r}", **where)
+            if _LISTS[key] is int:
+                items = [_as_int(v, key, where) for v in items]
+            else:
+                bad = [v for v in items if not isinstance(v, str) or not v.strip()]
+                if bad:
+                    raise CassiInputError(f"{key}: expected names, got {bad[0]!r}", **where)
+                items = [v.strip() for v in items]
+            if not items:
+                raise CassiInputError(f"{key}: the list is empty", **where)
+            values[key] = tuple(dict.fromkeys(items))  # order kept, repeats dropped
+        elif key in _INTS:
+            n = _as_int(value, key, where)
+            if n < _INTS[key]:
+                raise CassiInputError(f"{key}: must be at least {_INTS[key]}, got {n}", **where)
+            values[key] = n
+        elif key in ("out", "corpus"):
+            if not isinstance(value, (str, Path)) or not str(value).strip():
+                raise CassiInputError(f"{key}: expected a path, got {value!r}", **where)
+            path = Path(str(value)).expanduser()
+            if source is not None and not path.is_absolute():
+                path = Path(source).parent / path  # relative to the config file
+            values[key] = path
+        else:
+            if not isinstance(value, str):
+                raise CassiInputError(f"{key}: expected text, got {value!r}", **where)
+            values[key] = value.strip()
+    cfg = RunConfig(**values)
+    if cfg.executor not in EXECUTORS:
+        raise CassiInputError(f"unknown executor {cfg.executor!r}; valid: {', '.join(EXECUTORS)}",
+                              path=source, line=_line_of(text, "executor"))
+    if cfg.address and cfg.executor != "ray":
+        raise CassiInputError("address is only used with executor 'ray'", path=source,
+                              line=_line_of(text, "address"))
+    return cfg
+
+
+def load_config(path: str | Path) -> RunConfig:
+    """Read and validate a ``.toml``, ``.yaml`` or ``.yml`` run file."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as err:
+        raise CassiInputError(f"cannot read the run configuration: {err}", path=path) from err
+    suffix = path.suffix.lower()
+    if suffix == ".toml":
+        try:
+            raw = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as err:
+            m = re.search(r"line (\d+)", str(err))
+            raise CassiInputError(f"not valid TOML: {err}", path=path,
+                                  line=int(m.group(1)) if m else None) from err
+    elif suffix in (".yaml", ".yml"):
+        try:
+            raw = yaml.safe_load(text)
+        except yaml.YAMLError as err:
+            mark = getattr(err, "problem_mark", None)
+            raise CassiInputError(f"not valid YAML: {getattr(err, 'problem', err)}", path=path,
+                                  line=mark.line + 1 if mark else None) from err
+        raw = {} if raw is None else raw
+    else:
+        raise CassiInputError("run configuration must be .toml, .yaml or .yml", path=path)
+    if not isinstance(raw, dict):
+        raise CassiInputError("run configuration must be a table of settings", path=path)
+    if "run" in raw and isinstance(raw["run"], dict) and len(raw) == 1:
+        raw = raw["run"]  # a [run] table is accepted as well as top-level keys
+    return validate(raw, source=path, text=text)
+
+
+def merge(base: RunConfig, overrides: Mapping[str, Any]) -> RunConfig:
+    """``base`` with every non-None override applied (CLI flags over a config file)."""
+    raw = {k: v for k, v in dataclasses.asdict(base).items()
+           if v is not None and v != getattr(RunConfig(), k)}
+    raw.update({k: v for k, v in overrides.items() if v is not None})
+    return validate(raw)
+
+
+@dataclass(frozen=True)
+class Catalog:
+    """What exists: the names a configuration may use."""
+
+    subjects: tuple[str, ...]
+    tasks: Mapping[str, tuple[int, ...]] = field(default_factory=dict)  # subject -> task numbers
+    versions: tuple[str, ...] = ()
+    views: tuple[str, ...] = ()
+    presets: tuple[str, ...] = ()
+
+
+def _unknown(kind: str, names, valid) -> None:
+    bad = [n for n in names if n not in valid]
+    if bad:
+        hint = _did_you_mean(bad[0], valid)
+        raise CassiInputError(f"unknown {kind} {', '.join(map(str, bad))}{hint}; valid "
+                              f"{kind}s: {', '.join(map(str, valid)) or '(none)'}")
+
+
+def check_names(cfg: RunConfig, catalog: Catalog) -> None:
+    """Fail before any work when a name is unknown, listing the valid names."""
+    if cfg.subjects is not None:
+        _unknown("subject", cfg.subjects, catalog.subjects)
+    if cfg.tasks is not None and catalog.tasks:
+        subjects = cfg.subjects or catalog.subjects
+        valid = sorted({t for s in subjects for t in catalog.tasks.get(s, ())})
+        _unknown("task", cfg.tasks, valid)
+    if cfg.versions is not None:
+        _unknown("version", cfg.versions, catalog.versions)
+    if cfg.views is not None:
+        _unknown("view", cfg.views, tuple(catalog.views) + (GEOMETRY_VIEW,))
+    if catalog.presets:
+        _unknown("preset", [cfg.preset], catalog.presets)
+
+
+def package_version() -> str:
+    try:
+        return pkg_version("cassi-farm")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+def git_revision(where: Path | None = None) -> str | None:
+    """The checkout's commit (with ``-dirty`` when it has changes), or None outside git."""
+    where = where or Path(__file__).resolve().parent
+    try:
+        rev = subprocess.run(["git", "rev-parse", "HEAD"], cwd=where, capture_output=True,
+                             text=True, timeout=10)
+        if rev.returncode != 0:
+            return None
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                               cwd=where, capture_output=True, text=True, timeout=10)
+        return rev.stdout.strip() + ("-dirty" if dirty.stdout.strip() else "")
+    except (OSError, subprocess.SubprocessError):
+        return None
+
+
+def resolved(cfg: RunConfig, **extra) -> dict:
+    """The configuration as saved with the results: every field, plus provenance."""
+    doc = {k: (str(v) if isinstance(v, Path) else list(v) if isinstance(v, tuple) else v)
+           for k, v in dataclasses.asdict(cfg).items()}
+    doc["package_version"] = package_version()
+    doc["git_revision"] = git_revision()
+    doc.update(extra)
+    return doc

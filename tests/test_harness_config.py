@@ -1,0 +1,118 @@
+"""Run configuration: TOML/YAML/flags, validation at load time, names checked before work."""
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import pytest
+
+from cassi.data.errors import CassiInputError
+from cassi.harness import config as C
+from cassi.harness.commands import config_from_args, register
+from cassi.harness.evalset import TABLE_5_1
+
+CATALOG = C.Catalog(subjects=("JW11", "JW12"), tasks={"JW11": (19, 21, 106), "JW12": (2, 5)},
+                    versions=("cassi-1.0", "cassi-2.1"), views=("front", "side", "half", "top"),
+                    presets=("preview", "final"))
+
+
+def _parser():
+    p = argparse.ArgumentParser()
+    register(p.add_subparsers(dest="command"))
+    return p
+
+
+def test_toml_and_yaml_give_the_same_config(tmp_path):
+    (tmp_path / "run.toml").write_text(
+        'out = "o"\nsubjects = ["JW11"]\ntasks = [19, 21]\nviews = ["front"]\nworkers = 2\n'
+        'executor = "ray"\naddress = "127.0.0.1:6379"\n')
+    (tmp_path / "run.yaml").write_text(
+        "out: o\nsubjects: [JW11]\ntasks: [19, 21]\nviews: [front]\nworkers: 2\n"
+        "executor: ray\naddress: '127.0.0.1:6379'\n")
+    a, b = C.load_config(tmp_path / "run.toml"), C.load_config(tmp_path / "run.yaml")
+    assert a == b
+    assert a.out == tmp_path / "o"  # relative to the config file
+    assert a.tasks == (19, 21) and a.workers == 2 and a.stride == 25
+
+
+@pytest.mark.parametrize("text, match, line", [
+    ('out = "o"\nworkres = 2\n', r"unknown setting 'workres' \(did you mean 'workers'\?\)", 2),
+    ('out = "o"\nworkers = 0\n', "workers: must be at least 1", 2),
+    ('out = "o"\nstride = "x"\n', "stride: expected an integer", 2),
+    ('tasks = ["a"]\n', "tasks: expected an integer", 1),
+    ('subjects = []\n', "subjects: the list is empty", 1),
+    ('executor = "slurm"\n', "unknown executor 'slurm'; valid: local, ray", 1),
+    ('address = "x:1"\n', "address is only used with executor 'ray'", 1),
+    ('out = "o"\nworkers = [\n', "not valid TOML", None),
+])
+def test_bad_settings_name_file_and_line(tmp_path, text, match, line):
+    path = tmp_path / "run.toml"
+    path.write_text(text)
+    with pytest.raises(CassiInputError, match=match) as err:
+        C.load_config(path)
+    assert err.value.path == str(path)
+    if line is not None:
+        assert err.value.line == line
+
+
+def test_bad_yaml_and_suffix(tmp_path):
+    (tmp_path / "r.yaml").write_text("out: [unclosed\n")
+    with pytest.raises(CassiInputError, match="not valid YAML"):
+        C.load_config(tmp_path / "r.yaml")
+    (tmp_path / "r.json").write_text("{}")
+    with pytest.raises(CassiInputError, match=".toml, .yaml or .yml"):
+        C.load_config(tmp_path / "r.json")
+
+
+def test_flags_override_the_file(tmp_path):
+    (tmp_path / "run.toml").write_text('out = "o"\nworkers = 2\nversions = ["cassi-1.0"]\n')
+    args = _parser().parse_args(["run", "--config", str(tmp_path / "run.toml"),
+                                 "--workers", "1", "--tasks", "19", "21", "--stride", "5"])
+    cfg = config_from_args(args)
+    assert cfg.workers == 1 and cfg.tasks == (19, 21) and cfg.stride == 5
+    assert cfg.versions == ("cassi-1.0",) and cfg.out == tmp_path / "o"
+
+
+def test_flags_are_validated_like_the_file():
+    with pytest.raises(CassiInputError, match="workers: must be at least 1"):
+        config_from_args(_parser().parse_args(["run", "--out", "x", "--workers", "0"]))
+    with pytest.raises(CassiInputError, match="no output directory"):
+        config_from_args(_parser().parse_args(["run"]))
+    with pytest.raises(CassiInputError, match="tasks: expected an integer"):
+        config_from_args(_parser().parse_args(["run", "--out", "x", "--tasks", "tp19"]))
+
+
+@pytest.mark.parametrize("change, match", [
+    ({"subjects": ("JW11", "JW99")}, r"unknown subject JW99.*; valid subjects: JW11, JW12"),
+    ({"tasks": (19, 7)}, r"unknown task 7; valid tasks: 2, 5, 19, 21, 106"),
+    ({"subjects": ("JW12",), "tasks": (19,)}, r"unknown task 19; valid tasks: 2, 5"),
+    ({"versions": ("cassi-2.2",)}, r"did you mean 'cassi-2.1'.*valid versions: cassi-1.0, cassi-2.1"),
+    ({"views": ("fromt",)}, r"unknown view fromt \(did you mean 'front'\?\); valid views: front, "
+                            r"side, half, top, geometry"),
+    ({"preset": "ultra"}, "unknown preset ultra; valid presets: preview, final"),
+])
+def test_unknown_names_list_the_valid_ones(change, match):
+    with pytest.raises(CassiInputError, match=match):
+        C.check_names(C.RunConfig(**change), CATALOG)
+
+
+def test_known_names_pass():
+    C.check_names(C.RunConfig(subjects=("JW12",), tasks=(2,), versions=("cassi-1.0",),
+                              views=("geometry",)), CATALOG)
+
+
+def test_resolved_has_provenance(tmp_path):
+    doc = C.resolved(C.RunConfig(out=tmp_path, tasks=(1, 2)), extra=1)
+    assert doc["out"] == str(tmp_path) and doc["tasks"] == [1, 2] and doc["extra"] == 1
+    assert doc["package_version"] == "0.1.0"
+    rev = doc["git_revision"]
+    assert rev is None or len(rev.split("-")[0]) == 40
+    json.dumps(doc)
+
+
+def test_table_5_1_as_printed():
+    # thesis Table 5.1: 15 subjects, two tasks each
+    assert len(TABLE_5_1) == 15
+    assert TABLE_5_1["JW16"] == (3, 6) and TABLE_5_1["JW502"] == (21, 22)
+    assert all(a != b for a, b in TABLE_5_1.values())
