@@ -1,0 +1,271 @@
+"""Image files: linear EXR and sRGB PNG through OpenImageIO, part-id masks, JSON sidecars,
+contact sheets. Every write is atomic (temporary sibling, then ``os.replace``) and every file
+carries the render metadata (variant, view, preset, spp, seed, Mitsuba version, part names).
+"""
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from cassi.data.atomic import atomic_tmp_path, atomic_write_text
+from cassi.data.errors import CassiInputError
+
+__all__ = ["srgb_encode", "srgb_decode", "to_srgb8", "write_exr", "write_png", "write_mask_png",
+           "write_sidecar", "read_image", "read_metadata", "contact_sheet", "write_contact_sheet",
+           "METADATA_PREFIX"]
+
+#: Metadata keys are written as ``cassi:<key>`` attributes (EXR header / PNG text chunks).
+METADATA_PREFIX = "cassi:"
+PNG_COMPRESSION = 3  # zlib level: small files, a few ms per 512^2 image
+
+
+def srgb_encode(linear: np.ndarray) -> np.ndarray:
+    """Linear -> sRGB transfer function (IEC 61966-2-1), clipped to [0, 1]; float32."""
+    x = np.clip(np.asarray(linear, np.float32), 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055).astype(np.float32)
+
+
+def srgb_decode(encoded: np.ndarray) -> np.ndarray:
+    """sRGB -> linear (inverse of :func:`srgb_encode` on [0, 1]); float32."""
+    x = np.asarray(encoded, np.float32)
+    return np.where(x <= 0.04045, x / 12.92, np.power((x + 0.055) / 1.055, 2.4)).astype(np.float32)
+
+
+def to_srgb8(linear: np.ndarray) -> np.ndarray:
+    """uint8 sRGB image from linear float RGB (H, W, 3)."""
+    return np.rint(srgb_encode(linear) * 255.0).astype(np.uint8)
+
+
+def _meta_attrs(spec, metadata: dict | None) -> None:
+    for key, value in (metadata or {}).items():
+        if not isinstance(value, str):
+            value = json.dumps(value, sort_keys=True)
+        spec.attribute(METADATA_PREFIX + str(key), value)
+
+
+def _write(path: Path, pixels: np.ndarray, spec, *, fmt) -> None:
+    import OpenImageIO as oiio
+
+    path = Path(path)
+    tmp = atomic_tmp_path(path)
+    try:
+        out = oiio.ImageOutput.create(str(tmp))
+        if out is None:
+            raise OSError(f"OpenImageIO cannot write {path.suffix} files: {oiio.geterror()}")
+        if not out.open(str(tmp), spec):
+            raise OSError(f"cannot open {tmp} for writing: {out.geterror()}")
+        ok = out.write_image(np.ascontiguousarray(pixels))
+        out.close()
+        if not ok:
+            raise OSError(f"cannot write {path}: {out.geterror()}")
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def _check_rgb(rgb: np.ndarray) -> np.ndarray:
+    rgb = np.asarray(rgb)
+    if rgb.ndim != 3 or rgb.shape[2] not in (3, 4):
+        raise CassiInputError(f"image must be (H, W, 3), not {rgb.shape}")
+    return rgb[..., :3]
+
+
+def write_exr(path: str | os.PathLike, rgb: np.ndarray, *, depth: np.ndarray | None = None,
+              mask: np.ndarray | None = None, metadata: dict | None = None,
+              compression: str = "zip") -> Path:
+    """Write linear RGB (float32 (H, W, 3)) as OpenEXR, with optional extra channels
+    ``Z`` (depth, Parke units, inf = background) and ``part`` (part index as float)."""
+    import OpenImageIO as oiio
+
+    rgb = _check_rgb(rgb).astype(np.float32)
+    chans, names = [rgb], ["R", "G", "B"]
+    if depth is not None:
+        chans.append(np.asarray(depth, np.float32)[..., None]); names.append("Z")
+    if mask is not None:
+        chans.append(np.asarray(mask, np.float32)[..., None]); names.append("part")
+    pixels = np.concatenate(chans, axis=2)
+    h, w = rgb.shape[:2]
+    spec = oiio.ImageSpec(w, h, len(names), oiio.FLOAT)
+    spec.channelnames = tuple(names)
+    spec.attribute("compression", compression)
+    spec.attribute("oiio:ColorSpace", "lin_rec709")
+    _meta_attrs(spec, metadata)
+    _write(Path(path), pixels, spec, fmt=oiio.FLOAT)
+    return Path(path)
+
+
+def write_png(path: str | os.PathLike, rgb: np.ndarray, *, metadata: dict | None = None,
+              linear: bool = True) -> Path:
+    """Write an 8-bit sRGB PNG. ``rgb`` is linear float (encoded here) when ``linear``, else
+    already-encoded uint8."""
+    import OpenImageIO as oiio
+
+    rgb = _check_rgb(rgb)
+    pixels = to_srgb8(rgb) if linear else np.asarray(rgb, np.uint8)
+    h, w = pixels.shape[:2]
+    spec = oiio.ImageSpec(w, h, 3, oiio.UINT8)
+    spec.attribute("png:compressionLevel", PNG_COMPRESSION)
+    spec.attribute("oiio:ColorSpace", "sRGB")
+    _meta_attrs(spec, metadata)
+    _write(Path(path), pixels, spec, fmt=oiio.UINT8)
+    return Path(path)
+
+
+def write_mask_png(path: str | os.PathLike, mask: np.ndarray, *, metadata: dict | None = None) -> Path:
+    """Write part indices (int (H, W), < 256) as a one-channel 8-bit PNG; the part names
+    are in the metadata (``cassi:part_names``)."""
+    import OpenImageIO as oiio
+
+    mask = np.asarray(mask)
+    if mask.ndim != 2 or mask.min() < 0 or mask.max() > 255:
+        raise CassiInputError("mask must be (H, W) with part indices 0..255")
+    h, w = mask.shape
+    spec = oiio.ImageSpec(w, h, 1, oiio.UINT8)
+    spec.attribute("png:compressionLevel", PNG_COMPRESSION)
+    _meta_attrs(spec, metadata)
+    _write(Path(path), mask.astype(np.uint8), spec, fmt=oiio.UINT8)
+    return Path(path)
+
+
+def write_sidecar(path: str | os.PathLike, metadata: dict) -> Path:
+    """Write the render metadata as JSON beside an image."""
+    atomic_write_text(path, json.dumps(metadata, indent=1, sort_keys=True) + "\n")
+    return Path(path)
+
+
+def read_image(path: str | os.PathLike) -> np.ndarray:
+    """Pixels of an image file as a numpy array (H, W, C): float32 for EXR, uint8 for PNG."""
+    import OpenImageIO as oiio
+
+    inp = oiio.ImageInput.open(str(path))
+    if inp is None:
+        raise CassiInputError(f"cannot read image: {oiio.geterror()}", path=path)
+    try:
+        return inp.read_image()
+    finally:
+        inp.close()
+
+
+def read_metadata(path: str | os.PathLike) -> dict:
+    """The ``cassi:`` attributes of an image file (JSON values decoded)."""
+    import OpenImageIO as oiio
+
+    inp = oiio.ImageInput.open(str(path))
+    if inp is None:
+        raise CassiInputError(f"cannot read image: {oiio.geterror()}", path=path)
+    try:
+        out = {}
+        for attr in inp.spec().extra_attribs:
+            if attr.name.startswith(METADATA_PREFIX):
+                value = attr.value
+                try:
+                    value = json.loads(value)
+                except (TypeError, ValueError):
+                    pass
+                out[attr.name[len(METADATA_PREFIX):]] = value
+        return out
+    finally:
+        inp.close()
+
+
+def contact_sheet(images: Sequence[np.ndarray], *, columns: int | None = None, gap: int = 4,
+                  background: tuple[int, int, int] = (32, 32, 32)) -> np.ndarray:
+    """Tile uint8 (H, W, 3) images (sizes may differ) into one uint8 grid image, row-major."""
+    if not images:
+        raise CassiInputError("contact sheet needs at least one image")
+    imgs = [np.asarray(i) for i in images]
+    imgs = [i if i.dtype == np.uint8 else to_srgb8(i) for i in imgs]
+    n = len(imgs)
+    cols = columns or int(np.ceil(np.sqrt(n)))
+    rows = int(np.ceil(n / cols))
+    ch = max(i.shape[0] for i in imgs)
+    cw = max(i.shape[1] for i in imgs)
+    sheet = np.empty((rows * ch + (rows + 1) * gap, cols * cw + (cols + 1) * gap, 3), np.uint8)
+    sheet[...] = np.asarray(background, np.uint8)
+    for k, img in enumerate(imgs):
+        r, c = divmod(k, cols)
+        y = gap + r * (ch + gap)
+        x = gap + c * (cw + gap)
+        sheet[y:y + img.shape[0], x:x + img.shape[1]] = img[..., :3]
+    return sheet
+
+
+def write_contact_sheet(path: str | os.PathLike, images: Sequence[np.ndarray], *,
+                        columns: int | None = None, metadata: dict | None = None) -> Path:
+    """Write :func:`contact_sheet` of ``images`` as a PNG."""
+    return write_png(path, contact_sheet(images, columns=columns), metadata=metadata, linear=False)
+
+
+def write_result(result, stem: str | os.PathLike, *, exr: bool = True, png: bool = True,
+                 mask_png: bool = True, sidecar: bool = True) -> list[Path]:
+    """Write one ``RenderResult``: ``<stem>.exr`` (linear RGB + ``Z`` depth + ``part`` index),
+    ``<stem>.png`` (sRGB), ``<stem>.mask.png`` (part indices) and ``<stem>.json`` (metadata).
+    Returns the paths written."""
+    meta = result.metadata()
+    written = []
+    if exr:
+        written.append(write_exr(f"{stem}.exr", result.rgb, depth=result.depth,
+                                 mask=result.mask, metadata=meta))
+    if png:
+        written.append(write_png(f"{stem}.png", result.rgb, metadata=meta))
+    if mask_png:
+        written.append(write_mask_png(f"{stem}.mask.png", result.mask, metadata=meta))
+    if sidecar:
+        written.append(write_sidecar(f"{stem}.json", meta))
+    return written
+
+
+class FrameWriter:
+    """Writes render results on one background thread while the next frame renders.
+
+    OpenImageIO encodes and compresses outside Python's GIL, so file writing overlaps the next
+    ``mi.render``. At most ``max_pending`` results wait in memory (memory stays flat over long
+    tasks); ``flush()`` waits for all and re-raises the first write error.
+
+    Examples
+    --------
+    >>> with FrameWriter() as writer:                                     # doctest: +SKIP
+    ...     for n, pos in enumerate(positions):
+    ...         writer.submit(renderer.render(pos), out / f"front_{n:05d}")
+    """
+
+    def __init__(self, *, exr: bool = True, png: bool = True, mask_png: bool = True,
+                 sidecar: bool = True, background: bool = True, max_pending: int = 2):
+        from concurrent.futures import ThreadPoolExecutor
+
+        self._opts = dict(exr=exr, png=png, mask_png=mask_png, sidecar=sidecar)
+        self._pool = ThreadPoolExecutor(1, thread_name_prefix="cassi-writer") if background else None
+        self._pending: list = []
+        self._max = max(1, int(max_pending))
+        self.written: list[Path] = []
+
+    def submit(self, result, stem: str | os.PathLike) -> None:
+        if self._pool is None:
+            self.written += write_result(result, stem, **self._opts)
+            return
+        self._pending.append(self._pool.submit(write_result, result, stem, **self._opts))
+        while len(self._pending) > self._max:
+            self.written += self._pending.pop(0).result()
+
+    def flush(self) -> list[Path]:
+        while self._pending:
+            self.written += self._pending.pop(0).result()
+        return self.written
+
+    def close(self) -> None:
+        try:
+            self.flush()
+        finally:
+            if self._pool is not None:
+                self._pool.shutdown(wait=True)
+
+    def __enter__(self) -> "FrameWriter":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

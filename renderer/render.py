@@ -1,0 +1,263 @@
+"""``FaceRenderer``: one Mitsuba scene per (topology, view, preset), loaded once; per frame only the
+vertex positions change.
+
+Why: ``mi.load_dict`` per frame leaks memory and recompiles kernels (mitsuba issues 1890, 703);
+writing ``mesh_<part>.vertex_positions`` through ``mi.traverse`` and calling ``params.update()``
+once keeps the scene, the film, the sensors and hence the compiled kernels fixed, so a frame costs
+a BVH refit plus the render itself.
+
+Each frame gives the colour image (linear RGB) and, from a second pass with the ``aov``
+integrator through the pixel centres, the part shown at each pixel and its distance from the
+camera (exact, aligned with the colour image: same camera, same pixel grid).
+"""
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from cassi.data.errors import CassiInputError
+
+from . import scenes
+from .variant import activate_variant, choose_variant
+from .views import Preset, View, preset as _preset, view as _view
+
+__all__ = ["RenderResult", "FaceRenderer", "part_triangles", "BACKGROUND"]
+
+BACKGROUND = "background"
+
+
+@dataclass(frozen=True)
+class RenderResult:
+    """One rendered frame of one view.
+
+    Attributes
+    ----------
+    rgb : float32 (H, W, 3)
+        Linear RGB radiance (scene-referred; 1.0 ~ diffuse white under the key light).
+    mask : int32 (H, W)
+        Part index per pixel: ``part_names[mask[i, j]]`` is the part the ray through the pixel
+        centre hits first; 0 = background.
+    depth : float32 (H, W)
+        Distance along that ray from the camera to the surface, Parke units; ``inf`` where the
+        ray hits nothing.
+    part_names : tuple of str
+        ``("background", part1, part2, ...)``.
+    view, preset, variant : str
+        What produced the image (recorded in every file written from it).
+    """
+
+    rgb: np.ndarray
+    mask: np.ndarray
+    depth: np.ndarray
+    part_names: tuple[str, ...]
+    view: str
+    preset: str
+    variant: str
+    spp: int
+    seed: int
+    render_s: float = 0.0
+    extra: dict = field(default_factory=dict)
+
+    def part_mask(self, part: str) -> np.ndarray:
+        """bool (H, W): where ``part`` is the visible surface."""
+        if part not in self.part_names:
+            raise KeyError(f"no part {part!r}; parts: {', '.join(self.part_names[1:])}")
+        return self.mask == self.part_names.index(part)
+
+    def coverage(self) -> dict[str, float]:
+        """Fraction of the image each part covers (background included)."""
+        counts = np.bincount(self.mask.ravel(), minlength=len(self.part_names))
+        return {name: float(c) / self.mask.size for name, c in zip(self.part_names, counts)}
+
+    def metadata(self) -> dict:
+        """What gets recorded with every image written from this result."""
+        import mitsuba as mi
+        return {"renderer": "cassi.renderer", "mitsuba": mi.__version__, "variant": self.variant,
+                "view": self.view, "preset": self.preset, "spp": self.spp, "seed": self.seed,
+                "width": int(self.rgb.shape[1]), "height": int(self.rgb.shape[0]),
+                "part_names": list(self.part_names), **self.extra}
+
+
+def part_triangles(topology) -> dict[str, np.ndarray]:
+    """The per-part triangles of a render topology, as int (T, 3) zero-based into the part's
+    expanded vertex array.
+
+    Accepts ``topology.triangles`` (a mapping part -> triangles) or ``topology.parts`` (a mapping
+    part -> object with ``.triangles``), which is how ``cassi.data.face.RenderTopology`` and the
+    test meshes describe themselves.
+    """
+    tri = getattr(topology, "triangles", None)
+    if isinstance(tri, Mapping):
+        items = tri.items()
+    else:
+        parts = getattr(topology, "parts", None)
+        if isinstance(parts, Mapping):
+            items = ((k, getattr(v, "triangles", v)) for k, v in parts.items())
+        else:
+            raise TypeError("topology has neither a .triangles nor a .parts mapping")
+    out = {}
+    for name, t in items:
+        t = np.asarray(t)
+        if t.ndim != 2 or t.shape[1] != 3:
+            raise ValueError(f"part {name!r}: triangles must be (T, 3), not {t.shape}")
+        out[str(name)] = t.astype(np.int64)
+    return out
+
+
+class FaceRenderer:
+    """Renders frames of one face topology from one view at one preset.
+
+    Parameters
+    ----------
+    topology
+        A ``cassi.data.face.RenderTopology`` (use ``half=True`` for the ``half`` view): per part
+        triangles and ``expand(positions (V, 3)) -> dict[part, float32 (W, 3)]``.
+    view, preset
+        Names from :mod:`cassi.renderer.views` (or the objects).
+    variant
+        Mitsuba variant or None for :func:`choose_variant`.
+
+    The scene is built on the first frame (its vertex counts, and for the ``top`` view the
+    triangles kept below the clip plane, come from that frame) and never reloaded.
+    """
+
+    def __init__(self, topology, view: str | View = "front", preset: str | Preset = "preview",
+                 variant: str | None = None):
+        self.view = _view(view) if isinstance(view, str) else view
+        self.preset = _preset(preset) if isinstance(preset, str) else preset
+        self.variant = choose_variant(variant)
+        half = getattr(topology, "half", None)
+        if half is not None and bool(half) != self.view.half:
+            raise CassiInputError(
+                f"view {self.view.name!r} needs a {'half' if self.view.half else 'full'}-head "
+                f"topology (render_topology(face, half={self.view.half}))")
+        self.topology = topology
+        self._triangles = part_triangles(topology)
+        self._scene = None
+        self.loads = 0  # how many times a scene was loaded (stays 1: tests check it)
+
+    # -- scene ---------------------------------------------------------------------------
+    def _clip(self, expanded: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """Triangles per part after the view's clip (top view: hide everything above the
+        palate's top + margin; the palate itself is never clipped)."""
+        tris = self._triangles
+        margin = self.view.clip_above_palate
+        if margin is None:
+            return tris
+        palate = [p for p in expanded if p.startswith("palate")]
+        if not palate:
+            return tris
+        z_cut = max(float(np.max(expanded[p][:, 2])) for p in palate) + margin
+        out = {}
+        for part, t in tris.items():
+            if part.startswith("palate") or len(t) == 0:
+                out[part] = t
+                continue
+            centroid_z = expanded[part][t][:, :, 2].mean(axis=1)
+            out[part] = t[centroid_z <= z_cut]
+        return out
+
+    def _load(self, expanded: dict[str, np.ndarray]) -> None:
+        import drjit as dr
+        import mitsuba as mi
+
+        activate_variant(self.variant)
+        missing = set(self._triangles) - set(expanded)
+        if missing:
+            raise ValueError(f"topology.expand gave no positions for parts {sorted(missing)}")
+        tris = self._clip(expanded)
+        meshes = {part: scenes.part_mesh(part, expanded[part], t)
+                  for part, t in tris.items() if len(t)}
+        self.part_names = (BACKGROUND, *meshes)
+        self._scene = mi.load_dict(scenes.scene_dict(meshes, self.view, self.preset))
+        self.loads += 1
+        sensors = {s.id(): s for s in self._scene.sensors()}
+        self._sensor_colour = sensors[scenes.SENSOR_COLOUR]
+        self._sensor_mask = sensors[scenes.SENSOR_MASK]
+        self._mask_integrator = mi.load_dict(scenes.mask_integrator_dict())
+        params = mi.traverse(self._scene)
+        self._keys = {part: scenes.mesh_id(part) + ".vertex_positions" for part in meshes}
+        params.keep(list(self._keys.values()))
+        self._params = params
+        self._buffer_type = {part: type(params[key]) for part, key in self._keys.items()}
+        # The aov integrator's shape_index is the scene order + 1 in scalar variants and the
+        # shape's registry id in JIT variants; map either to our part index via a lookup table.
+        shapes = list(self._scene.shapes())
+        by_id = {s.id(): s for s in shapes}
+        raw = {}
+        for k, part in enumerate(meshes, start=1):
+            shape = by_id[scenes.mesh_id(part)]
+            if mi.variant().startswith("scalar"):
+                raw[k] = shapes.index(shape) + 1
+            else:
+                raw[k] = int(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(shape))[0])
+        lut = np.zeros(max([0, *raw.values()]) + 2, np.int32)
+        for k, r in raw.items():
+            lut[r] = k
+        self._lut = lut
+
+    # -- per frame -------------------------------------------------------------------------
+    def update(self, positions: np.ndarray) -> None:
+        """Move the mesh to ``positions`` (float (V, 3), Parke units, FaceModel numbering)."""
+        positions = np.asarray(positions)
+        if positions.ndim != 2 or positions.shape[1] != 3:
+            raise CassiInputError(f"positions must be (V, 3), not {positions.shape}")
+        if not np.all(np.isfinite(positions)):
+            raise CassiInputError("positions contain NaN or infinite values")
+        expanded = self.topology.expand(positions)
+        if self._scene is None:
+            self._load(expanded)
+            return
+        activate_variant(self.variant)
+        for part, key in self._keys.items():
+            self._params[key] = self._buffer_type[part](
+                np.ascontiguousarray(expanded[part], np.float32).ravel())
+        self._params.update()
+
+    def render_colour(self) -> np.ndarray:
+        """float32 (H, W, 3) linear RGB of the current geometry (the bare ``mi.render``)."""
+        import mitsuba as mi
+        img = mi.render(self._scene, sensor=self._sensor_colour, seed=self.preset.seed,
+                        spp=self.preset.spp)
+        return np.asarray(img, dtype=np.float32)[..., :3]
+
+    def render_mask(self) -> tuple[np.ndarray, np.ndarray]:
+        """(mask int32 (H, W), depth float32 (H, W)) of the current geometry."""
+        import mitsuba as mi
+        aov = np.asarray(mi.render(self._scene, integrator=self._mask_integrator,
+                                   sensor=self._sensor_mask, seed=0, spp=1), dtype=np.float32)
+        raw = np.rint(aov[..., 1]).astype(np.int64)
+        raw[(raw < 0) | (raw >= len(self._lut))] = len(self._lut) - 1  # unknown -> background
+        mask = self._lut[raw]
+        depth = aov[..., 0].copy()
+        depth[mask == 0] = np.inf
+        return mask, depth
+
+    def render(self, positions: np.ndarray) -> RenderResult:
+        """Render one frame: colour, mask and depth."""
+        t0 = time.perf_counter()
+        self.update(positions)
+        rgb = self.render_colour()
+        mask, depth = self.render_mask()
+        return RenderResult(rgb=rgb, mask=mask, depth=depth, part_names=self.part_names,
+                            view=self.view.name, preset=self.preset.name, variant=self.variant,
+                            spp=self.preset.spp, seed=self.preset.seed,
+                            render_s=time.perf_counter() - t0)
+
+    def render_to_files(self, positions: np.ndarray, stem: str | Path, *, exr: bool = True,
+                        png: bool = True, mask_png: bool = True, sidecar: bool = True,
+                        extra: dict | None = None) -> RenderResult:
+        """Render one frame and write it (synchronously) with :func:`images.write_result`:
+        ``<stem>.exr``, ``<stem>.png``, ``<stem>.mask.png``, ``<stem>.json``."""
+        from .images import write_result
+
+        res = self.render(positions)
+        if extra:
+            res = dataclasses.replace(res, extra={**res.extra, **extra})
+        write_result(res, stem, exr=exr, png=png, mask_png=mask_png, sidecar=sidecar)
+        return res

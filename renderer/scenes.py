@@ -1,0 +1,142 @@
+"""Every Mitsuba scene dictionary of the renderer, built in this one module.
+
+The ids chosen here become the keys of ``mi.traverse``; they are fixed on purpose:
+
+- ``mesh_<part>``: one triangle mesh per face part (``mesh_skin.vertex_positions`` is what the
+  renderer rewrites each frame);
+- ``sensor_colour``: the camera with the preset's film and an ``multijitter`` sampler (its seed
+  is the preset's, so a render is reproducible);
+- ``sensor_mask``: the same camera and film size with a ``stratified`` sampler, one sample per
+  pixel and ``jitter=False``, i.e. exactly one ray through each pixel's centre, and a box filter:
+  the mask and depth it gives are exact per pixel and aligned with the colour image (same camera,
+  same pixel grid);
+- ``light_key``, ``light_fill``, ``light_rim``: rectangular area lights; ``ambient``: a dim
+  constant environment (also the image background).
+
+All functions need Mitsuba's variant to be set already (``variant.activate_variant``).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .views import DEFAULT_MATERIAL, MATERIALS, Preset, View
+
+__all__ = ["mesh_id", "material_for", "part_mesh", "sensor_dict", "emitter_dicts",
+           "colour_integrator_dict", "mask_integrator_dict", "scene_dict", "SENSOR_COLOUR",
+           "SENSOR_MASK"]
+
+SENSOR_COLOUR = "sensor_colour"
+SENSOR_MASK = "sensor_mask"
+_MESH_PREFIX = "mesh_"
+
+
+def mesh_id(part: str) -> str:
+    """The scene id (and ``mi.traverse`` key prefix) of a part's mesh."""
+    return _MESH_PREFIX + part
+
+
+def material_for(part: str) -> dict:
+    """The BSDF dict of a part: exact name, else the longest material name the part starts
+    with (``teeth_upper`` -> ``teeth``), else a neutral grey."""
+    if part in MATERIALS:
+        return MATERIALS[part]
+    prefixes = [m for m in MATERIALS if part.startswith(m)]
+    if prefixes:
+        return MATERIALS[max(prefixes, key=len)]
+    return DEFAULT_MATERIAL
+
+
+def part_mesh(part: str, positions: np.ndarray, triangles: np.ndarray):
+    """A Mitsuba mesh for one part, with smooth vertex normals.
+
+    Parameters
+    ----------
+    positions : float (W, 3)
+        Vertex positions in Parke units.
+    triangles : int (T, 3)
+        Zero-based indices into ``positions``; T >= 1.
+
+    Vertex normals are recomputed by Mitsuba whenever ``vertex_positions`` is updated.
+    """
+    import mitsuba as mi
+
+    props = mi.Properties()
+    props["bsdf"] = mi.load_dict(material_for(part))
+    mesh = mi.Mesh(mesh_id(part), int(len(positions)), int(len(triangles)), props=props,
+                   has_vertex_normals=True)
+    params = mi.traverse(mesh)
+    vp, fc = params["vertex_positions"], params["faces"]
+    params["vertex_positions"] = type(vp)(np.ascontiguousarray(positions, np.float32).ravel())
+    params["faces"] = type(fc)(np.ascontiguousarray(triangles, np.uint32).ravel())
+    params.update()
+    return mesh
+
+
+def _to_world(origin, target, up):
+    import mitsuba as mi
+    return mi.ScalarTransform4f().look_at(origin=list(map(float, origin)),
+                                          target=list(map(float, target)),
+                                          up=list(map(float, up)))
+
+
+def sensor_dict(view: View, preset: Preset, *, mask: bool) -> dict:
+    """The camera of ``view`` with the film of ``preset``; ``mask=True`` for the mask sensor."""
+    cam = view.camera
+    film = {"type": "hdrfilm", "width": preset.width, "height": preset.height,
+            "pixel_format": "rgb", "component_format": "float32",
+            "rfilter": {"type": "box" if mask else preset.rfilter}}
+    if mask:
+        sampler = {"type": "stratified", "sample_count": 1, "jitter": False}
+    else:
+        # multijitter: half the noise of independent sampling at the same cost (4 spp).
+        sampler = {"type": "multijitter", "sample_count": preset.spp, "seed": preset.seed}
+    return {"type": "perspective", "fov": cam.fov, "fov_axis": "y",
+            "near_clip": cam.near_clip, "far_clip": cam.far_clip,
+            "to_world": _to_world(cam.origin, cam.target, cam.up),
+            "film": film, "sampler": sampler}
+
+
+def emitter_dicts(view: View) -> dict[str, dict]:
+    """The view's studio lights (placed in its camera frame) and the ambient environment."""
+    import mitsuba as mi
+
+    cam = view.camera
+    right, up, back = cam.basis()
+    target = np.asarray(cam.target, float)
+    out: dict[str, dict] = {}
+    for light in view.lights:
+        pos = target + cam.distance * (light.offset[0] * right + light.offset[1] * up
+                                       + light.offset[2] * back)
+        half = 0.5 * light.size * cam.distance
+        # A rectangle emits along its local +z; look_at turns +z toward the camera target.
+        to_world = _to_world(pos, target, up) @ mi.ScalarTransform4f().scale([half, half, 1.0])
+        out["light_" + light.name] = {
+            "type": "rectangle", "to_world": to_world,
+            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": list(light.radiance)}}}
+    out["ambient"] = {"type": "constant",
+                      "radiance": {"type": "rgb", "value": [view.ambient] * 3}}
+    return out
+
+
+def colour_integrator_dict(preset: Preset) -> dict:
+    return {"type": "path", "max_depth": preset.max_depth}
+
+
+def mask_integrator_dict() -> dict:
+    """AOV integrator: channel 0 = distance along the ray (``depth``), 1 = shape index
+    (a registry id in JIT variants, scene order + 1 in scalar ones; 0 = no hit)."""
+    return {"type": "aov", "aovs": "dd.y:depth,si:shape_index"}
+
+
+def scene_dict(meshes: dict[str, object], view: View, preset: Preset) -> dict:
+    """The complete scene of one (topology, view, preset): part meshes, both sensors, lights.
+
+    ``meshes`` maps part name -> Mitsuba mesh from :func:`part_mesh`.
+    """
+    scene: dict = {"type": "scene", "integrator": colour_integrator_dict(preset),
+                   SENSOR_COLOUR: sensor_dict(view, preset, mask=False),
+                   SENSOR_MASK: sensor_dict(view, preset, mask=True)}
+    scene.update(emitter_dicts(view))
+    for part, mesh in meshes.items():
+        scene[mesh_id(part)] = mesh
+    return scene
