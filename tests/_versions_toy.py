@@ -56,17 +56,18 @@ def toy_vertices(seed: int = 0) -> np.ndarray:
     put(70, 60, 250, 0)
     put(287, 50, 240, 0)
     put(300, 55, 245, 0)
-    # Nose outline 80-101: a wedge above the lip, tip forward at z = 200.
+    # Nose outline 80-101: a wedge above the lip; 80-85 the tip and its underside (z 180-200).
     for k, n in enumerate(range(80, 102)):
         t = k / 21.0
-        v[n - 1] = (120 + 120 * np.sin(np.pi * t), 60 * t, 180 + 200 * t)
-    put(90, 245, 0, 200)                       # the tip
-    # Tongue 288-299: tip 288, centre 289-292, back 293, edges 294-299.
+        v[n - 1] = (120 + 100 * t, 60 * t, 250 + 150 * t)
+    for k, n in enumerate(range(80, 86)):
+        v[n - 1] = (160 + 15 * k, 10 * k, 180 + 4 * k)
+    # Tongue 288-299: tip 288, centre 289-292, back 293, edges 294-299 beside each of them.
     put(288, -20, 0, 40)
     for n, x in zip(range(289, 293), (-80, -270, -430, -540)):
         put(n, x, 0, 50)
     put(293, -640, 0, 0)
-    for n, x in zip(range(294, 300), (-60, -200, -340, -470, -580, -650)):
+    for n, x in zip(range(294, 300), (-20, -80, -270, -430, -540, -640)):
         put(n, x, 120, 40)
     # Jaw 14-43, chin 11-13, neck 6-10, cheek 44-48.
     for k, n in enumerate(range(14, 44)):
@@ -76,6 +77,8 @@ def toy_vertices(seed: int = 0) -> np.ndarray:
         v[n - 1] = (100 - 20 * (n - 6), 30 * (n - 6), -450 + 10 * n)
     for n in range(44, 49):
         v[n - 1] = (-100 - 50 * (n - 44), 300, -100)
+    put(17, 90, 0, -330)                       # gnathion (point of the chin)
+    put(22, -560, 300, -300)                   # gonion (angle of the jaw)
     return v
 
 

@@ -222,7 +222,8 @@ def test_tongue_on_pellets_tip_follows_back_anchored(anim10, face, rec):
                                                (anim10.n_frames, 3)), atol=1e-3)
     np.testing.assert_array_equal(anim10.vertex(293), np.broadcast_to(face.vertices[292],
                                                                       (anim10.n_frames, 3)))
-    assert follow[294] == 289 and follow[299] is None         # edges: nearest centre, or back
+    assert follow[294] == 289 and follow[299] is None         # edges: beside tip -> T1, back
+    assert [follow[n] for n in (295, 296, 297, 298)] == [289, 290, 291, 292]
 
 
 def test_nose_kept_above_a_high_upper_lip(face):

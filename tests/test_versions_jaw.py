@@ -47,10 +47,14 @@ def test_point_of_rotation_undefined_at_zero_angle():
 
 
 def test_table_4_3_fractions_are_parke_times_1_11111():
+    # Table 4.3 prints Parke's fraction x 1.11111 per zone: 1.11111, 0.999999, 0.8333325,
+    # 0.555555, 0.3888885; every CASSI zone must be its Parke zone's fraction times 1.11111.
     printed = K.TABLE_4_3_PRINTED
-    by_zone = {z.name.split()[0]: z.fraction for z in K.CASSI10_ZONES}
-    for zone, value in printed.items():
-        assert by_zone[zone] == pytest.approx(value, abs=5e-8)
+    parke = {z.name.split()[0]: z.fraction for z in K.PARKE_ZONES}
+    for zone in K.CASSI10_ZONES:
+        key = zone.name.split()[0]
+        assert zone.fraction == pytest.approx(printed[key], abs=5e-8)
+        assert zone.fraction == pytest.approx(parke[key] * K.CASSI_FRACTION_FACTOR, abs=5e-8)
 
 
 def test_cassi_zones_move_22_30_and_drop_lower_lip():

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cassi.data import numbering as N
 from cassi.data.errors import CassiInputError
 from cassi.versions import constants as K
 from cassi.versions.jaw import apply_zones, solve_jaw_motion
@@ -61,36 +62,13 @@ def check_parameters(parameters: dict[int, float] | None) -> dict[int, float]:
     return out
 
 
-def _numbering():
-    try:
-        from cassi.data import numbering
-    except ImportError:  # the face model's numbering not there yet: geometric fallbacks below
-        return None
-    return numbering
+def jaw_reference_vertices(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Parke (x, z) of the model's gnathion (point 1) and gonion (point 2).
 
-
-def _face_index(n: int) -> int:
-    return n - 1
-
-
-def jaw_reference_vertices(neutral: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Parke (x, z) of the model's gnathion (point 1) and gonion (point 2) on the neutral face.
-
-    The thesis gives no vertex numbers for them. ``cassi.data.numbering.GNATHION`` /
-    ``GONION`` are used when the face model names them; otherwise (CHOSEN) the gnathion is the
-    1st-zone jaw vertex farthest forward-and-down (max x - z) and the gonion the one farthest
-    back-and-down (min x + z), which are the point of the chin and the angle of the jaw.
+    The thesis gives no vertex numbers for them; the face model names them
+    (``cassi.data.numbering.GNATHION``, ``GONION``).
     """
-    num = _numbering()
-    jaw = np.asarray(K.CASSI10_ZONES[0].vertices)
-    xz = neutral[jaw - 1][:, _XZ]
-    g1 = getattr(num, "GNATHION", None) if num else None
-    g2 = getattr(num, "GONION", None) if num else None
-    gnathion = (_vertex_xz(neutral, g1) if g1 is not None
-                else xz[np.argmax(xz[:, 0] - xz[:, 1])])
-    gonion = (_vertex_xz(neutral, g2) if g2 is not None
-              else xz[np.argmin(xz[:, 0] + xz[:, 1])])
-    return gnathion, gonion
+    return _vertex_xz(vertices, N.GNATHION), _vertex_xz(vertices, N.GONION)
 
 
 def _vertex_xz(vertices: np.ndarray, number) -> np.ndarray:
@@ -109,12 +87,13 @@ class JawStage:
     """Jaw rotation of 4.1.3 with Table 4.3's zones (initialisation and animation phases)."""
 
     zones: tuple = K.CASSI10_ZONES
-    teeth_zones: tuple[str, ...] = K.CASSI10_TEETH_ZONES
+    teeth_vertices: tuple[int, ...] = K.TEETH_VERTICES
     name: str = "jaw"
 
     def initialise(self, ctx: TaskContext) -> None:
-        teeth = tuple(z for z in self.zones if z.name in self.teeth_zones)
-        others = tuple(z for z in self.zones if z.name not in self.teeth_zones)
+        teeth_set = set(self.teeth_vertices)
+        teeth = tuple(z for z in self.zones if set(z.vertices) <= teeth_set)
+        others = tuple(z for z in self.zones if not set(z.vertices) <= teeth_set)
         # Teeth: Parke's placement -> the first valid row's jaw pellets.
         mani, manm = _mandible_points(ctx.neutral)
         motion = solve_jaw_motion(mani, manm, ctx.pellet("MNI")[:1], ctx.pellet("MNM")[:1])
@@ -189,23 +168,10 @@ def _parameters(ctx: TaskContext, spec: dict[int, tuple[str, int]]) -> None:
         ctx.diagnostics[f"param_{number}"] = ctx.displacement(pellet)[:, axis]
 
 
-def nose_tip_vertices(neutral: np.ndarray) -> np.ndarray:
-    """1-based numbers of the nose-tip vertices that the clearance rule raises.
-
-    ``cassi.data.numbering.NOSE_TIP`` when the face model names them; otherwise (CHOSEN) the
-    vertices of Parke's nose outline (80-101) that lie in the front half of the nose and no higher
-    than its most forward vertex: the tip and the underside above the upper lip.
-    """
-    num = _numbering()
-    named = getattr(num, "NOSE_TIP", None) if num else None
-    if named is not None:
-        return np.atleast_1d(np.asarray(named, dtype=np.int64))
-    nose = np.asarray(K.NOSE_VERTICES)
-    xz = neutral[nose - 1][:, _XZ]
-    tip = np.argmax(xz[:, 0])
-    x_mid = 0.5 * (xz[:, 0].min() + xz[:, 0].max())
-    keep = (xz[:, 0] >= x_mid) & (xz[:, 1] <= xz[tip, 1] + 1e-9)
-    return nose[keep]
+def nose_tip_vertices(vertices: np.ndarray | None = None) -> np.ndarray:
+    """1-based numbers of the nose-tip vertices the clearance rule raises (the face model's
+    ``NOSE_TIP``: the tip and its underside above the upper lip)."""
+    return np.asarray(K.NOSE_TIP_VERTICES, dtype=np.int64)
 
 
 @dataclass
@@ -241,37 +207,10 @@ class NoseClearanceStage:
         ctx.diagnostics["nose_raise"] = raise_by
 
 
-def tongue_followers(neutral: np.ndarray) -> dict[int, int | None]:
-    """For each non-pellet tongue vertex, the pellet vertex it follows (None: anchored).
-
-    CHOSEN (4.1.1 says only "adjusted accordingly"): on the neutral face the midline vertex in
-    front of 289 is the tip and follows T1 (289); the midline vertex behind 292 is the back and
-    stays anchored; every edge vertex follows the nearest of 289-292 and the back vertex, so the
-    back edge stays anchored with the back.
-    """
-    tongue = np.asarray(K.TONGUE_VERTICES)
-    centre = np.asarray(K.V_TONGUE_PELLETS)
-    others = np.setdiff1d(tongue, centre)
-    xyz = neutral[others - 1]
-    mid = np.abs(xyz[:, 1]) <= 1e-6 * max(1.0, float(np.abs(neutral[tongue - 1]).max()))
-    out: dict[int, int | None] = {}
-    tip = back = None
-    if mid.any():
-        mids = others[mid]
-        tip = int(mids[np.argmax(neutral[mids - 1, 0])])
-        back = int(mids[np.argmin(neutral[mids - 1, 0])]) if mid.sum() > 1 else None
-    leaders = list(centre) + ([back] if back is not None else [])
-    for v in others:
-        v = int(v)
-        if v == tip:
-            out[v] = int(centre[0])
-        elif v == back:
-            out[v] = None
-        else:
-            d = np.linalg.norm(neutral[np.asarray(leaders) - 1] - neutral[v - 1], axis=1)
-            lead = int(leaders[int(np.argmin(d))])
-            out[v] = None if lead == back else lead
-    return out
+def tongue_followers(vertices: np.ndarray | None = None) -> dict[int, int | None]:
+    """For each non-pellet tongue vertex, the pellet vertex it follows (None: anchored); see
+    :data:`cassi.versions.constants.TONGUE_FOLLOW`."""
+    return dict(K.TONGUE_FOLLOW)
 
 
 @dataclass

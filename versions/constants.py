@@ -10,20 +10,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cassi.data import numbering as N
+
 # --- vertices the thesis associates with pellets (4.1.1, Figures 4.4-4.7) -------------------
+# The face model's numbering (cassi.data.numbering) is the one source of vertex numbers.
 #: Bottom of the top front teeth: the XRMB origin is translated here (4.1.1 "Mapping").
-V_UPPER_INCISOR_TIP = 226
+V_UPPER_INCISOR_TIP = N.UPPER_INCISOR_TIP          # 226
 #: The MANi pellet's vertex (4.1.1, Figure 4.7).
-V_MANI = 258
+V_MANI = N.MANI                                    # 258
 #: The MANm pellet sits halfway between these two vertices (4.1.1, Figure 4.7).
-V_MANM_PAIR = (281, 286)
+V_MANM_PAIR = N.MANM_PAIR                          # (281, 286)
 #: Upper and lower lip pellets' vertices (4.1.1, Figures 4.4-4.5).
-V_UL = 67
-V_LL = 49
+V_UL = N.UL                                        # 67
+V_LL = N.LL                                        # 49
 #: Tongue vertices of T1..T4 (4.1.1, Figure 4.6).
-V_TONGUE_PELLETS = (289, 290, 291, 292)
+V_TONGUE_PELLETS = N.TONGUE_PELLETS                # (289, 290, 291, 292)
 #: Parke's fixed jaw pivot (3.1.3, Equations 3.5-3.6).
-V_PARKE_JAW_PIVOT = 107
+V_PARKE_JAW_PIVOT = N.JAW_PIVOT                    # 107
 
 # --- the mapping (4.1.1) -----------------------------------------------------------------
 #: CHOSEN: p, "the distance between two approximately corresponding points in the model", is
@@ -65,41 +68,29 @@ def _r(a: int, b: int) -> tuple[int, ...]:
     return tuple(range(a, b + 1))
 
 
-#: Parke's rotation zones, Table 3.2 (fractions of the jaw angle, axes adjusted).
-PARKE_ZONES: tuple[Zone, ...] = (
-    Zone("1st jaw", 1.0, _r(14, 43)),
-    Zone("1st lip centerline", 1.0, (49, 52, 55, 58)),
-    Zone("2nd lip", 0.9, (50, 53, 56, 59)),
-    Zone("2nd lower teeth", 0.9, _r(255, 286)),
-    Zone("3rd underneath chin", 0.75, (11, 12, 13), "z"),
-    Zone("3rd lip", 0.75, (51, 54, 57, 60)),
-    Zone("4th neck", 0.5, _r(6, 10), "z"),
-    Zone("5th lower cheek", 0.35, _r(44, 48)),
-    Zone("5th lip corner", 0.35, (70, 287)),
-)
+#: Parke's rotation zones, Table 3.2 (fractions of the jaw angle, axes adjusted), from the face
+#: model's numbering: 1st 1.0 jaw 14-43 and lip centre line; 2nd 0.9 lips 50, 53, 56, 59 and the
+#: lower teeth 255-286; 3rd 0.75 under the chin 11-13 (z only) and lips 51, 54, 57, 60; 4th 0.5
+#: the neck 6-10 (z only); 5th 0.35 the lower cheek 44-48 and the corners 70, 287.
+PARKE_ZONES: tuple[Zone, ...] = tuple(Zone(f"{z} {i}", f, tuple(v), ax)
+                                      for i, (z, f, v, ax) in enumerate(N.PARKE_JAW_ZONES))
 
 #: CASSI 1.0's factor on Parke's fractions (4.1.3): "Parke's fractions of theta are multiplied by
-#: 1.11111" so that the teeth get (almost) 100 % of the jaw rotation. Table 4.3 prints the
-#: products; they are computed here and checked against the printed values in the tests.
+#: 1.11111" so that the teeth get (almost) 100 % of the jaw rotation.
 CASSI_FRACTION_FACTOR = 1.11111
 
 #: CASSI 1.0's zones, Table 4.3: 22 and 30 move from the 1st to the 3rd zone; the lower lip
-#: vertices are no longer rotated (4.1.2). CHOSEN: the axes column, which Table 4.3 omits, is
-#: kept from Table 3.2 (11-13 and the neck z only; 22 and 30, jaw vertices, x and z).
-CASSI10_ZONES: tuple[Zone, ...] = (
-    Zone("1st jaw", 1.0 * CASSI_FRACTION_FACTOR, _r(14, 21) + _r(23, 29) + _r(31, 43)),
-    Zone("2nd lower teeth", 0.9 * CASSI_FRACTION_FACTOR, _r(255, 286)),
-    Zone("3rd underneath chin", 0.75 * CASSI_FRACTION_FACTOR, (11, 12, 13), "z"),
-    Zone("3rd back of jaw", 0.75 * CASSI_FRACTION_FACTOR, (22, 30)),
-    Zone("4th neck", 0.5 * CASSI_FRACTION_FACTOR, _r(6, 10), "z"),
-    Zone("5th lower cheek", 0.35 * CASSI_FRACTION_FACTOR, _r(44, 48)),
-)
+#: vertices are no longer rotated (4.1.2). The axes column, which Table 4.3 omits, is kept from
+#: Table 3.2 (11-13 and the neck z only; 22 and 30, jaw vertices, x and z). Tests check these
+#: against Parke's zones times 1.11111.
+CASSI10_ZONES: tuple[Zone, ...] = tuple(Zone(f"{z} {i}", f, tuple(v), ax)
+                                        for i, (z, f, v, ax) in enumerate(N.CASSI10_JAW_ZONES))
 #: Table 4.3 as printed, for the test that the products above match it.
 TABLE_4_3_PRINTED = {"1st": 1.11111, "2nd": 0.999999, "3rd": 0.8333325, "4th": 0.555555,
                      "5th": 0.3888885}
-#: The zones rotated by the initialisation's teeth rotation (Parke -> first-row jaw pellets);
+#: The vertices rotated by the initialisation's teeth rotation (Parke -> first-row jaw pellets);
 #: every other zone is placed by the head-measures jaw rotation (4.1.3, last paragraph).
-CASSI10_TEETH_ZONES = ("2nd lower teeth",)
+TEETH_VERTICES = N.LOWER_TEETH
 
 # --- Parke's baseline (3.1.3) ------------------------------------------------------------
 #: Parameter 4 "is between 0 and 20" degrees (3.1.3): the baseline clips the jaw angle taken from
@@ -130,20 +121,26 @@ CORNER_WEIGHTS = {"UL": 0.5, "LL": 0.5}
 #: the neutral face's own gap, so a lip at or below its neutral height never moves the nose.
 #: 2 mm: a visible space at the scale of the lips (~10 mm tall), small enough not to reshape it.
 NOSE_LIP_MIN_GAP_MM = 2.0
-#: CHOSEN: the tongue tip follows T1 and every edge vertex follows the centre vertex it is
-#: nearest to on the neutral face (4.1.1: "the other vertices on the tongue are adjusted
-#: accordingly"); the back vertices stay anchored (the rubric's "V shape at the back of the
-#: tongue caused by the anchored back points" is that choice's known consequence).
-TONGUE_BACK_ANCHORED = True
+#: CHOSEN (4.1.1 says only "the other vertices on the tongue are adjusted accordingly"): the tip
+#: follows T1; each edge vertex follows the centre vertex it lies beside (the edge beside the tip
+#: follows T1 with the tip); the back vertex and the edge beside it stay anchored (the rubric's
+#: "V shape at the back of the tongue caused by the anchored back points" is that choice's known
+#: consequence). ``None`` = anchored.
+TONGUE_FOLLOW: dict[int, int | None] = {N.TONGUE_TIP: N.T1, N.TONGUE_BACK: None}
+for _centre, _edge in zip(N.TONGUE_CENTRE, N.TONGUE_EDGE):
+    TONGUE_FOLLOW[_edge] = (N.T1 if _centre == N.TONGUE_TIP
+                            else None if _centre == N.TONGUE_BACK else _centre)
+del _centre, _edge
 
 # --- vertex sets (thesis 3.1.3 Figure 3.7 and 4.1.1 Figure 4.6) ---------------------------
 #: "The upper lip is shown as vertices 61 to 69, the lower lip as 49 to 60, and the corners as 70
 #: and 287" (3.1.3). CHOSEN: vertex 300, which 2.0 adds between 287 and 70 (4.2) and which the
 #: face model always carries, moves with the corners in 1.0 so it never lags behind them.
-UPPER_LIP_VERTICES = tuple(range(61, 70))
-LOWER_LIP_VERTICES = tuple(range(49, 61))
-LIP_CORNER_VERTICES = (70, 287, 300)
-#: Parke's nose outline (3.1.3: "80 through 101 for the nose").
-NOSE_VERTICES = tuple(range(80, 102))
+UPPER_LIP_VERTICES = N.UPPER_LIP
+LOWER_LIP_VERTICES = N.LOWER_LIP
+LIP_CORNER_VERTICES = (N.CORNER, N.INNER_CORNER, N.CORNER_MIDDLE)
+#: Parke's nose outline (3.1.3: "80 through 101 for the nose") and the tip the clearance raises.
+NOSE_VERTICES = N.NOSE
+NOSE_TIP_VERTICES = N.NOSE_TIP
 #: The 12 tongue vertices added by CASSI (4.1.1): 4 on the pellets, tip, back and 6 edges.
-TONGUE_VERTICES = tuple(range(288, 300))
+TONGUE_VERTICES = N.TONGUE
