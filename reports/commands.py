@@ -1,0 +1,79 @@
+"""``cassi report``, ``cassi nightly``, ``cassi gate`` and ``cassi golden``."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def register(sub) -> None:
+    p = sub.add_parser("report", help="write an HTML report (and CSV/Markdown tables) of a run",
+                       description="Write DIR/index.html and the thesis-style tables of RUN.")
+    p.add_argument("run", type=Path, help="a run directory (cassi run --out)")
+    p.add_argument("--compare", type=Path, help="a previous run to compare with")
+    p.add_argument("--out", type=Path, required=True, help="report directory")
+    p.set_defaults(func=cmd_report)
+
+    p = sub.add_parser("nightly", help="run the default evaluation, report, compare, gate",
+                       description="One night: dated run + report under DIR, compared with the "
+                       "previous night; exit 0 when the gates hold, 1 when one fails.")
+    p.add_argument("--out", type=Path, required=True, help="the nightly directory (kept across nights)")
+    p.add_argument("--corpus", type=Path, help="corpus directory (default: the embedded synthetic one)")
+    p.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
+    p.add_argument("--stride", type=int, help="render every N-th frame (default: the run default)")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.set_defaults(func=cmd_nightly)
+
+    p = sub.add_parser("gate", help="apply the regression gates to a run",
+                       description="Compare RUN with a baseline run or golden directory; write "
+                       "gate.json and gate.md into RUN; exit 0 when all gates hold, 1 otherwise.")
+    p.add_argument("run", type=Path)
+    p.add_argument("--baseline", type=Path, required=True, help="a run directory or golden directory")
+    p.set_defaults(func=cmd_gate)
+
+    p = sub.add_parser("golden", help="make a run's renders the golden images (explicit only)",
+                       description="Copy RUN's renders and results into GOLDEN; the only way "
+                       "golden images change.")
+    p.add_argument("run", type=Path)
+    p.add_argument("--golden", type=Path, required=True, help="golden directory to (re)write")
+    p.set_defaults(func=cmd_golden)
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    from cassi.reports.report import write_report  # noqa: PLC0415
+
+    index = write_report(args.run, args.out, compare=args.compare)
+    print(index)
+    return 0
+
+
+def cmd_nightly(args: argparse.Namespace) -> int:
+    from cassi.harness.config import RunConfig  # noqa: PLC0415
+    from cassi.reports.nightly import nightly  # noqa: PLC0415
+
+    cfg = RunConfig(workers=args.workers)
+    if args.stride:
+        cfg = cfg.replace(stride=args.stride)
+    passed, index = nightly(args.out, corpus=args.corpus, config=cfg, progress=not args.quiet)
+    print(f"{'PASSED' if passed else 'FAILED'}: {index}")
+    return 0 if passed else 1
+
+
+def cmd_gate(args: argparse.Namespace) -> int:
+    from cassi.reports.gates import gate  # noqa: PLC0415
+
+    passed, results = gate(args.run, args.baseline)
+    fails = [r for r in results if r.status == "fail"]
+    for r in fails:
+        print(f"FAIL {r.gate} {r.version} {r.subject} {r.item}: {r.reason}")
+    skips = sum(r.status == "skip" for r in results)
+    print(f"{'PASSED' if passed else 'FAILED'}: {len(results) - len(fails) - skips} passed, "
+          f"{len(fails)} failed, {skips} skipped (see {args.run / 'gate.md'})")
+    return 0 if passed else 1
+
+
+def cmd_golden(args: argparse.Namespace) -> int:
+    from cassi.reports.gates import update_golden  # noqa: PLC0415
+
+    n = update_golden(args.run, args.golden)
+    print(f"{n} golden images written to {args.golden}")
+    return 0

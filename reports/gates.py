@@ -1,0 +1,209 @@
+"""Regression gates: image gates against golden renders and metric gates against a baseline run.
+
+A gate passes, fails or is skipped, and always says why. Golden images change only through
+:func:`update_golden` (``cassi golden``), never as a side effect of checking.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import imageio.v3 as iio
+import numpy as np
+import pandas as pd
+from skimage.metrics import peak_signal_noise_ratio, structural_similarity
+
+from cassi.data.atomic import atomic_tmp_path, atomic_write_text
+from cassi.data.errors import CassiInputError
+from cassi.reports.runio import Run, load_run
+from cassi.reports.tables import verdicts
+
+#: Image gate thresholds. Renders use fixed seeds, so an unchanged version reproduces its images
+#: almost exactly (Monte Carlo noise is identical); SSIM 0.97 / PSNR 32 dB tolerate drift across
+#: Mitsuba variants (scalar vs LLVM round differently) while a lip moved by a few pixels fails.
+SSIM_MIN = 0.97
+PSNR_MIN_DB = 32.0
+#: Extra negatives a check may gain over the baseline before the metric gate fails, unless the
+#: rubric declares its own ``gate_tolerance`` for that check.
+DEFAULT_TOLERANCE = 0
+
+GOLDEN_MARK = "golden.json"
+
+
+@dataclass
+class GateResult:
+    gate: str          # "image" or "metric"
+    subject: str
+    version: str
+    item: str          # view/frame for images, table/check for metrics
+    status: str        # "pass", "fail", "skip"
+    reason: str
+    value: float | None = None
+    threshold: float | None = None
+
+
+def golden_key(row) -> Path:
+    """Where a render lives in a golden directory: version/view/subject_task_rep_frame.png."""
+    for name in ("version", "view", "subject"):
+        value = str(row[name])
+        if not value or "/" in value or "\\" in value or value in (".", ".."):
+            raise CassiInputError(f"unsafe {name} {value!r} in render index")
+    return Path(str(row["version"]), str(row["view"]),
+                f"{row['subject']}_{int(row['task']):03d}_{int(row['rep'])}_{int(row['frame']):05d}.png")
+
+
+def _read_rgb(path: Path) -> np.ndarray:
+    img = np.asarray(iio.imread(path))
+    if img.ndim == 2:
+        img = np.stack([img] * 3, axis=-1)
+    return img[..., :3]
+
+
+def image_metrics(rendered: np.ndarray, reference: np.ndarray) -> tuple[float, float]:
+    """SSIM and PSNR (dB) of two 8-bit RGB images of the same shape."""
+    if rendered.shape != reference.shape:
+        raise ValueError(f"image shapes differ: {rendered.shape} vs {reference.shape}")
+    ssim = structural_similarity(rendered, reference, channel_axis=-1, data_range=255)
+    if np.array_equal(rendered, reference):
+        return float(ssim), float("inf")
+    return float(ssim), float(peak_signal_noise_ratio(reference, rendered, data_range=255))
+
+
+def image_gates(run: Run, reference_dir: Path, *, ssim_min: float = SSIM_MIN,
+                psnr_min: float = PSNR_MIN_DB) -> list[GateResult]:
+    """Compare every render of ``run`` with its golden counterpart under ``reference_dir``.
+
+    A render without a golden image is a skipped gate that says so; never a pass.
+    """
+    out = []
+    for _, row in run.renders.iterrows():
+        if not str(row["path"]).endswith(".png"):
+            continue
+        item = f"{row['view']} task {int(row['task'])} frame {int(row['frame'])}"
+        ref = reference_dir / golden_key(row)
+        if not ref.is_file():
+            out.append(GateResult("image", row["subject"], row["version"], item, "skip",
+                                  f"no golden image {ref}"))
+            continue
+        try:
+            ssim, psnr = image_metrics(_read_rgb(Path(row["path"])), _read_rgb(ref))
+        except (OSError, ValueError) as err:
+            out.append(GateResult("image", row["subject"], row["version"], item, "fail", str(err)))
+            continue
+        ok = ssim >= ssim_min and psnr >= psnr_min
+        reason = (f"SSIM {ssim:.4f} (min {ssim_min}), PSNR {psnr:.1f} dB (min {psnr_min})")
+        out.append(GateResult("image", row["subject"], row["version"], item,
+                              "pass" if ok else "fail", reason, ssim, ssim_min))
+    return out
+
+
+def tolerance(check: str) -> int:
+    try:
+        from cassi.harness.rubric import CHECKS  # noqa: PLC0415
+    except ImportError:
+        return DEFAULT_TOLERANCE
+    entry = CHECKS.get(check) if hasattr(CHECKS, "get") else None
+    return int(getattr(entry, "gate_tolerance", DEFAULT_TOLERANCE))
+
+
+def metric_gates(run: pd.DataFrame, baseline: pd.DataFrame) -> list[GateResult]:
+    """Per version, table and check: the negatives summed over subjects may not grow beyond the
+    check's tolerance. Only versions and subjects present in both runs are compared."""
+    cur, base = verdicts(run), verdicts(baseline)
+    common = set(cur["subject"]) & set(base["subject"])
+    cur, base = cur[cur["subject"].isin(common)], base[base["subject"].isin(common)]
+    keys = ["version", "table", "check"]
+    a = cur.groupby(keys)["negatives"].sum()
+    b = base.groupby(keys)["negatives"].sum()
+    out = []
+    for key in sorted(set(a.index) & set(b.index)):
+        version, table, check = key
+        now, before, tol = int(a[key]), int(b[key]), tolerance(check)
+        status = "fail" if now - before > tol else "pass"
+        out.append(GateResult("metric", "all", version, f"table {table} / {check}", status,
+                              f"{now} negatives against {before} in the baseline (tolerance {tol})",
+                              float(now), float(before + tol)))
+    return out
+
+
+def gate(run_dir: str | os.PathLike, baseline: str | os.PathLike, *,
+         out_dir: str | os.PathLike | None = None) -> tuple[bool, list[GateResult]]:
+    """Apply the gates of run ``run_dir`` against ``baseline`` (a run directory or a golden
+    directory), write ``gate.json`` and ``gate.md`` into ``out_dir`` (default: the run), and
+    return (passed, results). A baseline run gives metric gates and, through its renders,
+    image gates; a golden directory gives image gates (and metric gates when it holds the
+    results snapshot that :func:`update_golden` stores)."""
+    run = load_run(run_dir)
+    base_path = Path(baseline)
+    if (base_path / GOLDEN_MARK).is_file():
+        results = [*image_gates(run, base_path)]
+        snap = base_path / "results.parquet"
+        if snap.is_file():
+            results += metric_gates(run.results, pd.read_parquet(snap))
+    elif (base_path / "results.parquet").is_file():
+        base_run = load_run(base_path)
+        results = metric_gates(run.results, base_run.results)
+        results += image_gates(run, _renders_as_golden(base_run))
+    else:
+        raise CassiInputError("baseline is neither a run directory (results.parquet) nor a "
+                              f"golden directory ({GOLDEN_MARK})", path=base_path)
+    passed = not any(r.status == "fail" for r in results)
+    write_gate_report(Path(out_dir or run.root), passed, results, baseline=str(base_path))
+    return passed, results
+
+
+def _renders_as_golden(run: Run) -> Path:
+    """A baseline run's renders laid out like a golden directory (links in a scratch dir)."""
+    scratch = run.root / ".gate-baseline"
+    for _, row in run.renders.iterrows():
+        dest = scratch / golden_key(row)
+        if not dest.exists():
+            dest.parent.mkdir(parents=True, exist_ok=True)
+            os.symlink(row["path"], dest)
+    return scratch
+
+
+def write_gate_report(out_dir: Path, passed: bool, results: list[GateResult], *, baseline: str) -> None:
+    counts = {s: sum(r.status == s for r in results) for s in ("pass", "fail", "skip")}
+    payload = {"passed": passed, "baseline": baseline, "counts": counts,
+               "gates": [asdict(r) for r in results]}
+    atomic_write_text(out_dir / "gate.json", json.dumps(payload, indent=2, default=str) + "\n")
+    lines = [f"# Gates: {'PASSED' if passed else 'FAILED'}", "",
+             f"Baseline: `{baseline}`. {counts['pass']} passed, {counts['fail']} failed, "
+             f"{counts['skip']} skipped.", ""]
+    for status in ("fail", "skip"):
+        rows = [r for r in results if r.status == status]
+        if rows:
+            lines += [f"## {status}", ""]
+            lines += [f"- {r.gate} {r.version} {r.subject} {r.item}: {r.reason}" for r in rows]
+            lines.append("")
+    atomic_write_text(out_dir / "gate.md", "\n".join(lines))
+
+
+def update_golden(run_dir: str | os.PathLike, golden_dir: str | os.PathLike) -> int:
+    """Make ``run_dir``'s renders and results the golden baseline (the only way goldens change).
+
+    Returns the number of images written.
+    """
+    run = load_run(run_dir)
+    golden = Path(golden_dir)
+    n = 0
+    for _, row in run.renders.iterrows():
+        if not str(row["path"]).endswith(".png"):
+            continue
+        dest = golden / golden_key(row)
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        tmp = atomic_tmp_path(dest)
+        shutil.copyfile(row["path"], tmp)
+        os.replace(tmp, dest)
+        n += 1
+    tmp = atomic_tmp_path(golden / "results.parquet")
+    run.results.to_parquet(tmp, index=False)
+    os.replace(tmp, golden / "results.parquet")
+    atomic_write_text(golden / GOLDEN_MARK, json.dumps(
+        {"from_run": str(Path(run_dir).resolve()), "images": n, "synthetic": run.synthetic},
+        indent=2) + "\n")
+    return n

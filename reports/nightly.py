@@ -1,0 +1,94 @@
+"""``cassi nightly``: run the default evaluation, report it, compare with the previous night,
+apply the gates and keep a history.
+
+Layout of the nightly directory::
+
+    DIR/runs/<YYYY-MM-DD>[-N]/      each night's run (cassi run output)
+    DIR/reports/<same name>/        its report (index.html, tables, images)
+    DIR/golden/                     golden renders (only `cassi golden` writes them)
+    DIR/history.csv                 night, version, negatives, gate (one row per version a night)
+    DIR/latest.txt                  the name of the newest night
+"""
+from __future__ import annotations
+
+import datetime as dt
+import os
+from pathlib import Path
+
+import pandas as pd
+
+from cassi.data.atomic import atomic_write_text
+from cassi.harness.config import RunConfig
+from cassi.reports.gates import GOLDEN_MARK, gate, write_gate_report
+from cassi.reports.report import write_report
+from cassi.reports.runio import load_run
+from cassi.reports.tables import verdicts
+
+HISTORY_COLUMNS = ["night", "version", "negatives", "gate"]
+
+
+def night_name(runs_dir: Path, today: dt.date | None = None) -> str:
+    """Today's ISO date, suffixed -2, -3 ... when the directory already exists."""
+    base = (today or dt.datetime.now(dt.timezone.utc).date()).isoformat()
+    name, n = base, 1
+    while (runs_dir / name).exists():
+        n += 1
+        name = f"{base}-{n}"
+    return name
+
+
+def previous_night(runs_dir: Path, current: str) -> Path | None:
+    """The newest finished night before ``current`` (one with a results table)."""
+    nights = sorted((p for p in runs_dir.iterdir() if p.is_dir() and p.name != current
+                     and (p / "results.parquet").is_file()), key=lambda p: p.name)
+    earlier = [p for p in nights if p.name < current]
+    return earlier[-1] if earlier else None
+
+
+def read_history(path: Path) -> pd.DataFrame:
+    if not path.is_file():
+        return pd.DataFrame(columns=HISTORY_COLUMNS)
+    return pd.read_csv(path, dtype={"night": str, "version": str})
+
+
+def nightly(out_dir: str | os.PathLike, *, corpus: str | os.PathLike | None = None,
+            config: RunConfig | None = None, today: dt.date | None = None,
+            progress: bool = True) -> tuple[bool, Path]:
+    """One night. Returns (gates passed, report index path)."""
+    from cassi.harness.farm import run as run_farm  # noqa: PLC0415 - heavy import, only here
+
+    root = Path(out_dir)
+    runs_dir, reports_dir = root / "runs", root / "reports"
+    runs_dir.mkdir(parents=True, exist_ok=True)
+    name = night_name(runs_dir, today)
+    run_dir = runs_dir / name
+    cfg = (config or RunConfig()).replace(out=run_dir, corpus=Path(corpus) if corpus else None)
+    result = run_farm(cfg, progress=progress)
+
+    prev = previous_night(runs_dir, name)
+    golden = root / "golden"
+    passed, gate_results = True, []
+    if prev is not None:
+        passed, gate_results = gate(run_dir, prev)
+    if (golden / GOLDEN_MARK).is_file():
+        ok, more = gate(run_dir, golden)
+        passed, gate_results = passed and ok, gate_results + more
+    if not gate_results:
+        write_gate_report(run_dir, True, [], baseline="none (first night, no golden images)")
+    else:
+        write_gate_report(run_dir, passed, gate_results,
+                          baseline=", ".join(str(p) for p in (prev, golden) if p is not None))
+    passed = passed and result.ok
+
+    history_path = root / "history.csv"
+    history = read_history(history_path)
+    v = verdicts(load_run(run_dir).results)
+    tonight = v.groupby("version")["negatives"].sum().reset_index()
+    tonight.insert(0, "night", name)
+    tonight["gate"] = "pass" if passed else "fail"
+    history = pd.concat([history[history["night"] != name], tonight], ignore_index=True)
+    atomic_write_text(history_path, history[HISTORY_COLUMNS].to_csv(index=False, lineterminator="\n"))
+
+    index = write_report(run_dir, reports_dir / name, compare=prev, history=history)
+    atomic_write_text(root / "latest.txt", name + "\n")
+    return passed, index

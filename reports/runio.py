@@ -1,0 +1,119 @@
+"""Reading a finished run directory: the results table, ratings, metadata and render index.
+
+Reports read harness results only (files a run wrote), never re-render or recompute geometry.
+"""
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+from cassi.data.errors import CassiInputError
+from cassi.harness.results import ratings as derive_ratings
+from cassi.harness.results import read_results
+
+#: Columns of a run's render index (one row per image a run rendered).
+RENDER_COLUMNS = ("subject", "task", "rep", "version", "view", "frame", "path")
+
+
+@dataclass
+class Run:
+    """One run directory, loaded.
+
+    Attributes
+    ----------
+    root : Path
+    results : DataFrame
+        The long results table (cassi.harness.results.COLUMNS).
+    ratings : DataFrame
+        Per task file, version, table and component: negatives and rating.
+    meta : dict
+        The run's ``run.json`` (resolved config, package version, git revision, ...).
+    renders : DataFrame
+        RENDER_COLUMNS; ``path`` is absolute. Empty when the run rendered nothing.
+    """
+
+    root: Path
+    results: pd.DataFrame
+    ratings: pd.DataFrame
+    meta: dict = field(default_factory=dict)
+    renders: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=RENDER_COLUMNS))
+
+    @property
+    def synthetic(self) -> bool:
+        if "synthetic" in self.meta:
+            return bool(self.meta["synthetic"])
+        return bool(len(self.results)) and bool(self.results["synthetic"].any())
+
+    @property
+    def name(self) -> str:
+        return self.root.name
+
+    @property
+    def versions(self) -> list[str]:
+        return order_versions(self.results["version"].dropna().unique())
+
+
+#: The thesis's order of versions; others (third-party) follow alphabetically.
+VERSION_ORDER = ("parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1")
+
+
+def order_versions(names) -> list[str]:
+    names = {str(n) for n in names}
+    known = [v for v in VERSION_ORDER if v in names]
+    return known + sorted(names - set(known))
+
+
+def _read_json(path: Path) -> dict:
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return {}
+    except (OSError, json.JSONDecodeError) as err:
+        raise CassiInputError(f"unreadable run metadata: {err}", path=path) from err
+
+
+def _read_renders(root: Path) -> pd.DataFrame:
+    for name in ("renders.parquet", "renders.csv"):
+        path = root / name
+        if path.exists():
+            df = pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
+            missing = [c for c in RENDER_COLUMNS if c not in df]
+            if missing:
+                raise CassiInputError(f"render index lacks columns {missing}", path=path)
+            df = df[list(RENDER_COLUMNS)].copy()
+            df["path"] = [str(_inside(root, p)) for p in df["path"]]
+            return df.reset_index(drop=True)
+    return pd.DataFrame({c: pd.Series(dtype="object") for c in RENDER_COLUMNS})
+
+
+def _inside(root: Path, rel: str) -> Path:
+    """Resolve a path the run recorded, refusing anything outside the run directory."""
+    path = (root / rel).resolve()
+    if os.path.commonpath([path, root.resolve()]) != str(root.resolve()):
+        raise CassiInputError(f"render path {rel!r} escapes the run directory", path=root)
+    return path
+
+
+def load_run(path: str | os.PathLike) -> Run:
+    """Load a run directory written by ``cassi run``.
+
+    Raises
+    ------
+    CassiInputError
+        When ``path`` is not a run directory (no results table).
+    """
+    root = Path(path)
+    results_path = root / "results.parquet"
+    if not results_path.is_file():
+        raise CassiInputError("not a run directory: no results.parquet (run `cassi run` first)",
+                              path=root)
+    results = read_results(results_path)
+    ratings_path = root / "ratings.parquet"
+    ratings = (pd.read_parquet(ratings_path) if ratings_path.is_file()
+               else derive_ratings(results))
+    return Run(root=root, results=results, ratings=ratings, meta=_read_json(root / "run.json"),
+               renders=_read_renders(root))

@@ -1,0 +1,58 @@
+"""The HTML report: content, self-containment, escaping, comparison, command."""
+from __future__ import annotations
+
+import re
+
+import pandas as pd
+
+from reports_fixtures import image, results_rows, write_run
+from cassi.harness.cli import main
+from cassi.reports.report import slug, write_report
+
+
+def _run(tmp_path, name, negatives, subjects=("JW11", "JW12")):
+    res = results_rows(negatives, subjects=subjects)
+    images = {(s, 19, v, view, f): image(hash((s, v, view, f)) % 1000)
+              for s in subjects for v in ("cassi-1.0", "cassi-2.0") for view in ("front", "side")
+              for f in (0, 7)}
+    return write_run(tmp_path / name, res, images=images, meta={"git_revision": "abc123"})
+
+
+def test_report_has_tables_banner_images_and_csv(tmp_path):
+    run = _run(tmp_path, "run", {("cassi-1.0", "JW11", "lip_gap_start"): 2})
+    index = write_report(run, tmp_path / "report")
+    html = index.read_text()
+    assert "Synthetic corpus" in html and "not real speakers" in html
+    assert "Teeth, lips and tongue per subject (thesis Table 5.3)" in html
+    assert "GOOD" in html and "abc123" in html
+    # Every referenced local file exists (self-contained: no network, images alongside).
+    for ref in re.findall(r'(?:src|href)="([^"#]+)"', html):
+        assert not ref.startswith(("http:", "https:", "//")), ref
+        assert (index.parent / ref).exists(), ref
+    page = (index.parent / "subjects" / "JW11.html").read_text()
+    assert "lip_gap_start" in page and "frame 7" in page
+    for ref in re.findall(r'src="([^"]+)"', page):
+        assert (index.parent / "subjects" / ref).resolve().is_file(), ref
+    csv = pd.read_csv(index.parent / "tables" / "table_A_cassi-1.0.csv")
+    assert set(csv["rating"]) == {"GOOD", "EXCELLENT"}
+    assert (index.parent / "tables" / "rating_counts_C.md").read_text().startswith("| version")
+
+
+def test_strings_from_data_are_escaped(tmp_path):
+    evil = "<script>alert(1)</script>"
+    run = _run(tmp_path, "run", {("cassi-1.0", evil, "lip_gap_start"): 1}, subjects=(evil,))
+    index = write_report(run, tmp_path / "report")
+    html = index.read_text()
+    assert "<script>" not in html and "&lt;script&gt;" in html
+    pages = list((index.parent / "subjects").iterdir())
+    assert len(pages) == 1 and pages[0].name == f"{slug(evil)}.html" and "/" not in slug(evil)
+    assert "<script>" not in pages[0].read_text()
+
+
+def test_compare_and_command(tmp_path):
+    old = _run(tmp_path, "old", {("cassi-2.0", "JW11", "lip_gap_start"): 2})
+    new = _run(tmp_path, "new", {})
+    assert main(["report", str(new), "--compare", str(old), "--out", str(tmp_path / "rep")]) == 0
+    html = (tmp_path / "rep" / "index.html").read_text()
+    assert "Changes since old" in html and "▲ better" in html
+    assert main(["report", str(tmp_path / "missing"), "--out", str(tmp_path / "r2")]) == 2
