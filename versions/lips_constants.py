@@ -53,11 +53,15 @@ OUTLINE_FRACTIONS: tuple[float, float, float] = (0.0, 1.0 / 3.0, 2.0 / 3.0)
 # --- Left unstated by the thesis: chosen here, with the reason ------------------------------
 
 #: rho, the "rate of change for c" of OUTER_ABC_CALC step 3(c)i: c := rho c' + (1 - rho) prev_c.
-#: Reason: XRMB rows come every ~6.9 ms; rho = 0.3 gives a time constant of about 2.8 rows
-#: (~19 ms), short against lip gestures (~100 ms) so rounding is not visibly late, yet it
-#: bounds the jump of c at a horizontal/vertical ellipse switch to 30 % of the gap between c'
-#: and the previous c (section 4.2.5 asks for "smooth motion, without sudden changes").
-RHO: float = 0.3
+#: Reason: when OUTER_ABC_CALC leaves branch 3(a)/3(b) for 3(c) (c' leaves the band near
+#: c_rest) or leaves a vertical ellipse, prev_c is Eq. 4.14's c, which can lie far from c'; the
+#: width then jumps by about rho times that gap in one row. On a jaw-wagging trajectory (see
+#: tests/test_versions_lips_behaviour.py) rho = 0.3 gave corner jumps of 2.4 times the pellets'
+#: largest step per row, rho = 0.15 1.2 times, rho = 0.1 no more than the data's own step
+#: (section 4.2.5: "smooth motion, without sudden changes" at the ellipse transitions). The
+#: price is lag: a time constant of about 9.5 rows (~65 ms at 6.9 ms a row), about two of the
+#: frames the thesis displayed (every 5th row), short against a rounding gesture.
+RHO: float = 0.1
 
 #: "c' is near c_rest" (steps 3(a), 3(b)): |c' - c_rest| <= NEAR_C_REST.
 #: Reason: c spans 20 units between rest (65) and fully stretched (85); a quarter of that span

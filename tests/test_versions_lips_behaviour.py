@@ -1,0 +1,296 @@
+"""Behaviour of CASSI 2.0/2.1's lip movement (thesis 4.2-4.3) on a small stand-in face.
+
+The stand-in face has Parke-like lips (units and layout of Figure 4.4-4.5: 67 above 64, 61,
+58, 55, 52, 49 on the centre line, corner 70 and inside corner 287 to the side) so that the
+algorithm can be checked without the full face model; tests with the real face model live in
+tests/test_versions_cassi2x.py.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from cassi.data.errors import CassiInputError
+from cassi.versions import lips_constants as K
+from cassi.versions.lips import (
+    LIP_VERTICES,
+    LipRest,
+    LipSubject,
+    LowLipsThicknessPolicy,
+    EqualThicknessPolicy,
+    lip_frames,
+)
+from cassi.versions.lips_thickness import EQUAL_THICKNESS, LOW_LIPS_THICKNESS
+
+TRACK_OF = {  # the centre-line vertex whose parabolic track each outline vertex rides
+    67: 67, 68: 67, 69: 67, 49: 49, 50: 49, 51: 49,
+    64: 64, 65: 64, 66: 64, 55: 55, 56: 55, 57: 55, 52: 52, 53: 52, 54: 52,
+    61: 61, 62: 61, 63: 61, 58: 58, 59: 58, 60: 58,
+}
+
+
+def stand_in_face() -> np.ndarray:
+    v = np.zeros((310, 3))
+    for n, xyz in {
+        67: (100, 0, -10), 64: (102, 0, -16), 61: (97, 0, -22), 58: (96, 0, -26),
+        55: (99, 0, -31), 52: (99, 0, -36), 49: (98, 0, -40), 70: (78, 68, -25),
+        287: (76, 60, -25), 226: (90, 0, -20),
+    }.items():
+        v[n - 1] = xyz
+    return v
+
+
+REST = LipRest(stand_in_face())
+SUBJECT = LipSubject(x_rest=100.0, x_max=125.0, x_min=70.0, thick=8.0)
+
+
+def pellets(ulx, ulz=-10.0, llx=None, llz=-40.0):
+    ulx = np.asarray(ulx, dtype=float)
+    n = ulx.shape[0]
+    llx = ulx - 2.0 if llx is None else np.broadcast_to(llx, (n,))
+    ul = np.c_[ulx, np.broadcast_to(ulz, (n,))]
+    ll = np.c_[llx, np.broadcast_to(llz, (n,))]
+    return ul, ll
+
+
+def protrusion_trajectory():
+    """Rest, forward to MAX UL and held (rounding), back through rest to MIN UL and held."""
+    ulx = np.concatenate([
+        np.full(50, 100.0), np.linspace(100, 125, 100), np.full(150, 125.0),
+        np.linspace(125, 70, 200), np.full(150, 70.0),
+    ])
+    return pellets(ulx)
+
+
+def jaw_wagging_trajectory(n=1200, amp=55.0):
+    """Jaw opening and closing twice a second (task 106), the upper lip drifting a little."""
+    t = np.arange(n) * 0.006866
+    rng = np.random.default_rng(0)
+    ulx = 100 + 6 * np.sin(2 * np.pi * 0.7 * t) + 0.04 * rng.standard_normal(n).cumsum()
+    ulz = -10 + 0.3 * np.sin(2 * np.pi * 2 * t)
+    phase = 1 - np.cos(2 * np.pi * 2 * t)
+    return np.c_[ulx, ulz], np.c_[98 - 5 * phase, -40 - amp * phase]
+
+
+def test_rest_face_validation():
+    with pytest.raises(CassiInputError, match="300"):
+        LipRest(np.zeros((287, 3)))
+    bad = stand_in_face()
+    bad[69] = (78, -5, -25)  # corner on the wrong half
+    with pytest.raises(CassiInputError, match="vertex 70"):
+        LipRest(bad)
+
+
+def test_2_0_rounds_forward_and_stretches_back():
+    ul, ll = protrusion_trajectory()
+    lips = lip_frames(ul, ll, REST, SUBJECT)
+    d = lips.diagnostics
+    rest, rounded, stretched = 0, 299, len(ul) - 1
+    # c' follows Eq. 4.13: 65 at rest, 0 at MAX UL, 85 at MIN UL.
+    assert d["c_prime"][[rest, rounded, stretched]] == pytest.approx([65.0, 0.0, 85.0])
+    a, y70 = d["a"], lips.vertex(70)[:, 1]
+    # Forward: narrower mouth (rounded); back: wider than at rest (stretched).
+    assert a[rounded] < 0.75 * a[rest] and y70[rounded] < 0.75 * y70[rest]
+    assert a[stretched] > a[rest] and y70[stretched] > y70[rest]
+    # Rounded lips are thicker (step 8), resting and stretched ones are not.
+    assert d["currthick"][rounded] == pytest.approx(SUBJECT.thick * (1 + K.THICKEN_GAIN))
+    assert d["currthick"][[rest, stretched]] == pytest.approx([SUBJECT.thick] * 2)
+    # The corners come forward on the track as they close in (relative to the centre line).
+    h = 0.5 * (ul[:, 0] + ll[:, 0])
+    depth = h - lips.vertex(70)[:, 0]
+    assert depth[rounded] < 0.6 * depth[rest] and depth[stretched] > depth[rest]
+
+
+def test_every_lip_vertex_rides_its_parabolic_track():
+    ul, ll = protrusion_trajectory()
+    lips = lip_frames(ul, ll, REST, SUBJECT)
+    for v, centre in TRACK_OF.items():
+        x, y, _ = lips.vertex(v).T
+        h = lips.vertex(centre)[:, 0]
+        np.testing.assert_allclose(x, h + y * y / (4 * K.TRACK_P), atol=1e-9, err_msg=f"vertex {v}")
+    # Centre-line vertices keep Parke's depth offsets and sit at y = 0.
+    np.testing.assert_allclose(lips.vertex(64)[:, 0] - ul[:, 0], 2.0)
+    np.testing.assert_allclose(lips.vertex(58)[:, 0] - ll[:, 0], -2.0)
+    for v in (67, 64, 61, 58, 55, 52, 49):
+        assert np.all(lips.vertex(v)[:, 1] == 0.0)
+
+
+def test_no_lip_vertex_crosses_a_teeth_arch_behind_the_lips():
+    """Section 4.2.2: the track keeps rounding lips in front of the teeth (Figure 4.20(b)).
+
+    The teeth arch is a parabola curving back faster than the track (|p| = 30 < 37, as the
+    thesis chose p as the value closest to zero that kept Parke's lips clear), its front 4 units
+    behind the lips' rearmost centre-line vertex. Without the track (x frozen at the resting
+    values, Figure 4.20(a)) the rounded corner would lie behind that arch.
+    """
+    ul, ll = protrusion_trajectory()
+    lips = lip_frames(ul, ll, REST, SUBJECT)
+    centre_x = np.stack([lips.vertex(v)[:, 0] for v in (67, 64, 61, 58, 55, 52, 49)], axis=1)
+    front = centre_x.min(axis=1) - 4.0
+    x, y = lips.xyz[..., 0], lips.xyz[..., 1]
+    teeth_x = front[:, None] - y * y / (4 * 30.0)
+    assert np.all(x >= teeth_x - 1e-9)
+    # The counterfactual "folding" lips: the resting corner x with the rounded corner y.
+    rounded = 299
+    x70_frozen = lips.vertex(70)[0, 0]
+    y70_round = lips.vertex(70)[rounded, 1]
+    assert x70_frozen < front[rounded] - y70_round ** 2 / (4 * 30.0)
+
+
+def test_vertex_70_at_a_when_round_and_farther_as_c_grows():
+    ul, ll = protrusion_trajectory()
+    lips = lip_frames(ul, ll, REST, SUBJECT)
+    a, c = lips.diagnostics["a"], lips.diagnostics["c"]
+    beyond = lips.vertex(70)[:, 1] - a
+    np.testing.assert_allclose(beyond, K.CORNER_STRETCH * c)
+    assert c.min() < 1.0 and beyond[c.argmin()] == pytest.approx(K.CORNER_STRETCH * c.min())
+    order = np.argsort(c)
+    assert np.all(np.diff(beyond[order]) >= -1e-12)
+    # The corner sits on the centre line of the outer ellipse (z = k).
+    np.testing.assert_allclose(lips.vertex(70)[:, 2], 0.5 * (ul[:, 1] + ll[:, 1]))
+
+
+def test_outline_vertices_at_thirds_of_a():
+    ul, ll = protrusion_trajectory()
+    lips = lip_frames(ul, ll, REST, SUBJECT)
+    a = lips.diagnostics["a"]
+    for (u, l), frac in zip(((67, 49), (68, 50), (69, 51)), (0, 1 / 3, 2 / 3)):
+        np.testing.assert_allclose(lips.vertex(u)[:, 1], frac * a)
+        np.testing.assert_allclose(lips.vertex(l)[:, 1], frac * a)
+    # Inner outline: thirds of the inside corner's y; middle outline: thirds of vertex 300's.
+    for v, corner, frac in ((62, 287, 1 / 3), (60, 287, 2 / 3), (65, 300, 1 / 3), (54, 300, 2 / 3)):
+        np.testing.assert_allclose(lips.vertex(v)[:, 1], frac * lips.vertex(corner)[:, 1])
+    # Vertex 300 is midway between 287 and 70.
+    np.testing.assert_allclose(lips.vertex(300), 0.5 * (lips.vertex(287) + lips.vertex(70)))
+
+
+def test_middle_outline_pairs_equidistant_and_closing_toward_corner():
+    ul, ll = protrusion_trajectory()
+    lips = lip_frames(ul, ll, REST, SUBJECT)
+    gaps = []
+    for top, bottom, taper in zip((55, 56, 57), (52, 53, 54), K.MIDDLE_PAIR_TAPER):
+        zt, zb = lips.vertex(top)[:, 2], lips.vertex(bottom)[:, 2]
+        gaps.append(zt - zb)
+        # The midpoint of each pair lies on the middle outline's lower half (Eq. 4.16).
+        y = lips.vertex(top)[:, 1]
+        a_m = lips.vertex(300)[:, 1]
+        z64 = lips.vertex(64)[:, 2]
+        zl = 0.5 * (lips.vertex(52)[:, 2] + lips.vertex(55)[:, 2])
+        b_m, k_m = 0.5 * (z64 - zl), 0.5 * (z64 + zl)
+        np.testing.assert_allclose(0.5 * (zt + zb), k_m - b_m * np.sqrt(1 - (y / a_m) ** 2))
+    gaps = np.array(gaps)
+    np.testing.assert_allclose(gaps[1], 2 / 3 * gaps[0])
+    np.testing.assert_allclose(gaps[2], 1 / 3 * gaps[0])
+    assert np.all(gaps[2] < 0.5 * gaps[0])  # "much closer to each other"
+
+
+def test_overlapping_lips_rule():
+    # Thick lips (Thick 25) closed to 30 units: 61 = -10 - 25 = -35, 58 = -40 + 25 = -15, so
+    # 58 is 20 above 61: the inner outline is flat, 61-63 10 below and 58-60 10 above the
+    # centre line -25.
+    thick = LipSubject(x_rest=100.0, x_max=125.0, x_min=70.0, thick=25.0)
+    ul, ll = pellets(np.full(5, 100.0))
+    lips = lip_frames(ul, ll, REST, thick)
+    assert lips.diagnostics["lips_overlap"].all()
+    for v in (61, 62, 63):
+        np.testing.assert_allclose(lips.vertex(v)[:, 2], -35.0)
+    for v in (58, 59, 60):
+        np.testing.assert_allclose(lips.vertex(v)[:, 2], -15.0)
+    # Thin lips do not overlap and follow Eq. 4.16: 62 between the centre line and 61.
+    lips = lip_frames(ul, ll, REST, SUBJECT)
+    assert not lips.diagnostics["lips_overlap"].any()
+    z61, z62 = lips.vertex(61)[:, 2], lips.vertex(62)[:, 2]
+    k_in = 0.5 * (z61 + lips.vertex(58)[:, 2])
+    assert np.all((z62 < z61) & (z62 > k_in))
+
+
+def test_ellipse_switch_without_jumps_on_jaw_wagging():
+    """Section 4.2.5 and Table 5.9: no large frame jump at the horizontal/vertical switch."""
+    ul, ll = jaw_wagging_trajectory()
+    lips = lip_frames(ul, ll, REST, SUBJECT)
+    kind = lips.diagnostics["ellipse"]
+    switches = np.nonzero(kind[1:] != kind[:-1])[0]
+    assert len(switches) >= 4, "the trajectory must exercise the ellipse switch"
+    data_step = max(np.linalg.norm(np.diff(p, axis=0), axis=1).max() for p in (ul, ll))
+    lip_step = np.linalg.norm(np.diff(lips.xyz, axis=0), axis=-1).max(axis=1)  # (F-1,)
+    assert lip_step[switches].max() <= data_step
+    # ... and none elsewhere, where OUTER_ABC_CALC changes branch, beyond 5 % over the data's
+    # own (vertices riding on the lower lip also turn with the outline, so match it only
+    # approximately; with rho = 0.3 this ratio was 2.4).
+    assert lip_step.max() <= 1.05 * data_step
+    branches = set(lips.diagnostics["outer_abc_branch"])
+    assert {"3a", "3b", "3c-ii"} <= branches
+
+
+def test_outer_state_limits_and_diagnostics():
+    ul, ll = jaw_wagging_trajectory(400)
+    d = lip_frames(ul, ll, REST, SUBJECT).diagnostics
+    assert np.all((d["a"] >= K.A_MIN) & (d["a"] <= K.A_MAX))
+    assert np.all((d["c"] >= 0) & (d["c"] <= K.C_LIMIT))
+    for col in ("a", "b", "c", "c_prime", "currthick", "outer_abc_branch", "ellipse"):
+        assert len(d[col]) == 400
+    assert d["outer_abc_branch"][0] == "3"
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.floats(60, 140), st.floats(-19, 10), st.floats(-120, -20)),
+                min_size=2, max_size=40))
+def test_any_trajectory_gives_finite_ordered_lips(rows):
+    arr = np.array(rows)
+    ul = arr[:, :2]
+    ll = np.c_[arr[:, 0] - 2.0, arr[:, 2]]
+    lips = lip_frames(ul, ll, REST, SUBJECT)
+    assert np.isfinite(lips.xyz).all()
+    y = lips.xyz[..., 1]
+    assert (y >= 0).all()
+    # Along each outline, y grows from the centre line to the corner.
+    for seq in ((67, 68, 69, 70), (61, 62, 63, 287), (64, 65, 66, 300)):
+        ys = np.stack([lips.vertex(v)[:, 1] for v in seq], axis=1)
+        assert np.all(np.diff(ys, axis=1) >= -1e-9)
+    # The upper outer outline lies above the lower one (lips not crossed: UL above LL here).
+    for u, l in ((68, 50), (69, 51)):
+        assert np.all(lips.vertex(u)[:, 2] >= lips.vertex(l)[:, 2] - 1e-9)
+
+
+# --- CASSI 2.1 against 2.0 ------------------------------------------------------------------
+def test_2_1_policy_leaves_well_centred_subjects_alone():
+    ul, ll = protrusion_trajectory()
+    # Vertex 226 at z = -20; 61 starts at -10 - 8 = -18, above it: not low.
+    rule, blend = LowLipsThicknessPolicy().choose(ul[:1], ll[:1], REST, SUBJECT, -20.0)
+    assert (rule, blend) == (EQUAL_THICKNESS, False)
+    assert EqualThicknessPolicy().choose(ul[:1], ll[:1], REST, SUBJECT, 100.0) == (EQUAL_THICKNESS, False)
+    a = lip_frames(ul, ll, REST, SUBJECT)
+    b = lip_frames(ul, ll, REST, SUBJECT, rule=rule, blend_inner_corner=blend)
+    np.testing.assert_array_equal(a.xyz, b.xyz)
+
+
+def test_2_1_policy_adjusts_low_lips():
+    ul, ll = protrusion_trajectory()
+    # 61 starts at -18; with 226 at z = 3 it is 21 units below: low lips (> 20).
+    assert LowLipsThicknessPolicy().choose(ul[:1], ll[:1], REST, SUBJECT, 3.0) == (
+        LOW_LIPS_THICKNESS, True)
+    # 19.5 below: not low.
+    assert LowLipsThicknessPolicy().choose(ul[:1], ll[:1], REST, SUBJECT, 1.5)[0] == EQUAL_THICKNESS
+    two0 = lip_frames(ul, ll, REST, SUBJECT)
+    two1 = lip_frames(ul, ll, REST, SUBJECT, rule=LOW_LIPS_THICKNESS, blend_inner_corner=True)
+    ct = two1.diagnostics["currthick"]
+    np.testing.assert_allclose(two1.vertex(61)[:, 2], ul[:, 1] - 2 / 3 * ct)
+    np.testing.assert_allclose(two1.vertex(58)[:, 2], ll[:, 1] + 4 / 3 * ct)
+    # The outer outline and the thickness total do not change; the inside edge moves up.
+    np.testing.assert_allclose(two1.vertex(68), two0.vertex(68))
+    assert np.all(two1.vertex(61)[:, 2] > two0.vertex(61)[:, 2])
+    # 287's z: the 2.0 value while c' >= 50, vertex 60's when fully rounded (c' = 0).
+    cp = two1.diagnostics["c_prime"]
+    not_round = cp >= 50
+    np.testing.assert_allclose(two1.vertex(287)[not_round, 2], two0.vertex(287)[not_round, 2])
+    full = cp <= 0
+    assert full.any()
+    np.testing.assert_allclose(two1.vertex(287)[full, 2], two1.vertex(60)[full, 2])
+    # In between, 287's z moves monotonically with t (blend weights F1, F2).
+    assert set(np.unique(two1.diagnostics["blend_t"])) >= {0.0, 1.0}
+
+
+def test_lip_vertex_list_is_the_thesis_lips():
+    assert set(LIP_VERTICES) == set(range(49, 71)) | {287, 300}
