@@ -196,8 +196,9 @@ class Stage(Protocol):
         ...
 
     def animate(self, ctx: TaskContext, positions: np.ndarray) -> None:
-        """Write this stage's vertices of ``positions`` (float64 (F, V, 3), every frame starting
-        as ``ctx.start`` plus what earlier stages wrote) in place, for all frames at once."""
+        """Write this stage's vertices of ``positions`` (float32 (F, V, 3), every frame starting
+        as ``ctx.start`` plus what earlier stages wrote) in place, for all frames at once.
+        Compute in float64 (``ctx.start`` is float64) and store; the store rounds to float32."""
         ...
 
 
@@ -236,7 +237,10 @@ class StagedVersion:
         stages = self.stages()
         for stage in stages:            # initialisation phase: the subject's starting face
             stage.initialise(ctx)
-        positions = np.broadcast_to(ctx.start, (ctx.n_frames,) + ctx.start.shape).copy()
+        # float32 from the start: the result's dtype, and half the memory traffic of float64 on
+        # a long task (the stages compute in float64 and store here).
+        positions = np.empty((ctx.n_frames,) + ctx.start.shape, dtype=np.float32)
+        positions[...] = ctx.start
         for stage in stages:            # animation phase: every line against the first line
             stage.animate(ctx, positions)
         return self.finish(ctx, positions)
@@ -248,7 +252,7 @@ class StagedVersion:
             columns[f"held_{name}"] = ctx.held[:, idx]
         columns.update(ctx.diagnostics)
         return Animation(version=self.name, frames=ctx.rows, time_us=time_us,
-                         positions=positions.astype(np.float32),
+                         positions=positions.astype(np.float32, copy=False),
                          diagnostics=pd.DataFrame(columns))
 
     def __repr__(self) -> str:
