@@ -159,6 +159,13 @@ class LipRest:
         y287 / y70 on this face: the inside corner keeps this fraction of the outer half-width.
     inner_corner_dz : float
         z287 - k (k midway between 67 and 49) on this face.
+    corner_dx, inner_corner_dx : float
+        How far behind its parabolic track the corner 70 (track of the outer centre line, the
+        mean of 67 and 49) and the inside corner 287 (track of the inner centre line, the mean
+        of 61 and 58) sit on this face. The thesis puts the seven centre-line tracks under the
+        outline vertices but names none for the corners; they keep the face's own depth
+        relative to the track, so the mouth corner keeps the model's lip thickness there
+        (Parke added 287 for exactly that) while still sliding forward as the lips round.
     """
 
     vertices: np.ndarray
@@ -166,6 +173,8 @@ class LipRest:
     dx_lower: dict = field(init=False)
     inner_corner_ratio: float = field(init=False)
     inner_corner_dz: float = field(init=False)
+    corner_dx: float = field(init=False)
+    inner_corner_dx: float = field(init=False)
 
     def __post_init__(self) -> None:
         v = np.asarray(self.vertices, dtype=np.float64)
@@ -185,6 +194,11 @@ class LipRest:
         object.__setattr__(self, "inner_corner_ratio", float(np.clip(ratio, 0.0, 1.0)))
         k = 0.5 * (p(67)[2] + p(49)[2])
         object.__setattr__(self, "inner_corner_dz", float(p(V_INNER_CORNER)[2] - k))
+        h_out = 0.5 * (p(67)[0] + p(49)[0])
+        h_in = 0.5 * (p(61)[0] + p(58)[0])
+        object.__setattr__(self, "corner_dx", float(p(V_CORNER)[0] - track_x(y70, h_out)))
+        object.__setattr__(self, "inner_corner_dx",
+                           float(p(V_INNER_CORNER)[0] - track_x(p(V_INNER_CORNER)[1], h_in)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -283,13 +297,13 @@ def lip_frames(
         put(vu, track_x(y, x67), y, ellipse_z(y, a, b_signed, k, upper=True))
         put(vl, track_x(y, x49), y, ellipse_z(y, a, b_signed, k, upper=False))
     y70 = a + np.where(vertical, 0.0, K.CORNER_STRETCH * c)
-    x70 = track_x(y70, 0.5 * (x67 + x49))
+    x70 = track_x(y70, 0.5 * (x67 + x49)) + rest.corner_dx
     put(V_CORNER, x70, y70, k)
 
     # Inside corner 287 (the inner outline's corner point) and the new vertex 300 midway to 70.
     y287 = rest.inner_corner_ratio * y70
     z287 = k + rest.inner_corner_dz
-    x287 = track_x(y287, 0.5 * (xc[61] + xc[58]))
+    x287 = track_x(y287, 0.5 * (xc[61] + xc[58])) + rest.inner_corner_dx
 
     # Inner outline: 61/58 at 0, 62/59 at a/3, 63/60 at 2a/3 (MID_INNER_ABC_CALC with 287).
     a_in, b_in, _c_in = mid_inner_abc(zc[61], zc[58], y287)

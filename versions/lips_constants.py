@@ -11,6 +11,12 @@ Two kinds of value live here:
   vertices around the lips). Each carries the reason for the value chosen, and a test in
   ``tests/test_versions_lips*.py`` pins the behaviour it produces.
 
+Two rules the thesis leaves open are geometric rather than numeric and are documented where they
+act (``cassi.versions.lips.LipRest``): the corners 70 and 287 keep the face's own depth behind
+their parabolic track (the thesis names tracks only for the seven centre-line vertices), and the
+inside corner 287 keeps its share of the outer half-width and its height above the mouth's
+centre line (the thesis uses 287 as the inner outline's corner but does not say how it moves).
+
 All lengths are in Parke units (the face model's units; the thesis's c_rest = 65 is in them).
 """
 from __future__ import annotations
