@@ -1,0 +1,672 @@
+"""Exact geometric measures for the rubric, over an animation's vertex positions.
+
+Every function here is pure: arrays in, arrays or numbers out. Positions are ``(F, V, 3)`` in
+Parke units with the face's numbering (row ``i`` is Parke vertex ``i + 1``), X forward, Y to the
+face's left, Z up, left half only (the right half is the mirror ``y -> -y``). Which rows are the
+teeth, the tongue, the lips ... is given explicitly by a :class:`MouthParts` (0-based row
+indices), so tests can build small synthetic mouths and the real face supplies its own through
+:func:`mouth_parts`. Lengths are returned in millimetres: ``mm_per_unit`` converts (thesis 4.1.1
+scales the pellets by ``p / d``, Parke jaw length over the subject's jaw length, so one Parke unit
+is ``d / p`` millimetres).
+
+The measures are what the thesis's authors judged by eye (thesis chapter 5, restated in
+``shared/spec/rubric.md``); the thresholds that turn them into negatives live in
+:mod:`cassi.harness.rubric`, never here.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = [
+    "MouthParts", "mouth_parts", "mm_per_unit", "surface_hits", "front_triangles",
+    "tongue_teeth_penetration", "tongue_palate_penetration", "lip_teeth_penetration",
+    "inner_lip_gap", "lower_lip_below_teeth", "protrusion_difference", "lip_nose_clearance",
+    "concavity", "corner_misplacement", "excess_jitter", "switch_jumps",
+    "palate_below_incisor", "teeth_overlap", "teeth_slope", "teeth_gap", "lip_rounding",
+    "opening_polygon", "polygon_extent", "profile_angle", "max_protrusion_frame",
+]
+
+
+def _arr(x) -> np.ndarray:
+    return np.asarray(x, dtype=np.int64).reshape(-1)
+
+
+@dataclass(frozen=True)
+class MouthParts:
+    """Which rows of the positions array form each part of the mouth (0-based indices).
+
+    Attributes
+    ----------
+    upper_teeth_tris, lower_teeth_tris : int (T, 3)
+        Triangles of the upper and the lower teeth surfaces.
+    tongue : int (K,)
+        Tongue vertices; ``tongue_edges`` int (E, 2) its edges (sampled between the vertices).
+    palate : int (P,), palate_tris : int (Q, 3)
+        The palatal outline surface (empty when the face has none).
+    ul_outer, ll_outer : int
+        Vertices 67 and 49, the outer edges of the lips where the UL and LL pellets sit.
+    ul_inner, ll_inner : int
+        Vertices 61 and 58, the inner outline at the centerline (the lips' contact edges).
+    upper_inner, lower_inner : int (3,)
+        Inner outline, centerline to corner: 61, 62, 63 and 58, 59, 60; ``inner_corner`` 287.
+    upper_outer, lower_outer : int (3,)
+        Outer outline: 67, 68, 69 and 49, 50, 51; ``corner`` 70.
+    lip_points : int (L,)
+        Every lip vertex (49-70, 287, 300), tested against the teeth surface.
+    above_lip, below_lip : int (3,)
+        71, 72, 73 above the upper lip and 41, 42, 43 below the lower lip (thesis 4.2.2).
+    subnasale : int
+        The base of the nose on the centerline (the top of the upper-lip profile).
+    chin, chin_low : int
+        Soft-tissue chin point and a point under it on the jaw line (the chin profile).
+    upper_incisor_tip : int
+        Vertex 226, the bottom of the top front teeth.
+    lower_incisor_tip : int
+        The top (cutting edge) of the lower front teeth.
+    lower_gum : int
+        Vertex 258 (MANi): where the gums and the lower front teeth meet.
+    upper_molar, lower_molar : int
+        Lowest back upper-teeth vertex and highest back lower-teeth vertex (occlusal line ends).
+    jaw_point : int
+        A rigid jaw vertex for jaw motion (258); lip jitter is compared with this one.
+    jaw : int (J,)
+        The jaw's vertices (Parke's first rotation zone, 14-43) for its shape (Table B).
+    """
+
+    upper_teeth_tris: np.ndarray
+    lower_teeth_tris: np.ndarray
+    tongue: np.ndarray
+    tongue_edges: np.ndarray
+    palate: np.ndarray
+    palate_tris: np.ndarray
+    ul_outer: int
+    ll_outer: int
+    ul_inner: int
+    ll_inner: int
+    upper_inner: np.ndarray
+    lower_inner: np.ndarray
+    inner_corner: int
+    upper_outer: np.ndarray
+    lower_outer: np.ndarray
+    corner: int
+    lip_points: np.ndarray
+    above_lip: np.ndarray
+    below_lip: np.ndarray
+    subnasale: int
+    chin: int
+    chin_low: int
+    upper_incisor_tip: int
+    lower_incisor_tip: int
+    lower_gum: int
+    upper_molar: int
+    lower_molar: int
+    jaw_point: int
+    jaw: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    extra: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        for name in ("upper_teeth_tris", "lower_teeth_tris", "palate_tris"):
+            object.__setattr__(self, name, np.asarray(getattr(self, name), np.int64).reshape(-1, 3))
+        object.__setattr__(self, "tongue_edges",
+                           np.asarray(self.tongue_edges, np.int64).reshape(-1, 2))
+        for name in ("tongue", "palate", "upper_inner", "lower_inner", "upper_outer",
+                     "lower_outer", "lip_points", "above_lip", "below_lip", "jaw"):
+            object.__setattr__(self, name, _arr(getattr(self, name)))
+
+
+# ----------------------------------------------------------------------------------------------
+# Building the parts from the real face
+# ----------------------------------------------------------------------------------------------
+
+def _num(numbering, names, default):
+    """First attribute of ``numbering`` among ``names`` (Parke 1-based number), else default."""
+    for n in names:
+        if numbering is not None and hasattr(numbering, n):
+            return getattr(numbering, n)
+    return default
+
+
+def _polys_by_material(face, wanted) -> np.ndarray:
+    """Triangles (0-based, fan-split) of the face polygons whose material name is in ``wanted``."""
+    tris = []
+    materials = getattr(face, "materials", None)
+    for poly in getattr(face, "polygons", ()):
+        mat, verts = _poly_parts(poly)
+        name = _material_name(materials, mat)
+        if name is None or name.lower() not in wanted:
+            continue
+        v = [int(x) - 1 for x in verts]
+        for k in range(1, len(v) - 1):
+            tris.append((v[0], v[k], v[k + 1]))
+    return np.asarray(tris, np.int64).reshape(-1, 3)
+
+
+def _poly_parts(poly):
+    if hasattr(poly, "material"):
+        return poly.material, tuple(getattr(poly, "vertices", getattr(poly, "verts", ())))
+    return poly[0], tuple(poly[1])
+
+
+def _material_name(materials, mat):
+    if isinstance(mat, str):
+        return mat
+    if materials is None:
+        return None
+    try:
+        m = materials[mat]
+    except (KeyError, IndexError, TypeError):
+        return None
+    return m if isinstance(m, str) else getattr(m, "name", None)
+
+
+def mouth_parts(face, numbering=None) -> MouthParts:
+    """The :class:`MouthParts` of a :class:`cassi.data.face.FaceModel` (thesis numbering).
+
+    Vertex numbers come from :mod:`cassi.data.numbering` where it names them, else from the
+    thesis (Figures 3.7, 4.4-4.7, 4.17; Table 3.2). Teeth, tongue and palate surfaces come
+    from the face's polygons by material; vertices of the lower teeth are 255-286 (Table 3.2),
+    so teeth triangles using them belong to the lower set.
+    """
+    if numbering is None:
+        try:
+            from cassi.data import numbering  # noqa: PLC0415 - optional until it lands
+        except ImportError:
+            numbering = None
+    V = np.asarray(face.vertices).shape[0]
+    verts = np.asarray(face.vertices, dtype=np.float64)
+    teeth = _polys_by_material(face, {"teeth", "tooth"})
+    lower_first = _num(numbering, ("LOWER_TEETH_FIRST",), 255) - 1
+    lower_last = _num(numbering, ("LOWER_TEETH_LAST",), 286) - 1
+    is_lower = np.any((teeth >= lower_first) & (teeth <= lower_last), axis=1)
+    upper_tris, lower_tris = teeth[~is_lower], teeth[is_lower]
+    tongue_first = _num(numbering, ("TONGUE_FIRST",), 288) - 1
+    tongue_last = _num(numbering, ("TONGUE_LAST",), 299) - 1
+    tongue = np.arange(tongue_first, tongue_last + 1)
+    tongue_tris = _polys_by_material(face, {"tongue"})
+    edges = np.concatenate([tongue_tris[:, [0, 1]], tongue_tris[:, [1, 2]],
+                            tongue_tris[:, [2, 0]]]) if len(tongue_tris) else np.zeros((0, 2))
+    edges = np.unique(np.sort(edges.astype(np.int64), axis=1), axis=0) if len(edges) else edges
+    palate_first = _num(numbering, ("PALATE_FIRST",), 301) - 1
+    palate = np.arange(palate_first, V)
+    palate_tris = _polys_by_material(face, {"palate"})
+
+    upper_v = np.unique(upper_tris) if len(upper_tris) else np.zeros(0, np.int64)
+    lower_v = np.unique(lower_tris) if len(lower_tris) else np.arange(lower_first, lower_last + 1)
+    lower_v = lower_v[lower_v < V]
+
+    def front_most(idx, pick):
+        # the vertex nearest the centerline among the front 20 % (by x) of a teeth set
+        p = verts[idx]
+        x0 = p[:, 0].max() - 0.2 * np.ptp(p[:, 0])
+        cand = idx[(p[:, 0] >= x0) & (np.abs(p[:, 1]) <= np.abs(p[:, 1]).min() + 0.15 * np.ptp(p[:, 1]) + 1e-9)]
+        return int(cand[pick(verts[cand, 2])])
+
+    def back_most(idx, pick):
+        p = verts[idx]
+        x0 = p[:, 0].min() + 0.2 * np.ptp(p[:, 0])
+        cand = idx[p[:, 0] <= x0]
+        return int(cand[pick(verts[cand, 2])])
+
+    n = lambda names, d: _num(numbering, names, d) - 1  # noqa: E731
+    lower_tip = _num(numbering, ("LOWER_INCISOR_TIP", "LOWER_TEETH_TIP"), None)
+    lower_tip = lower_tip - 1 if lower_tip else front_most(lower_v, np.argmax)
+    upper_molar = (n(("UPPER_MOLAR",), 0) if hasattr(numbering, "UPPER_MOLAR") else
+                   back_most(upper_v, np.argmin) if len(upper_v) else n(("TEETH_TIP",), 226))
+    lower_molar = (n(("LOWER_MOLAR",), 0) if hasattr(numbering, "LOWER_MOLAR") else
+                   back_most(lower_v, np.argmax))
+    subnasale = _num(numbering, ("SUBNASALE", "NOSE_BASE"), None)
+    if subnasale is None:
+        # the lowest centerline vertex of the nose (80-101, thesis 3.1.3) above the upper lip
+        nose = np.arange(79, 101)
+        nose = nose[np.abs(verts[nose, 1]) < 1e-6] if np.any(np.abs(verts[nose, 1]) < 1e-6) else nose
+        nose = nose[verts[nose, 2] > verts[66, 2]]
+        subnasale = int(nose[np.argmin(verts[nose, 2])]) + 1
+    chin = _num(numbering, ("CHIN", "POGONION"), None)
+    chin_low = _num(numbering, ("CHIN_LOW", "MENTON", "GNATHION"), None)
+    if chin is None or chin_low is None:
+        # jaw vertices 14-43 on the centerline below the lower lip: the most forward is the
+        # soft-tissue chin, the lowest the underside of the chin
+        jaw = np.arange(13, 43)
+        centre = jaw[(np.abs(verts[jaw, 1]) < 1e-6) & (verts[jaw, 2] < verts[40, 2])]
+        if len(centre) < 2:
+            centre = jaw[verts[jaw, 2] < verts[40, 2]]
+        chin = chin or int(centre[np.argmax(verts[centre, 0])]) + 1
+        chin_low = chin_low or int(centre[np.argmin(verts[centre, 2])]) + 1
+    lips = [v - 1 for v in range(49, 71)] + [286, 299]
+    return MouthParts(
+        upper_teeth_tris=upper_tris, lower_teeth_tris=lower_tris, tongue=tongue,
+        tongue_edges=edges, palate=palate, palate_tris=palate_tris,
+        ul_outer=n(("UL", "UL_VERTEX"), 67), ll_outer=n(("LL", "LL_VERTEX"), 49),
+        ul_inner=60, ll_inner=57, upper_inner=[60, 61, 62], lower_inner=[57, 58, 59],
+        inner_corner=286, upper_outer=[66, 67, 68], lower_outer=[48, 49, 50], corner=69,
+        lip_points=[v for v in lips if v < V], above_lip=[70, 71, 72], below_lip=[40, 41, 42],
+        subnasale=subnasale - 1, chin=chin - 1, chin_low=chin_low - 1,
+        upper_incisor_tip=n(("TEETH_TIP", "UPPER_INCISOR_TIP"), 226), lower_incisor_tip=lower_tip,
+        lower_gum=n(("MANI",), 258), upper_molar=upper_molar, lower_molar=lower_molar,
+        jaw_point=n(("MANI",), 258), jaw=np.arange(13, 43))
+
+
+def mm_per_unit(face_vertices: np.ndarray, jaw_length_mm: float | None, *,
+                mani: int = 257, manm: tuple[int, int] = (280, 285)) -> float:
+    """Millimetres per Parke unit: the subject's XRMB jaw length over the model's (thesis 4.1.1).
+
+    Parameters
+    ----------
+    face_vertices : float (V, 3)
+        The face in Parke units.
+    jaw_length_mm : float or None
+        The subject's distance MNI-MNM (mm); None gives the model's own length mapped onto a
+        typical 60 mm adult jaw... never used for a rating (the farm always has a profile).
+    """
+    v = np.asarray(face_vertices, dtype=np.float64)
+    p = float(np.linalg.norm(v[mani, [0, 2]] - 0.5 * (v[manm[0], [0, 2]] + v[manm[1], [0, 2]])))
+    if not np.isfinite(p) or p <= 0:
+        return 1.0
+    d = float(jaw_length_mm) if jaw_length_mm else 60.0
+    return d / p
+
+
+# ----------------------------------------------------------------------------------------------
+# Surface queries
+# ----------------------------------------------------------------------------------------------
+
+_AXES = {0: (1, 2), 1: (0, 2), 2: (0, 1)}
+
+
+def surface_hits(points: np.ndarray, tri_pos: np.ndarray, *, axis: int = 0,
+                 eps: float = 1e-9, chunk: int = 2_000_000) -> tuple[np.ndarray, np.ndarray]:
+    """Where a line through each point along ``axis`` crosses a triangle surface.
+
+    Parameters
+    ----------
+    points : float (F, P, 3)
+        Query points per frame.
+    tri_pos : float (F, T, 3, 3)
+        Triangle corners per frame (the surface moves with the jaw).
+    axis : int
+        0 = x (forward), 1 = y, 2 = z.
+
+    Returns
+    -------
+    lo, hi : float (F, P)
+        The smallest and the largest ``axis`` coordinate of the surface crossings on the line
+        through each point; NaN where the line misses the surface.
+    """
+    points = np.asarray(points, dtype=np.float64)
+    tri_pos = np.asarray(tri_pos, dtype=np.float64)
+    F, P, _ = points.shape
+    T = tri_pos.shape[1]
+    lo = np.full((F, P), np.nan)
+    hi = np.full((F, P), np.nan)
+    if T == 0 or P == 0:
+        return lo, hi
+    u, v = _AXES[axis]
+    step = max(1, chunk // max(1, P * T))
+    for s in range(0, F, step):
+        e = min(F, s + step)
+        a = tri_pos[s:e, None, :, 0]          # (f, 1, T, 3)
+        b = tri_pos[s:e, None, :, 1]
+        c = tri_pos[s:e, None, :, 2]
+        p = points[s:e, :, None, :]          # (f, P, 1, 3)
+        au, av = a[..., u], a[..., v]
+        bu, bv = b[..., u], b[..., v]
+        cu, cv = c[..., u], c[..., v]
+        pu, pv = p[..., u], p[..., v]
+        den = (bu - au) * (cv - av) - (cu - au) * (bv - av)
+        ok = np.abs(den) > eps
+        den = np.where(ok, den, 1.0)
+        w1 = ((bu - pu) * (cv - pv) - (cu - pu) * (bv - pv)) / den
+        w2 = ((cu - pu) * (av - pv) - (au - pu) * (cv - pv)) / den
+        w3 = 1.0 - w1 - w2
+        tol = -1e-7
+        inside = ok & (w1 >= tol) & (w2 >= tol) & (w3 >= tol)
+        val = w1 * a[..., axis] + w2 * b[..., axis] + w3 * c[..., axis]
+        with np.errstate(invalid="ignore"):
+            lo[s:e] = np.where(inside.any(-1), np.where(inside, val, np.inf).min(-1), np.nan)
+            hi[s:e] = np.where(inside.any(-1), np.where(inside, val, -np.inf).max(-1), np.nan)
+    return lo, hi
+
+
+def front_triangles(rest: np.ndarray, tris: np.ndarray, *, front_share: float = 0.35,
+                    min_nx: float = 0.5) -> np.ndarray:
+    """The triangles of a teeth set that face forward or backward at the front of the arch.
+
+    The thesis judged the tongue poking "through the upper or the lower front teeth" from the
+    front view; a line along x through a point only meets the front teeth sensibly (the side
+    teeth run along x). Kept: triangles whose centroid lies in the front ``front_share`` of the
+    set's x range and whose unit normal has ``|n_x| >= min_nx``.
+
+    Parameters
+    ----------
+    rest : float (V, 3)
+        Rest positions.
+    tris : int (T, 3)
+
+    Returns
+    -------
+    int (T', 3)
+    """
+    tris = np.asarray(tris, np.int64).reshape(-1, 3)
+    if len(tris) == 0:
+        return tris
+    p = np.asarray(rest, np.float64)[tris]
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    norm = np.linalg.norm(n, axis=1)
+    nx = np.abs(n[:, 0]) / np.where(norm > 0, norm, 1.0)
+    cx = p[:, :, 0].mean(1)
+    xs = p[:, :, 0]
+    x0 = xs.max() - front_share * (xs.max() - xs.min())
+    return tris[(cx >= x0) & (nx >= min_nx) & (norm > 0)]
+
+
+def _edge_samples(pos: np.ndarray, verts: np.ndarray, edges: np.ndarray, per_edge: int) -> np.ndarray:
+    """Vertex positions plus ``per_edge`` evenly spaced interior points of each edge: (F, P, 3)."""
+    pts = [pos[:, verts]]
+    if len(edges) and per_edge > 0:
+        t = (np.arange(1, per_edge + 1) / (per_edge + 1))[None, None, :, None]
+        a = pos[:, edges[:, 0]][:, :, None, :]
+        b = pos[:, edges[:, 1]][:, :, None, :]
+        pts.append((a + t * (b - a)).reshape(pos.shape[0], -1, 3))
+    out = np.concatenate(pts, axis=1)
+    out[..., 1] = np.abs(out[..., 1])  # left half: a point a hair right of the cut is mirrored
+    return out
+
+
+def tongue_teeth_penetration(pos: np.ndarray, parts: MouthParts, *, rest: np.ndarray | None = None,
+                             per_edge: int = 3) -> dict[str, np.ndarray]:
+    """How far the tongue passes forward through the upper and the lower front teeth.
+
+    A tongue point (vertex or edge sample) whose (y, z) falls on the front teeth's silhouette
+    should lie behind the teeth's back (lingual) surface; the depth is how far forward of that
+    surface it is (Parke units; 0 when behind).
+
+    Returns
+    -------
+    dict with ``upper``, ``lower`` : float (F,) the deepest penetration per frame.
+    """
+    pos = np.asarray(pos, np.float64)
+    rest = pos[0] if rest is None else np.asarray(rest, np.float64)
+    pts = _edge_samples(pos, parts.tongue, parts.tongue_edges, per_edge)
+    out = {}
+    for key, tris in (("upper", parts.upper_teeth_tris), ("lower", parts.lower_teeth_tris)):
+        tris = front_triangles(rest, tris)
+        lo, _ = surface_hits(pts, pos[:, tris], axis=0)
+        depth = np.where(np.isnan(lo), 0.0, np.maximum(pts[..., 0] - lo, 0.0))
+        out[key] = depth.max(axis=1) if depth.shape[1] else np.zeros(pos.shape[0])
+    return out
+
+
+def tongue_palate_penetration(pos: np.ndarray, parts: MouthParts, *, per_edge: int = 3) -> np.ndarray:
+    """How far the tongue rises through the palatal surface, per frame (Parke units, >= 0)."""
+    pos = np.asarray(pos, np.float64)
+    if len(parts.palate_tris) == 0:
+        return np.zeros(pos.shape[0])
+    pts = _edge_samples(pos, parts.tongue, parts.tongue_edges, per_edge)
+    lo, _ = surface_hits(pts, pos[:, parts.palate_tris], axis=2)
+    depth = np.where(np.isnan(lo), 0.0, np.maximum(pts[..., 2] - lo, 0.0))
+    return depth.max(axis=1)
+
+
+def lip_teeth_penetration(pos: np.ndarray, parts: MouthParts, *, rest: np.ndarray | None = None,
+                          which: str = "both") -> np.ndarray:
+    """How far lip vertices sink behind the front surface of the front teeth, per frame.
+
+    ``which``: ``upper`` (upper lip against all front teeth), ``lower`` (lower lip against the
+    lower front teeth, thesis Table 5.9 "the lower lip passes through the bottom set of teeth"),
+    or ``both``. Returns float (F,), Parke units, >= 0.
+    """
+    pos = np.asarray(pos, np.float64)
+    rest = pos[0] if rest is None else np.asarray(rest, np.float64)
+    upper_lip = np.concatenate([parts.upper_inner, parts.upper_outer, [parts.inner_corner]])
+    lower_lip = np.concatenate([parts.lower_inner, parts.lower_outer])
+    if which == "upper":
+        lips, tris = upper_lip, np.concatenate([parts.upper_teeth_tris, parts.lower_teeth_tris])
+    elif which == "lower":
+        lips, tris = lower_lip, parts.lower_teeth_tris
+    else:
+        lips = parts.lip_points
+        tris = np.concatenate([parts.upper_teeth_tris, parts.lower_teeth_tris])
+    tris = front_triangles(rest, tris)
+    pts = pos[:, lips].copy()
+    pts[..., 1] = np.abs(pts[..., 1])
+    _, hi = surface_hits(pts, pos[:, tris], axis=0)
+    depth = np.where(np.isnan(hi), 0.0, np.maximum(hi - pts[..., 0], 0.0))
+    return depth.max(axis=1) if depth.shape[1] else np.zeros(pos.shape[0])
+
+
+# ----------------------------------------------------------------------------------------------
+# Lips
+# ----------------------------------------------------------------------------------------------
+
+def inner_lip_gap(pos: np.ndarray, parts: MouthParts) -> np.ndarray:
+    """Vertical gap between the lips' contact edges at the centerline, per frame (Parke units).
+
+    ``z(61) - z(58)``: positive = the lips are apart, 0 = touching, negative = the lower lip's
+    edge is above the upper's (the lips cross, thesis 4.2.2 "the lips overlap").
+    """
+    pos = np.asarray(pos, np.float64)
+    return pos[:, parts.ul_inner, 2] - pos[:, parts.ll_inner, 2]
+
+
+def lower_lip_below_teeth(pos: np.ndarray, parts: MouthParts) -> np.ndarray:
+    """How far the lower lip's edge (58) is below the bottom of the lower front teeth (258).
+
+    Positive = the whole lower front teeth and gum line show above the lower lip (thesis
+    Table 5.3: "the lower lip often goes below the bottom of the lower front teeth").
+    """
+    pos = np.asarray(pos, np.float64)
+    return pos[:, parts.lower_gum, 2] - pos[:, parts.ll_inner, 2]
+
+
+def protrusion_difference(pos: np.ndarray, parts: MouthParts) -> np.ndarray:
+    """``x(49) - x(67)``: how far the lower lip sticks out beyond the upper, per frame."""
+    pos = np.asarray(pos, np.float64)
+    return pos[:, parts.ll_outer, 0] - pos[:, parts.ul_outer, 0]
+
+
+def max_protrusion_frame(pos: np.ndarray, parts: MouthParts) -> int:
+    """The frame of maximum lip protrusion: largest mean x of the two lip pellet vertices."""
+    pos = np.asarray(pos, np.float64)
+    return int(np.argmax(pos[:, parts.ul_outer, 0] + pos[:, parts.ll_outer, 0]))
+
+
+def lip_nose_clearance(pos: np.ndarray, parts: MouthParts, rest: np.ndarray) -> np.ndarray:
+    """Distance (x, z) from the upper lip's edge (67) to the nose base, over its rest value.
+
+    1 = as at rest; toward 0 the upper lip runs into the nose (thesis Table 5.8); negative when
+    the lip's edge is above the nose base.
+    """
+    pos = np.asarray(pos, np.float64)
+    rest = np.asarray(rest, np.float64)
+    d = pos[:, parts.subnasale, [0, 2]] - pos[:, parts.ul_outer, [0, 2]]
+    d0 = rest[parts.subnasale, [0, 2]] - rest[parts.ul_outer, [0, 2]]
+    n0 = float(np.linalg.norm(d0)) or 1.0
+    sign = np.sign(pos[:, parts.subnasale, 2] - pos[:, parts.ul_outer, 2])
+    return sign * np.linalg.norm(d, axis=1) / n0
+
+
+def concavity(pos: np.ndarray, upper: int, mid: int, lower: int) -> np.ndarray:
+    """How far ``mid`` lies behind the chord from ``upper`` to ``lower`` in the side view.
+
+    Profile (x, z) only; positive = behind the chord (concave, caved in), per frame, Parke
+    units. Used for the points above and under the lip and the chin (thesis Tables 5.8, 5.9).
+    """
+    pos = np.asarray(pos, np.float64)
+    a = pos[:, upper][:, [0, 2]]
+    b = pos[:, lower][:, [0, 2]]
+    m = pos[:, mid][:, [0, 2]]
+    d = b - a
+    n = np.stack([d[:, 1], -d[:, 0]], axis=1)  # points forward (+x) when a is above b
+    n = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+    n *= np.where(n[:, :1] < 0, -1.0, 1.0)
+    return -np.sum((m - a) * n, axis=1)
+
+
+def corner_misplacement(pos: np.ndarray, parts: MouthParts) -> np.ndarray:
+    """How far the lip corner (70) lies outside the band its neighbours allow, per frame.
+
+    The corner should lie vertically between the last upper (69) and lower (51) outer-outline
+    vertices and no farther forward than the more forward of them (thesis Table 5.9, "the lip
+    corners badly placed relative to the other lip points"). Parke units, >= 0.
+    """
+    pos = np.asarray(pos, np.float64)
+    c = pos[:, parts.corner]
+    up = pos[:, parts.upper_outer[-1]]
+    lo = pos[:, parts.lower_outer[-1]]
+    ztop = np.maximum(up[:, 2], lo[:, 2])
+    zbot = np.minimum(up[:, 2], lo[:, 2])
+    dz = np.maximum(c[:, 2] - ztop, 0.0) + np.maximum(zbot - c[:, 2], 0.0)
+    dx = np.maximum(c[:, 0] - np.maximum(up[:, 0], lo[:, 0]), 0.0)
+    return np.hypot(dz, dx)
+
+
+def lip_rounding(pos: np.ndarray, parts: MouthParts) -> tuple[float, int]:
+    """Narrowing of the mouth at maximum protrusion: corner half-width there over at the start.
+
+    Returns ``(ratio, frame)``; ratio 1 = the corners did not move in (no lip rounding,
+    thesis Table 5.8), smaller = rounder.
+    """
+    pos = np.asarray(pos, np.float64)
+    f = max_protrusion_frame(pos, parts)
+    w0 = abs(pos[0, parts.corner, 1]) or 1.0
+    return float(abs(pos[f, parts.corner, 1]) / w0), f
+
+
+def opening_polygon(pos: np.ndarray, parts: MouthParts) -> np.ndarray:
+    """The lip opening in the front view, full mouth (mirrored): (F, N, 2) of (y, z).
+
+    Inner outline 61-62-63, inner corner 287, 60-59-58, then its mirror image.
+    """
+    pos = np.asarray(pos, np.float64)
+    left = np.concatenate([parts.upper_inner, [parts.inner_corner], parts.lower_inner[::-1]])
+    half = pos[:, left][:, :, [1, 2]].copy()
+    half[..., 0] = np.abs(half[..., 0])
+    mirror = half[:, ::-1].copy()
+    mirror[..., 0] *= -1
+    # right half goes 58 (centre) ... 287 ... 61: skip the duplicate centerline points
+    return np.concatenate([half, mirror[:, 1:-1]], axis=1)
+
+
+def polygon_extent(poly: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Area and extent (area / bounding-box area) of polygons (F, N, 2).
+
+    An ellipse fills pi/4 = 0.785 of its box, a diamond or a triangle 0.5 (thesis Table 5.9:
+    "lips very triangular or diamond-shaped"). Returns ``(area, extent)`` per frame.
+    """
+    y, z = poly[..., 0], poly[..., 1]
+    area = 0.5 * np.abs(np.sum(y * np.roll(z, -1, axis=1) - np.roll(y, -1, axis=1) * z, axis=1))
+    box = np.ptp(y, axis=1) * np.ptp(z, axis=1)
+    return area, np.where(box > 0, area / np.where(box > 0, box, 1.0), np.nan)
+
+
+def profile_angle(pos: np.ndarray, a: int, b: int, c: int) -> np.ndarray:
+    """Interior angle at ``b`` of the side-view polyline a-b-c, degrees, per frame."""
+    pos = np.asarray(pos, np.float64)
+    u = pos[:, a][:, [0, 2]] - pos[:, b][:, [0, 2]]
+    v = pos[:, c][:, [0, 2]] - pos[:, b][:, [0, 2]]
+    cos = np.sum(u * v, 1) / np.maximum(np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1), 1e-12)
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+
+
+def excess_jitter(pos: np.ndarray, points, jaw_point: int) -> np.ndarray:
+    """Frame-to-frame acceleration of lip points beyond the jaw's, per frame (Parke units).
+
+    Jitter the jaw shows equally comes from the pellet data and is no fault (thesis Table 5.8);
+    the excess ``|second difference of a lip point| - |second difference of the jaw point|``
+    (largest over the points, >= 0) is. Frames 0 and F-1 get 0.
+    """
+    pos = np.asarray(pos, np.float64)
+    F = pos.shape[0]
+    out = np.zeros(F)
+    if F < 3:
+        return out
+    lip = pos[:, np.asarray(points, np.int64)]
+    acc = np.linalg.norm(lip[2:] - 2 * lip[1:-1] + lip[:-2], axis=-1)           # (F-2, L)
+    jaw = pos[:, jaw_point]
+    jacc = np.linalg.norm(jaw[2:] - 2 * jaw[1:-1] + jaw[:-2], axis=-1)         # (F-2,)
+    out[1:-1] = np.maximum(acc - jacc[:, None], 0.0).max(axis=1)
+    return out
+
+
+def switch_jumps(pos: np.ndarray, parts: MouthParts, branch) -> tuple[np.ndarray, np.ndarray]:
+    """Jumps of the lip corners at the switch between ellipse branches.
+
+    Parameters
+    ----------
+    branch : (F,) array-like or None
+        The OUTER_ABC_CALC branch per frame (Animation diagnostics); None = no switches known.
+
+    Returns
+    -------
+    jump : float (F,)
+        ``|step of the corner| - |step of the jaw point|`` (>= 0) at frames where the branch
+        differs from the previous frame, 0 elsewhere (Parke units).
+    switches : int (S,)
+        The switch frames.
+    """
+    pos = np.asarray(pos, np.float64)
+    F = pos.shape[0]
+    jump = np.zeros(F)
+    if branch is None or F < 2:
+        return jump, np.zeros(0, np.int64)
+    b = np.asarray(branch)
+    if b.shape[0] != F:
+        return jump, np.zeros(0, np.int64)
+    sw = np.flatnonzero(b[1:] != b[:-1]) + 1
+    corners = np.asarray([parts.corner, parts.inner_corner])
+    step = np.linalg.norm(pos[1:, corners] - pos[:-1, corners], axis=-1).max(axis=1)
+    jstep = np.linalg.norm(pos[1:, parts.jaw_point] - pos[:-1, parts.jaw_point], axis=-1)
+    exc = np.maximum(step - jstep, 0.0)
+    jump[sw] = exc[sw - 1]
+    return jump, sw
+
+
+# ----------------------------------------------------------------------------------------------
+# Teeth and palate
+# ----------------------------------------------------------------------------------------------
+
+def palate_below_incisor(pos0: np.ndarray, parts: MouthParts) -> float:
+    """How far the palatal outline reaches below the tip of the upper front teeth (226).
+
+    ``pos0`` float (V, 3): the face at initialization. Parke units, >= 0 (thesis Table 5.4).
+    """
+    pos0 = np.asarray(pos0, np.float64)
+    if len(parts.palate) == 0:
+        return 0.0
+    return float(max(pos0[parts.upper_incisor_tip, 2] - pos0[parts.palate, 2].min(), 0.0))
+
+
+def teeth_overlap(pos: np.ndarray, parts: MouthParts) -> tuple[np.ndarray, np.ndarray]:
+    """Vertical overlap of the front and of the back teeth per frame (Parke units).
+
+    Front: ``z(lower incisor tip) - z(226)``; back: ``z(lower molar) - z(upper molar)``.
+    Positive = the upper teeth cover the lower ones by that much (overbite); negative = gap.
+    """
+    pos = np.asarray(pos, np.float64)
+    front = pos[:, parts.lower_incisor_tip, 2] - pos[:, parts.upper_incisor_tip, 2]
+    back = pos[:, parts.lower_molar, 2] - pos[:, parts.upper_molar, 2]
+    return front, back
+
+
+def teeth_gap(pos: np.ndarray, parts: MouthParts) -> np.ndarray:
+    """Vertical gap between the front teeth, ``z(226) - z(lower incisor tip)``, per frame."""
+    front, _ = teeth_overlap(pos, parts)
+    return -front
+
+
+def teeth_slope(pos: np.ndarray, parts: MouthParts) -> np.ndarray:
+    """Slope of the lower occlusal line relative to the upper one, degrees, per frame.
+
+    Lower line: lower molar -> lower incisor tip; upper: upper molar -> 226, both in the side
+    view. Positive = the lower teeth slant upward toward the front (thesis Table 5.3).
+    """
+    pos = np.asarray(pos, np.float64)
+
+    def ang(back, front):
+        d = pos[:, front][:, [0, 2]] - pos[:, back][:, [0, 2]]
+        return np.degrees(np.arctan2(d[:, 1], d[:, 0]))
+
+    return (ang(parts.lower_molar, parts.lower_incisor_tip)
+            - ang(parts.upper_molar, parts.upper_incisor_tip))

@@ -1,0 +1,230 @@
+"""Image measures for the rubric, on the renderer's part masks (scikit-image).
+
+What the thesis's authors judged by eye in a view and geometry cannot say exactly: how much of
+the upper and of the lower teeth shows inside the lip opening in the front view (lip centering),
+whether the tongue shows at all and whether it shows in front of the teeth, and the shape of the
+mouth opening (triangular or diamond when open wide).
+
+Inputs are per-frame part masks: ``mask`` int (H, W) part ids with ``part_names`` (0 =
+background) and ``depth`` float (H, W) distance to the camera (``inf`` = nothing), as in
+``cassi.renderer.render.RenderResult``. The teeth are one part ``teeth`` or two
+(``teeth_upper``/``teeth_lower``, or any names containing ``upper``/``lower``); a single teeth
+part is split into upper and lower at the row of least teeth inside the opening.
+
+All thresholds live in :mod:`cassi.harness.rubric`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Iterable, Mapping
+
+import numpy as np
+from scipy import ndimage
+from skimage import measure
+
+from .rubric import OPEN_MIN_PIXELS, Measurement
+
+__all__ = ["FrameMasks", "ImageContext", "mouth_opening", "teeth_split", "opening_extent",
+           "m_centered_high", "m_centering_offset", "m_tongue_visible", "m_tongue_in_front",
+           "m_lower_teeth_seen", "m_opening_extent"]
+
+
+@dataclass(frozen=True)
+class FrameMasks:
+    """One rendered frame reduced to boolean part masks (H, W)."""
+
+    frame: int
+    lips: np.ndarray
+    upper_teeth: np.ndarray
+    lower_teeth: np.ndarray
+    teeth: np.ndarray
+    tongue: np.ndarray
+    depth: np.ndarray
+    split: bool  # True: upper/lower came from one teeth part split by rows
+
+    @classmethod
+    def of(cls, frame: int, result: Any) -> "FrameMasks":
+        mask = np.asarray(result.mask)
+        names = [str(n).lower() for n in result.part_names]
+        depth = np.asarray(getattr(result, "depth", np.full(mask.shape, np.inf)), np.float64)
+
+        def parts(pred) -> np.ndarray:
+            ids = [i for i, n in enumerate(names) if pred(n)]
+            return np.isin(mask, ids) if ids else np.zeros(mask.shape, bool)
+
+        lips = parts(lambda n: n.startswith("lip"))
+        teeth = parts(lambda n: "teeth" in n or "tooth" in n)
+        upper = parts(lambda n: ("teeth" in n or "tooth" in n) and "upper" in n)
+        lower = parts(lambda n: ("teeth" in n or "tooth" in n) and "lower" in n)
+        split = not (upper.any() or lower.any())
+        if split:
+            upper, lower = teeth_split(teeth, mouth_opening(lips))
+        tongue = parts(lambda n: n.startswith("tongue"))
+        return cls(int(frame), lips, upper, lower, teeth, tongue, depth, split)
+
+
+def mouth_opening(lips: np.ndarray) -> np.ndarray:
+    """The mouth opening: pixels enclosed by the lips (holes of the lip region), bool (H, W)."""
+    lips = np.asarray(lips, bool)
+    if not lips.any():
+        return np.zeros_like(lips)
+    return ndimage.binary_fill_holes(lips) & ~lips
+
+
+def teeth_split(teeth: np.ndarray, opening: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Split one teeth mask into upper and lower at the row of least teeth in the opening.
+
+    Between the upper and the lower incisors the opening shows the mouth's inside (or, with the
+    teeth together, the incisal line): the row with the fewest teeth pixels between the first
+    and the last teeth row. Without an opening everything above the image's middle is upper.
+    """
+    teeth = np.asarray(teeth, bool)
+    inside = teeth & opening if opening.any() else teeth
+    rows = np.flatnonzero(inside.any(axis=1))
+    if rows.size == 0:
+        return np.zeros_like(teeth), np.zeros_like(teeth)
+    counts = inside[rows[0]:rows[-1] + 1].sum(axis=1)
+    if rows.size < 3:
+        cut = rows[0] + (rows.size // 2)
+    else:
+        # the emptiest row, the middle one among ties (a gap several rows high)
+        m = counts.min()
+        ties = np.flatnonzero(counts == m)
+        cut = rows[0] + int(ties[len(ties) // 2])
+    r = np.arange(teeth.shape[0])[:, None]
+    return teeth & (r < cut), teeth & (r >= cut)
+
+
+def opening_extent(opening: np.ndarray) -> tuple[float, float]:
+    """Area (px) and extent (area / bounding-box area) of the largest opening region.
+
+    An ellipse has extent pi/4 = 0.785; a diamond or triangle 0.5 (skimage regionprops).
+    """
+    lab = measure.label(np.asarray(opening, bool))
+    if lab.max() == 0:
+        return 0.0, float("nan")
+    props = max(measure.regionprops(lab), key=lambda p: p.area)
+    return float(props.area), float(props.extent)
+
+
+class ImageContext:
+    """The frames of one view of one animation, as :class:`FrameMasks`, with open-frame stats."""
+
+    def __init__(self, frames: Iterable[FrameMasks]):
+        self.frames = sorted(frames, key=lambda f: f.frame)
+        self.openings = [mouth_opening(f.lips) for f in self.frames]
+        self.open = [int(o.sum()) >= OPEN_MIN_PIXELS for o in self.openings]
+
+    @classmethod
+    def of(cls, frames: Mapping[int, Any] | Iterable[tuple[int, Any]]) -> "ImageContext":
+        items = frames.items() if hasattr(frames, "items") else frames
+        return cls(FrameMasks.of(k, r) for k, r in items)
+
+    def open_frames(self) -> list[tuple[FrameMasks, np.ndarray]]:
+        return [(f, o) for f, o, ok in zip(self.frames, self.openings, self.open) if ok]
+
+    def upper_shares(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per open frame with teeth showing: share of upper teeth among the teeth in the opening."""
+        shares, frames = [], []
+        for f, o in self.open_frames():
+            u = int((f.upper_teeth & o).sum())
+            lo = int((f.lower_teeth & o).sum())
+            if u + lo >= OPEN_MIN_PIXELS // 3:
+                shares.append(u / (u + lo))
+                frames.append(f.frame)
+        return np.asarray(shares, float), np.asarray(frames, int)
+
+
+def _none(what: str) -> Measurement:
+    return Measurement(float("nan"), -1, what)
+
+
+def m_centered_high(ctx: ImageContext) -> Measurement:
+    """Median share of upper teeth inside the lip opening over open frames (1 = only upper)."""
+    s, fr = ctx.upper_shares()
+    if s.size == 0:
+        return _none("no frame with the lips open and teeth showing")
+    i = int(np.argmax(s))
+    return Measurement(float(np.median(s)), int(fr[i]),
+                       f"median over {s.size} open frames; upper share {s.min():.2f}-{s.max():.2f}",
+                       frame_value=float(s[i]))
+
+
+def m_centering_offset(ctx: ImageContext) -> Measurement:
+    """|median upper share - 0.5|: 0 = even split (well centered), 0.5 = one set only."""
+    s, fr = ctx.upper_shares()
+    if s.size == 0:
+        return _none("no frame with the lips open and teeth showing")
+    med = float(np.median(s))
+    i = int(np.argmax(np.abs(s - 0.5)))
+    side = "high" if med > 0.5 else "low"
+    return Measurement(abs(med - 0.5), int(fr[i]), f"median upper share {med:.2f} (centered {side}) "
+                       f"over {s.size} open frames", frame_value=float(abs(s[i] - 0.5)))
+
+
+def m_tongue_visible(ctx: ImageContext) -> Measurement:
+    """Fraction of open frames in which any tongue pixel shows."""
+    of = ctx.open_frames()
+    if not of:
+        return _none("no frame with the lips open")
+    seen = np.asarray([int(f.tongue.sum()) > 0 for f, _ in of])
+    i = int(np.argmin(seen))
+    return Measurement(float(seen.mean()), of[i][0].frame,
+                       f"tongue seen in {int(seen.sum())} of {seen.size} open frames",
+                       frame_value=float(seen[i]))
+
+
+def m_lower_teeth_seen(ctx: ImageContext) -> Measurement:
+    """Fraction of open frames in which lower teeth show inside the opening."""
+    of = ctx.open_frames()
+    if not of:
+        return _none("no frame with the lips open")
+    seen = np.asarray([int((f.lower_teeth & o).sum()) >= 5 for f, o in of])
+    i = int(np.argmin(seen))
+    return Measurement(float(seen.mean()), of[i][0].frame,
+                       f"lower teeth seen in {int(seen.sum())} of {seen.size} open frames",
+                       frame_value=float(seen[i]))
+
+
+def m_tongue_in_front(ctx: ImageContext) -> Measurement:
+    """Most tongue pixels, in any frame, nearer the camera than the front teeth around them.
+
+    The front teeth's depth is the median depth of the teeth pixels; a tongue pixel is in front
+    of the teeth when it is nearer than that by more than a tenth of the teeth pixels' depth
+    spread (so a tongue seen between the teeth, behind them, never counts).
+    """
+    best, frame = 0, -1
+    for f in ctx.frames:
+        if not f.tongue.any() or not f.teeth.any():
+            continue
+        td = f.depth[f.teeth]
+        td = td[np.isfinite(td)]
+        if td.size == 0:
+            continue
+        front = float(np.percentile(td, 10))
+        margin = 0.1 * float(np.ptp(td)) + 1e-6
+        # only where the tongue is inside the teeth's horizontal span (the front teeth region)
+        cols = np.flatnonzero(f.teeth.any(axis=0))
+        span = np.zeros_like(f.tongue)
+        span[:, cols.min():cols.max() + 1] = True
+        n = int(np.sum(f.tongue & span & (f.depth < front - margin)))
+        if n > best:
+            best, frame = n, f.frame
+    return Measurement(float(best), frame, "tongue pixels nearer than the front teeth",
+                       frame_value=float(best) if frame >= 0 else None)
+
+
+def m_opening_extent(ctx: ImageContext) -> Measurement:
+    """Median extent of the mouth opening over the wide-open frames (area >= 70 % of the max)."""
+    stats = [(f.frame, *opening_extent(o)) for f, o in ctx.open_frames()]
+    if not stats:
+        return _none("no frame with the lips open")
+    areas = np.asarray([a for _, a, _ in stats])
+    wide = [(fr, e) for fr, a, e in stats if a >= 0.7 * areas.max() and np.isfinite(e)]
+    if not wide:
+        return _none("no wide-open frame")
+    ext = np.asarray([e for _, e in wide])
+    i = int(np.argmin(ext))
+    return Measurement(float(np.median(ext)), int(wide[i][0]),
+                       f"median regionprops extent over {len(wide)} wide-open frames",
+                       frame_value=float(ext[i]))
