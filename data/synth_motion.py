@@ -1,0 +1,332 @@
+"""Articulatory trajectories of the synthetic corpus: phone targets -> smooth pellet tracks.
+
+Model (pure numpy/scipy, vectorised over frames)
+------------------------------------------------
+1. A task is a list of segments ``(start_s, end_s, spec)``; a phone's spec comes from
+   :data:`PHONE_SPECS`, oral-motor programmes build their own. A spec sets targets for nine
+   articulatory channels (:data:`CHANNELS`): jaw opening angle, upper/lower lip protrusion, upper-lip
+   lowering, lower-lip raising (relative to the jaw), tongue tip and tongue body displacement (in the
+   jaw's frame). Unspecified channels (NaN) are interpolated in time between the neighbouring
+   segments that specify them: this is the classic "look-ahead" coarticulation (lip rounding spreads
+   over consonants that do not care about the lips, the tongue keeps moving through a /p/).
+2. Contact targets (tongue tip on the alveolar ridge, dorsum on the velum) are absolute points on
+   the subject's own palate; they are converted to the jaw's frame with the jaw angle targeted at
+   that moment, so that the jaw and the tongue share the work as in real speech.
+3. Each channel's step-wise target drives a critically damped second-order system (no overshoot;
+   10-90 % rise time 3.36/omega), targets anticipated by 1/omega. Channel speeds (omega) differ:
+   tongue tip fastest, jaw slowest. Peak pellet speeds land at 50-250 mm/s as in XRMB speech.
+4. Kinematics: the jaw rotates about the condyle and slides forward as it opens; MNI and MNM are
+   rigid points of it and it carries the lower lip and the tongue. Lips cannot pass through each
+   other (soft contact, compression) and tongue pellets stay below the palate (soft contact).
+5. Tracking noise (white, 0.12 mm lips/jaw, 0.15 mm tongue) is added last.
+
+Coordinates: XRMB head frame (thesis 3.2.3), millimetres; x forward out of the mouth, y up, origin
+at the tips of the upper central incisors.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import lfilter
+
+from cassi.data.synth_subjects import SubjectFigures, palate_y
+
+CHANNELS = ("jaw", "ulp", "ull", "llp", "llr", "tipx", "tipy", "bodx", "body")
+_IDX = {c: i for i, c in enumerate(CHANNELS)}
+#: Natural frequency (rad/s) of each channel's critically damped dynamics.
+OMEGA = np.array([26.0, 34.0, 34.0, 36.0, 40.0, 46.0, 46.0, 32.0, 32.0])
+PERIOD_S = 6866e-6
+#: Jaw slide forward (mm) per degree of opening, along the articular eminence.
+JAW_SLIDE_MM_PER_DEG = 0.12
+_SLIDE_DIR = np.array([math.cos(math.radians(-25.0)), math.sin(math.radians(-25.0))])
+#: Tongue pellets stay this far below the palatal outline (pellet radius plus tissue), mm.
+PALATE_CLEARANCE_MM = 1.2
+NOISE_MM = np.array([0.12, 0.12, 0.15, 0.15, 0.15, 0.15, 0.10, 0.10])
+
+# ----------------------------------------------------------------------------- phone targets
+# Spec keys: jaw (deg), prot (fraction of the subject's speech rounding; negative = spreading),
+# lips ("close" | "labiodental" | "round" | "open"), tip / body: ("own", dx, dy) displacement in the
+# jaw frame scaled by the tongue size, ("alv", back_mm, gap_mm) a point on the palate back_mm behind
+# its front end, ("vel", fwd_mm, gap_mm) a point fwd_mm in front of its back end, ("abs", x, y).
+_V = {  # vowels: jaw deg, body (dx, dy), prot
+    "IY": (1.5, (7.0, 7.0), -0.6), "IH": (2.5, (5.0, 4.0), -0.3), "EH": (4.2, (3.0, 0.5), -0.2),
+    "AE": (6.3, (1.5, -3.0), -0.2), "AA": (7.0, (-5.0, -5.0), 0.0), "AO": (5.6, (-6.0, -3.0), 0.5),
+    "AH": (4.2, (-1.0, -1.5), 0.0), "UH": (2.8, (-4.0, 3.0), 0.5), "UW": (1.8, (-5.0, 6.0), 1.0),
+    "OW": (3.5, (-5.0, 1.0), 0.8), "ER": (2.8, (-2.0, 4.0), 0.4),
+}
+PHONE_SPECS: dict[str, dict] = {}
+for _p, (_j, (_bx, _by), _pr) in _V.items():
+    PHONE_SPECS[_p] = {"jaw": _j, "prot": _pr, "lips": "open", "body": ("own", _bx, _by),
+                       "tip": ("own", 0.4 * _bx, 0.5 * _by + (3.0 if _p == "ER" else 0.0))}
+#: Diphthongs: two targets, share of the duration of the first.
+DIPHTHONGS = {"AY": ("AA", "IY", 0.55), "AW": ("AA", "UW", 0.55), "OY": ("AO", "IY", 0.55),
+              "EY": ("EH", "IY", 0.6)}
+PHONE_SPECS.update({
+    "P": {"jaw": 3.0, "lips": "close"}, "B": {"jaw": 3.0, "lips": "close"},
+    "M": {"jaw": 3.0, "lips": "close"},
+    "F": {"jaw": 2.5, "lips": "labiodental"}, "V": {"jaw": 2.5, "lips": "labiodental"},
+    "TH": {"jaw": 3.0, "tip": ("abs", 1.0, -1.5)}, "DH": {"jaw": 3.0, "tip": ("abs", 1.0, -1.5)},
+    "T": {"jaw": 1.5, "tip": ("alv", 4.0, 0.0)}, "D": {"jaw": 1.5, "tip": ("alv", 4.0, 0.0)},
+    "N": {"jaw": 2.0, "tip": ("alv", 4.0, 0.0)},
+    "L": {"jaw": 3.0, "tip": ("alv", 4.5, 0.0), "body": ("own", -2.0, -2.0)},
+    "S": {"jaw": 1.0, "tip": ("alv", 3.0, 2.5), "prot": -0.2},
+    "Z": {"jaw": 1.0, "tip": ("alv", 3.0, 2.5), "prot": -0.2},
+    "SH": {"jaw": 1.5, "tip": ("alv", 9.0, 2.0), "body": ("own", 2.0, 3.0), "prot": 0.8},
+    "ZH": {"jaw": 1.5, "tip": ("alv", 9.0, 2.0), "body": ("own", 2.0, 3.0), "prot": 0.8},
+    "CH": {"jaw": 1.5, "tip": ("alv", 7.0, 0.0), "body": ("own", 2.0, 3.0), "prot": 0.8},
+    "JH": {"jaw": 1.5, "tip": ("alv", 7.0, 0.0), "body": ("own", 2.0, 3.0), "prot": 0.8},
+    "K": {"jaw": 3.0, "body": ("vel", 10.0, 0.0)}, "G": {"jaw": 3.0, "body": ("vel", 10.0, 0.0)},
+    "NG": {"jaw": 3.0, "body": ("vel", 10.0, 0.0)},
+    "Y": {"jaw": 2.0, "body": ("own", 7.0, 7.5), "prot": -0.4},
+    "W": {"jaw": 2.5, "body": ("own", -5.0, 6.0), "prot": 1.0, "lips": "round"},
+    "R": {"jaw": 3.0, "tip": ("alv", 12.0, 5.0), "body": ("own", -3.0, 1.0), "prot": 0.6},
+    "HH": {},
+})
+#: The resting posture: what silence and the start of every recording look like.
+REST_SPEC = {"jaw": 0.0, "prot": 0.0, "lips": "open", "tip": ("own", 0.0, 0.0),
+             "body": ("own", 0.0, 0.0)}
+#: Pauses longer than this return to rest; shorter ones leave every channel unspecified.
+REST_PAUSE_S = 0.3
+
+
+@dataclass(frozen=True)
+class Anatomy:
+    """A subject's resting pellets and articulator geometry, mm (from :class:`SubjectFigures`)."""
+
+    fig: SubjectFigures
+    rest: np.ndarray        # (8, 2) resting pellets UL LL T1 T2 T3 T4 MNI MNM
+    condyle: np.ndarray     # (2,)
+    d_closed: float         # UL-LL pellet distance with the lips closed
+    round_ul: float         # speech lip rounding of UL (mm forward)
+    round_ll: float
+    spread_ul: float        # speech lip spreading of UL (mm back)
+
+    @classmethod
+    def of(cls, fig: SubjectFigures) -> "Anatomy":
+        pal = fig.palate
+        ts = fig.tongue_scale
+        ul, ll = np.array(fig.ul_rest_mm), np.array(fig.ll_rest_mm)
+        xs = pal[0] + (pal[6] - pal[0]) * np.array([0.08, 0.42, 0.72, 0.97]) * ts ** 0.3
+        xs = np.maximum(xs, pal[6] - 2.0)
+        gaps = np.array([4.5, 10.5, 12.0, 17.0]) * ts
+        tongue = np.column_stack([xs, palate_y(pal, xs) - gaps])
+        rest = np.vstack([ul, ll, tongue, fig.mni_mm, fig.mnm_mm])
+        dist = float(np.hypot(*(ul - ll)))
+        return cls(fig, rest, np.array(fig.condyle_mm, float), d_closed=0.8 * dist,
+                   round_ul=min(4.0, 0.6 * fig.max_protrusion_ul_mm),
+                   round_ll=min(4.0, 0.6 * fig.max_protrusion_ll_mm),
+                   spread_ul=min(2.0, fig.spread_ul_mm))
+
+
+def jaw_transform(anat: Anatomy, theta_deg: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Carry jaw-frame points with the jaw.
+
+    Parameters
+    ----------
+    theta_deg : (F,) jaw opening, degrees (0 = rest).
+    pts : (F, K, 2), (K, 2) or (2,) points in the resting jaw frame, mm.
+
+    Returns
+    -------
+    (F, K, 2) head-frame points, mm: rotated about the condyle (opening moves the chin down) and
+    slid forward-down by :data:`JAW_SLIDE_MM_PER_DEG` per degree.
+    """
+    th = np.radians(np.asarray(theta_deg, float))[:, None]
+    c, s = np.cos(th), np.sin(th)
+    rel = np.asarray(pts, float) - anat.condyle
+    if rel.ndim == 1:
+        rel = rel[None, :]
+    if rel.ndim == 2:
+        rel = np.broadcast_to(rel, (th.shape[0],) + rel.shape)
+    x = anat.condyle[0] + c * rel[..., 0] + s * rel[..., 1]
+    y = anat.condyle[1] - s * rel[..., 0] + c * rel[..., 1]
+    slide = JAW_SLIDE_MM_PER_DEG * np.asarray(theta_deg, float)[:, None]
+    return np.stack([x + slide * _SLIDE_DIR[0], y + slide * _SLIDE_DIR[1]], axis=-1)
+
+
+def _jaw_inverse(anat: Anatomy, theta_deg: float, p: np.ndarray) -> np.ndarray:
+    th = math.radians(theta_deg)
+    q = np.asarray(p, float) - JAW_SLIDE_MM_PER_DEG * theta_deg * _SLIDE_DIR - anat.condyle
+    c, s = math.cos(th), math.sin(th)
+    return anat.condyle + np.array([c * q[0] - s * q[1], s * q[0] + c * q[1]])
+
+
+def expand_phones(segments: list[tuple[float, float, str]]) -> list[tuple[float, float, dict]]:
+    """Phone segments ``(start_s, end_s, ARPAbet label)`` -> spec segments.
+
+    Stress digits are ignored; diphthongs become two targets; ``sp``/``sil``/empty labels are
+    pauses (rest when longer than :data:`REST_PAUSE_S`); unknown labels are unspecified.
+    """
+    out: list[tuple[float, float, dict]] = []
+    for t0, t1, lab in segments:
+        p = "".join(ch for ch in lab.upper() if ch.isalpha())
+        if p in ("", "SP", "SIL", "SPN"):
+            out.append((t0, t1, REST_SPEC if t1 - t0 > REST_PAUSE_S else {}))
+        elif p in DIPHTHONGS:
+            a, b, share = DIPHTHONGS[p]
+            tm = t0 + share * (t1 - t0)
+            out.append((t0, tm, PHONE_SPECS[a]))
+            out.append((tm, t1, PHONE_SPECS[b]))
+        else:
+            out.append((t0, t1, PHONE_SPECS.get(p, {})))
+    return out
+
+
+def _point(anat: Anatomy, spec) -> np.ndarray | None:
+    """Absolute head-frame point of a contact spec, or None for an ``own`` spec."""
+    kind = spec[0]
+    pal = anat.fig.palate
+    if kind == "abs":
+        return np.array(spec[1:3], float)
+    if kind == "alv":
+        x = pal[0] - spec[1]
+    elif kind == "vel":
+        x = pal[6] + spec[1]
+    else:
+        return None
+    return np.array([x, float(palate_y(pal, x)) - PALATE_CLEARANCE_MM - spec[2]])
+
+
+def segment_targets(anat: Anatomy, segs: list[tuple[float, float, dict]],
+                    rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Channel targets per segment.
+
+    Returns
+    -------
+    starts : (S,) segment start times, s.
+    targets : (S, 9) targets in :data:`CHANNELS` order; every NaN filled by interpolation in time.
+    """
+    n = len(segs)
+    starts = np.array([s[0] for s in segs], float)
+    mids = np.array([0.5 * (s[0] + s[1]) for s in segs], float)
+    tg = np.full((n, len(CHANNELS)), np.nan)
+    ts = anat.fig.tongue_scale
+    jit = rng.normal(0.0, 1.0, size=(n, 4))
+    jaw = np.array([s[2].get("jaw", np.nan) for s in segs], float)
+    jaw = jaw * (1.0 + 0.08 * jit[:, 0])
+    jaw = _fill(mids, jaw)
+    tg[:, 0] = jaw
+    rest = anat.rest
+    ll_jaw_y = jaw_transform(anat, jaw, rest[1])[:, 0, 1]   # LL carried by the targeted jaw
+    for i, (_, _, spec) in enumerate(segs):
+        if not spec:
+            continue
+        pr = spec.get("prot")
+        if pr is not None:
+            a_ul = anat.round_ul if pr >= 0 else anat.spread_ul
+            a_ll = anat.round_ll if pr >= 0 else anat.spread_ul * 0.6
+            f = 1.0 + 0.08 * jit[i, 1]
+            tg[i, 1], tg[i, 3] = pr * a_ul * f, pr * a_ll * f
+        if "ulp_mm" in spec:
+            tg[i, 1] = spec["ulp_mm"]
+        if "llp_mm" in spec:
+            tg[i, 3] = spec["llp_mm"]
+        lips = spec.get("lips")
+        if lips is not None:
+            ull = {"close": 1.5, "labiodental": 0.5, "round": 0.8}.get(lips, 0.0)
+            tg[i, 2] = ull
+            ul_y = rest[0, 1] - ull
+            if lips == "close":       # pellets closer than at contact: the lips press together
+                tg[i, 4] = ul_y - 0.93 * anat.d_closed - ll_jaw_y[i]
+            elif lips == "labiodental":
+                tg[i, 4] = ul_y - 1.05 * anat.d_closed - ll_jaw_y[i]
+                tg[i, 3] = -1.5
+            elif lips == "round":
+                tg[i, 4] = max(0.0, ul_y - 1.15 * anat.d_closed - ll_jaw_y[i])
+            else:
+                tg[i, 4] = 0.0
+        for key, col, base in (("tip", 5, rest[2]), ("body", 7, rest[4])):
+            sp = spec.get(key)
+            if sp is None:
+                continue
+            p = _point(anat, sp)
+            if p is None:
+                own = np.array(sp[1:3], float) * ts + 0.5 * jit[i, 2:4] * ts
+            else:
+                own = _jaw_inverse(anat, jaw[i], p) - base
+            tg[i, col:col + 2] = own
+    for c in range(1, len(CHANNELS)):
+        tg[:, c] = _fill(mids, tg[:, c])
+    return starts, tg
+
+
+def _fill(t: np.ndarray, v: np.ndarray) -> np.ndarray:
+    ok = np.isfinite(v)
+    if not ok.any():
+        return np.zeros_like(v)
+    if ok.all():
+        return v
+    return np.interp(t, t[ok], v[ok])
+
+
+def smooth(starts: np.ndarray, targets: np.ndarray, n_frames: int, *,
+           period_s: float = PERIOD_S) -> np.ndarray:
+    """Frame-wise channel trajectories (F, 9) from step targets, critically damped per channel.
+
+    The state starts at rest on the first segment's targets; each channel sees its targets
+    1/omega early (anticipation compensating the system's lag).
+    """
+    t = np.arange(n_frames) * period_s
+    out = np.empty((n_frames, targets.shape[1]))
+    for c, om in enumerate(OMEGA):
+        idx = np.searchsorted(starts, t + 1.0 / om, side="right") - 1
+        u = targets[np.clip(idx, 0, len(starts) - 1), c]
+        a = math.exp(-om * period_s)
+        b, den = [(1.0 - a) ** 2], [1.0, -2.0 * a, a * a]
+        zi = np.array([u[0] * (2 * a - a * a), -a * a * u[0]])  # steady state at u[0]
+        out[:, c] = lfilter(b, den, u, zi=zi)[0]
+    return out
+
+
+def _soft_ceiling(y: np.ndarray, ceiling: np.ndarray, s: float = 0.35) -> np.ndarray:
+    """min(y, ceiling), smoothly over about s mm (exact far below the ceiling)."""
+    return ceiling - s * np.logaddexp(0.0, (ceiling - y) / s)
+
+
+def pellets(anat: Anatomy, ch: np.ndarray) -> np.ndarray:
+    """Pellet tracks (F, 8, 2) mm from channel trajectories (F, 9) (no noise)."""
+    rest = anat.rest
+    n = ch.shape[0]
+    theta = np.maximum(ch[:, 0], -0.3)          # teeth stop the jaw closing further
+    own = np.zeros((n, 8, 2))
+    tip, body = ch[:, 5:7], ch[:, 7:9]
+    own[:, 2] = tip
+    own[:, 3] = 0.4 * tip + 0.6 * body
+    own[:, 4] = body
+    own[:, 5] = 0.85 * body
+    carried = jaw_transform(anat, theta, rest[None, 1:8] + own[:, 1:8])  # LL, T1-4, MNI, MNM
+    out = np.empty((n, 8, 2))
+    out[:, 0, 0] = rest[0, 0] + ch[:, 1]
+    out[:, 0, 1] = rest[0, 1] - ch[:, 2]
+    out[:, 1:] = carried
+    out[:, 1, 0] += ch[:, 3]
+    out[:, 1, 1] += ch[:, 4]
+    # lips meet: LL stays at least 0.88 d_closed below UL (pressed lips; soft contact)
+    out[:, 1, 1] = _soft_ceiling(out[:, 1, 1], out[:, 0, 1] - 0.88 * anat.d_closed, 0.6)
+    # tongue pellets under the palate where the palate is above them
+    pal = anat.fig.palate
+    tx = out[:, 2:6, 0]
+    ceil = palate_y(pal, tx) - PALATE_CLEARANCE_MM
+    inside = tx < pal[0] + 1.0
+    out[:, 2:6, 1] = np.where(inside, _soft_ceiling(out[:, 2:6, 1], ceil), out[:, 2:6, 1])
+    return out
+
+
+def add_noise(xy: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Tracking noise, per pellet :data:`NOISE_MM` (standard deviation, mm).
+
+    The real files were resampled with smoothing splines (thesis 3.2.4), so their noise is smooth
+    from row to row (Figure 3.9 moves by tens of micrometres per row): the noise is low-passed
+    (critically damped, about 12 Hz) and scaled back to NOISE_MM, plus 5 um of white noise.
+    """
+    n = xy.shape[0]
+    raw = rng.normal(0.0, 1.0, size=xy.shape)
+    a = math.exp(-2.0 * math.pi * 12.0 * PERIOD_S)
+    smooth_noise = lfilter([(1.0 - a) ** 2], [1.0, -2.0 * a, a * a], raw, axis=0)
+    # stationary variance of the two-pole filter driven by unit white noise
+    var = (1.0 - a) ** 4 * (1.0 + a * a) / ((1.0 - a * a) * ((1.0 + a * a) ** 2 - 4.0 * a * a))
+    smooth_noise /= math.sqrt(var)
+    white = rng.normal(0.0, 0.005, size=xy.shape)
+    return xy + smooth_noise * NOISE_MM[None, :, None] + white
