@@ -453,6 +453,9 @@ def check_corpus(corpus: Corpus) -> tuple[list[FileReport], list[str]]:
     ``file:line: reason`` strings.
     """
     errors: list[str] = list(corpus.problems)
+    if not corpus.subjects:
+        errors.append(str(CassiInputError("no subject directories (directories holding task "
+                                          "files) found", path=corpus.root)))
     try:
         corpus.metadata
         corpus.head_measures_table

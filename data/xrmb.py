@@ -41,6 +41,15 @@ from cassi.data.mis import (  # noqa: F401
 from cassi.data.textlines import (decode_ascii, numbered_rows, parse_int, parse_num, read_bytes,
                                   split_lines, tokens)
 
+__all__ = [
+    "PELLETS", "BAD_VALUE", "NOMINAL_PERIOD_US", "N_COLUMNS", "COLUMN_NAMES", "TaskRecording",
+    "parse_task_name", "task_file_name", "parse_txy", "read_txy", "format_txy", "write_txy",
+    "parse_outline", "format_outline", "read_pal", "write_pal", "read_pha", "write_pha",
+    "MistrackEntry", "MISTRACK_PELLET_CODES", "parse_mis", "read_mis", "format_mis", "write_mis",
+    "HeadMeasures", "parse_head_measures", "read_head_measures", "format_head_measures",
+    "write_head_measures",
+]
+
 PELLETS = ("UL", "LL", "T1", "T2", "T3", "T4", "MNI", "MNM")
 BAD_VALUE = 1000000
 NOMINAL_PERIOD_US = 6866

@@ -69,9 +69,12 @@ def test_check_single_subject_files(capsys):
 
 def test_check_bad_paths_exit_2(tmp_path, capsys):
     assert main(["check", str(tmp_path / "missing")]) == 2
+    (tmp_path / "empty").mkdir()
+    assert main(["check", str(tmp_path / "empty")]) == 2
     (tmp_path / "readme.md").write_text("hi")
     assert main(["check", str(tmp_path / "readme.md")]) == 2
-    assert "unknown file kind" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "unknown file kind" in err and "no subject directories" in err
 
 
 def test_check_synthetic_corpus_says_so(corpus_dir, capsys):
