@@ -291,3 +291,12 @@ def test_animate_is_deterministic(face, rec):
     a = Cassi10().animate(toy_profile(), face, rec)
     b = Cassi10().animate(toy_profile(), face, rec)
     np.testing.assert_array_equal(a.positions, b.positions)
+
+
+def test_lip_corners_take_half_of_each_lip(anim10):
+    # CORNER_WEIGHTS: corners 70, 287, 300 move by 0.5 dUL + 0.5 dLL (x and z).
+    d67 = anim10.vertex(K.V_UL) - anim10.vertex(K.V_UL)[0]
+    d49 = anim10.vertex(K.V_LL) - anim10.vertex(K.V_LL)[0]
+    for n in K.LIP_CORNER_VERTICES:
+        moved = anim10.vertex(n) - anim10.vertex(n)[0]
+        np.testing.assert_allclose(moved, 0.5 * d67 + 0.5 * d49, atol=2e-3)

@@ -145,3 +145,16 @@ def test_vectorised_over_frames_matches_per_frame():
     for i in (0, 17, 49):
         one = fixed_pivot_motion(th[i:i + 1], motion.point[i])
         np.testing.assert_allclose(out[i], apply_zones(base, one, zones)[0], atol=1e-8)
+
+
+def test_anchor_point_follows_exactly():
+    # Jaw line lengths differ (40 -> 42): no rotation carries one onto the other, so only the
+    # anchor point can land exactly; anchor 1 (MANi, the default) or anchor 2 (MANm).
+    p1, p2 = np.array([0.0, 0.0]), np.array([-40.0, 0.0])
+    q1, q2 = np.array([[1.0, -5.0]]), np.array([[-40.0, 2.0]])
+    for anchor, src, dst in ((1, p1, q1[0]), (2, p2, q2[0])):
+        motion = solve_jaw_motion(p1, p2, q1, q2, anchor=anchor)
+        out = apply_zones(np.array([[src[0], 0.0, src[1]]]), motion, [K.Zone("z", 1.0, (1,))])
+        np.testing.assert_allclose(out[0, 0, [0, 2]], dst, atol=1e-9)
+    with pytest.raises(ValueError):
+        solve_jaw_motion(p1, p2, q1, q2, anchor=3)

@@ -41,10 +41,11 @@ MAPPING_DISTANCE_PLANE = "xz"
 #: translation of each zone by its fraction of the pellet displacement. 1e-9 rad keeps the
 #: cancellation error of Eqs. 3.5-3.6 about a point ~1e9 units away below 1e-6 units.
 THETA_EPS = 1e-9
-#: CHOSEN: Eqs. 4.6-4.7 solve the point of rotation from one jaw point and its rotated image;
-#: we use MANi, point 1 of Figure 4.8, so the lower incisor follows its pellet exactly (with the
-#: teeth's fraction 0.999999 the residual is below 1e-5 units for any real jaw angle).
-ROTATION_ANCHOR_PELLET = "MNI"
+#: CHOSEN: Eqs. 4.6-4.7 solve the point of rotation from one jaw point and its rotated image
+#: ("(x, y)" and "(x', y')"), without saying which of the two; we use point 1 of Figure 4.8,
+#: MANi, so the lower incisor follows its pellet exactly (with the teeth's fraction 0.999999 the
+#: residual is below 1e-5 units for any real jaw angle), where the eye looks first. 2 = MANm.
+ROTATION_ANCHOR = 1
 
 
 @dataclass(frozen=True)

@@ -128,7 +128,7 @@ class JawMotion:
 
 
 def solve_jaw_motion(start1: np.ndarray, start2: np.ndarray, cur1: np.ndarray,
-                     cur2: np.ndarray) -> JawMotion:
+                     cur2: np.ndarray, *, anchor: int = K.ROTATION_ANCHOR) -> JawMotion:
     """Angle (Eqs. 4.1-4.3) and point of rotation (Eqs. 4.6-4.7) for every frame.
 
     Parameters
@@ -137,10 +137,14 @@ def solve_jaw_motion(start1: np.ndarray, start2: np.ndarray, cur1: np.ndarray,
         The starting jaw line: point 1 (MANi) and point 2 (MANm), (x, y).
     cur1, cur2 : float (F, 2) or (2,)
         The rotated jaw line in each frame.
+    anchor : {1, 2}
+        The point whose motion Eqs. 4.6-4.7 solve (a, b) from: it follows its target exactly.
     """
-    s1 = np.asarray(start1, dtype=np.float64)
-    c1 = np.asarray(cur1, dtype=np.float64)
-    theta = np.atleast_1d(jaw_angle(s1, start2, c1, cur2))
+    theta = np.atleast_1d(jaw_angle(start1, start2, cur1, cur2))
+    if anchor not in (1, 2):
+        raise ValueError(f"anchor must be 1 or 2, got {anchor!r}")
+    s1 = np.asarray(start1 if anchor == 1 else start2, dtype=np.float64)
+    c1 = np.asarray(cur1 if anchor == 1 else cur2, dtype=np.float64)
     s1b, c1b = np.broadcast_arrays(s1, c1)
     s1b = np.broadcast_to(s1b, theta.shape + (2,))
     c1b = np.broadcast_to(c1b, theta.shape + (2,))
