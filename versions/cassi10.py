@@ -101,6 +101,8 @@ class JawStage:
         ctx.state["init_teeth_theta"] = float(motion.theta[0])
         # Chin and jaw: Parke's placement -> the head measures (when the subject has them).
         hm = getattr(ctx.profile, "head_measures", None)
+        if hm is None:      # the face model carries them too (build_face(head_measures=...))
+            hm = getattr(ctx.face, "head_measures", None)
         if hm is not None and others:
             gnathion, gonion = jaw_reference_vertices(ctx.neutral)
             target1 = ctx.mapping.to_parke(np.asarray(hm.gnathion_mm, dtype=np.float64))[None]
