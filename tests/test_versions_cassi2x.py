@@ -1,0 +1,212 @@
+"""CASSI 2.0 and 2.1 as versions (thesis 4.2-4.3): the lip stage inside CASSI 1.0's pipeline.
+
+Pipeline tests run on the stand-in face of ``_versions_toy``; ``test_real_face_*`` run on the
+face model (``cassi.data.face.build_face``) and skip while it is not installed.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from _versions_toy import ToyFace, toy_profile, toy_recording, toy_vertices
+from cassi.versions import lips_constants as LK
+from cassi.versions.cassi10 import Cassi10
+from cassi.versions.cassi20 import Cassi20
+from cassi.versions.cassi21 import Cassi21
+from cassi.versions.lips import LIP_VERTICES, LipMovementStage
+from cassi.versions.registry import get_version
+
+UL, LL = 0, 1
+#: Vertices the lip stage may move besides the lips: 71-73, 41-43, 44 (4.2.1) and the nose tip,
+#: which CASSI 1.0's clearance stage raises after the lips (4.1.1).
+NEIGHBOURS = (41, 42, 43, 44, 71, 72, 73)
+NOSE_TIP = tuple(range(80, 102))
+
+
+def protrusion_recording(profile, n=600, wag_deg=2.0):
+    """The toy jaw-wagging task with the upper lip taken to the subject's MAX UL (rounded), then
+    back through rest to MIN UL (stretched); the lower lip follows 0.8 of the upper's x."""
+    rec = toy_recording(n, wag_deg=wag_deg)
+    xy = rec.xy_mm.copy()
+    d = profile.jaw_length_mm
+    start = rec.first_valid_index
+    x0 = xy[start, UL, 0]
+    target = np.concatenate([
+        np.linspace(x0, profile.max_ul * d, n // 4), np.full(n // 4, profile.max_ul * d),
+        np.linspace(profile.max_ul * d, profile.min_ul * d, n // 4),
+        np.full(n - 3 * (n // 4), profile.min_ul * d),
+    ])
+    dx = target - x0
+    xy[:, UL, 0] = x0 + dx
+    xy[:, LL, 0] += 0.8 * dx
+    xy[~rec.valid] = np.nan
+    return dataclasses.replace(rec, xy_mm=xy)
+
+
+#: The stand-in face is built at ~10 units per mm; CASSI 2.0's key c values (65, 0, 85) and the
+#: limits of step 7 are in Parke's units, ~4 per mm (cassi.data.numbering.MM_PER_UNIT), so the
+#: stand-in is scaled to that before the lips run on it.
+TOY_TO_PARKE = 0.4
+
+
+@pytest.fixture(scope="module")
+def face():
+    return ToyFace(toy_vertices() * TOY_TO_PARKE)
+
+
+@pytest.fixture(scope="module")
+def profile():
+    return toy_profile()
+
+
+@pytest.fixture(scope="module")
+def rec(profile):
+    return protrusion_recording(profile)
+
+
+@pytest.fixture(scope="module")
+def anims(face, profile, rec):
+    return {v.name: v.animate(profile, face, rec) for v in (Cassi10(), Cassi20(), Cassi21())}
+
+
+def test_registry_names_the_lip_versions():
+    assert isinstance(get_version("cassi-2.0"), Cassi20)
+    assert isinstance(get_version("cassi-2.1"), Cassi21)
+    # 2.0 is 1.0 with another lip stage; 2.1 is 2.0 with another thickness policy.
+    assert issubclass(Cassi20, Cassi10) and issubclass(Cassi21, Cassi20)
+    names = [type(s).__name__ for s in Cassi20().stages()]
+    assert names == [type(s).__name__ for s in Cassi10().stages()][:1] + ["LipMovementStage"] + \
+        [type(s).__name__ for s in Cassi10().stages()][2:]
+    assert isinstance(Cassi21().lip_stage(), LipMovementStage)
+
+
+def test_lips_on_their_pellets_and_diagnostics(anims, rec):
+    anim = anims["cassi-2.0"]
+    assert anim.version == "cassi-2.0"
+    assert anim.positions.shape[0] == len(rec.time_us) - rec.first_valid_index
+    d = anim.diagnostics
+    for col in ("a", "b", "c", "c_prime", "currthick", "outer_abc_branch", "ellipse",
+                "jaw_angle_rad", "param_63", "thickness_rule"):
+        assert col in d.columns, col
+    assert d["outer_abc_branch"].iloc[0] == "3"
+    # 67 and 49 stay on the mapped pellets (steps 1-4), exactly as in 1.0.
+    ref = anims["cassi-1.0"]
+    np.testing.assert_allclose(anim.vertex(67)[:, [0, 2]], ref.vertex(67)[:, [0, 2]], atol=1e-3)
+    np.testing.assert_allclose(anim.vertex(49)[:, [0, 2]], ref.vertex(49)[:, [0, 2]], atol=1e-3)
+
+
+def test_everything_but_the_lips_is_cassi_1_0(anims):
+    moved = set(LIP_VERTICES) | set(NEIGHBOURS) | set(NOSE_TIP)
+    a20, a10 = anims["cassi-2.0"].positions, anims["cassi-1.0"].positions
+    keep = np.array([v - 1 for v in range(1, a20.shape[1] + 1) if v not in moved])
+    np.testing.assert_array_equal(a20[:, keep], a10[:, keep])
+    # ... and the lips really are different (the ellipses reshape them).
+    lips = np.asarray(LIP_VERTICES) - 1
+    assert np.abs(a20[:, lips] - a10[:, lips]).max() > 1.0
+
+
+def test_1_0_never_rounds_2_0_rounds_forward_and_stretches_back(anims, rec):
+    n = anims["cassi-2.0"].n_frames
+    q = (len(rec.time_us)) // 4
+    rest, rounded, stretched = 0, 2 * q - 10 - rec.first_valid_index, n - 1
+    y10 = anims["cassi-1.0"].vertex(70)[:, 1]
+    assert np.ptp(y10) == 0.0                         # 1.0: corners never move sideways
+    y20 = anims["cassi-2.0"].vertex(70)[:, 1]
+    cp = anims["cassi-2.0"].diagnostics["c_prime"].to_numpy()
+    assert cp[rounded] < 5 and cp[stretched] > 80
+    assert y20[rounded] < 0.8 * y20[rest]
+    assert y20[stretched] > y20[rest]
+
+
+def test_frame_0_is_the_initialised_face(face, profile, rec):
+    version = Cassi20()
+    ctx = version.context(profile, face, rec)
+    for stage in version.stages():
+        stage.initialise(ctx)
+    anim = version.animate(profile, face, rec)
+    np.testing.assert_allclose(anim.positions[0], ctx.start, atol=1e-3)
+
+
+def test_neighbours_follow_their_lip_vertices(anims, face, profile, rec):
+    a20 = anims["cassi-2.0"]
+    # 71 moves by ABOVE_LIP_PORTION of 67's movement since the first frame.
+    m71 = a20.vertex(71) - a20.vertex(71)[0]
+    m67 = a20.vertex(67) - a20.vertex(67)[0]
+    np.testing.assert_allclose(m71, LK.ABOVE_LIP_PORTION * m67, atol=1e-3)
+    # 41's y moves by BELOW_LIP_Y_PORTION of 49's (the jaw rotation leaves y alone).
+    m41 = a20.vertex(41)[:, 1] - a20.vertex(41)[0, 1]
+    m49 = a20.vertex(49)[:, 1] - a20.vertex(49)[0, 1]
+    np.testing.assert_allclose(m41, LK.BELOW_LIP_Y_PORTION * m49, atol=1e-3)
+    # 41's x and z: half the jaw rotation (the jaw stage alone, run on 2.0's starting face),
+    # half 49's movement.
+    version = Cassi20()
+    ctx = version.context(profile, face, rec)
+    stages = version.stages()
+    for stage in stages:
+        stage.initialise(ctx)
+    alone = np.empty((ctx.n_frames,) + ctx.start.shape, dtype=np.float32)
+    alone[...] = ctx.start
+    stages[0].animate(ctx, alone)
+    jaw = alone[:, 40][:, [0, 2]] - ctx.start[40, [0, 2]]
+    lip = a20.vertex(49)[:, [0, 2]] - a20.vertex(49)[0, [0, 2]]
+    got = a20.vertex(41)[:, [0, 2]] - a20.vertex(41)[0, [0, 2]]
+    np.testing.assert_allclose(got, 0.5 * jaw + 0.5 * lip, atol=1e-3)
+
+
+def test_2_1_identical_to_2_0_for_well_centred_subjects(face, profile, rec, anims):
+    assert anims["cassi-2.1"].diagnostics["thickness_rule"].iloc[0] == "equal"
+    np.testing.assert_array_equal(anims["cassi-2.1"].positions, anims["cassi-2.0"].positions)
+
+
+def test_2_1_thins_the_upper_lip_of_low_lip_subjects(face, rec):
+    # A thick-lipped subject: 61 (67 - Thick) starts far below 226 -> low lips.
+    thick = dataclasses.replace(toy_profile(), lipthick=3.0)
+    a20 = Cassi20().animate(thick, face, rec)
+    a21 = Cassi21().animate(thick, face, rec)
+    assert a21.diagnostics["thickness_rule"].iloc[0] == "low-lips"
+    ct = a21.diagnostics["currthick"].to_numpy()
+    np.testing.assert_allclose(a21.vertex(67)[:, 2] - a21.vertex(61)[:, 2], 2 / 3 * ct, rtol=1e-4)
+    np.testing.assert_allclose(a21.vertex(58)[:, 2] - a21.vertex(49)[:, 2], 4 / 3 * ct, rtol=1e-4)
+    np.testing.assert_allclose(a20.vertex(67)[:, 2] - a20.vertex(61)[:, 2], ct, rtol=1e-4)
+    # Only lip vertices (and what follows them) differ.
+    diff = np.abs(a21.positions - a20.positions).max(axis=(0, 2))
+    changed = {i + 1 for i in np.nonzero(diff > 1e-4)[0]}
+    assert changed and changed <= set(LIP_VERTICES) | set(NEIGHBOURS) | set(NOSE_TIP)
+
+
+# --- on the face model ------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def real_face():
+    mod = pytest.importorskip("cassi.data.face")
+    try:
+        return mod.build_face()
+    except ImportError as err:  # the face model is still landing in pieces
+        pytest.skip(f"face model incomplete: {err}")
+
+
+def test_real_face_lips_stay_in_front_of_the_upper_teeth(real_face, profile):
+    """Section 4.2.2: on the parabolic track no outer lip vertex goes behind the upper front
+    teeth's labial surface while the lips round and stretch."""
+    from cassi.data import numbering as N
+
+    rec = protrusion_recording(profile)
+    anim = Cassi20().animate(profile, real_face, rec)
+    teeth = np.asarray(N.UPPER_TEETH) - 1
+    lips = [v - 1 for v in (67, 68, 69, 70, 64, 65, 66)]
+    for f in range(0, anim.n_frames, 25):
+        tx, ty = anim.positions[f, teeth, 0], anim.positions[f, teeth, 1]
+        order = np.argsort(ty)
+        for v in lips:
+            x, y, _ = anim.positions[f, v]
+            if y > ty.max():
+                continue
+            assert x >= np.interp(y, ty[order], tx[order]) - 1e-3, (f, v + 1)
+
+
+def test_real_face_runs_all_lip_versions(real_face, profile):
+    rec = toy_recording(300)
+    for v in (Cassi20(), Cassi21()):
+        anim = v.animate(profile, real_face, rec)
+        assert np.isfinite(anim.positions).all()
