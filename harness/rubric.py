@@ -919,14 +919,16 @@ def run_image_checks(results_by_view: Mapping[str, Any], *, task: int, subject: 
     ids = dict(subject=subject, task=int(task), rep=int(rep), version=version)
     wanted = None if checks is None else {get_check(c).name for c in checks}
     rows: list[dict] = []
+    contexts: dict[str, Any] = {}  # one mask analysis per view, shared by its checks
     for c in checks_for(kind="image", task=task):
         if wanted is not None and c.name not in wanted:
             continue
         frames = results_by_view.get(c.view) if hasattr(results_by_view, "get") else None
         if not frames:
             continue
-        ctx = I.ImageContext.of(frames)
-        rows.extend(_rows(c, c.func(ctx), c.view, ids))
+        if c.view not in contexts:
+            contexts[c.view] = I.ImageContext.of(frames)
+        rows.extend(_rows(c, c.func(contexts[c.view]), c.view, ids))
     return _frame(rows)
 
 

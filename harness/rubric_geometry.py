@@ -120,16 +120,27 @@ class MouthParts:
 # Building the parts from the real face
 # ----------------------------------------------------------------------------------------------
 
-def _num(numbering, names, default):
-    """First attribute of ``numbering`` among ``names`` (Parke 1-based number), else default."""
-    for n in names:
-        if numbering is not None and hasattr(numbering, n):
-            return getattr(numbering, n)
-    return default
+def _poly_parts(poly):
+    if hasattr(poly, "material"):
+        return poly.material, tuple(getattr(poly, "vertices", ()))
+    return poly[0], tuple(poly[1])
+
+
+def _material_name(materials, mat) -> str | None:
+    if isinstance(mat, str):
+        return mat
+    if materials is not None:
+        try:
+            m = materials[mat]
+            return m if isinstance(m, str) else getattr(m, "name", None)
+        except (KeyError, IndexError, TypeError):
+            pass
+    from cassi.data.face_build import MATERIAL_NAMES  # noqa: PLC0415 - the face's own names
+    return MATERIAL_NAMES.get(int(mat))
 
 
 def _polys_by_material(face, wanted) -> np.ndarray:
-    """Triangles (0-based, fan-split) of the face polygons whose material name is in ``wanted``."""
+    """Triangles (0-based, fan-split) of the face's polygons whose material name is in ``wanted``."""
     tris = []
     materials = getattr(face, "materials", None)
     for poly in getattr(face, "polygons", ()):
@@ -143,109 +154,44 @@ def _polys_by_material(face, wanted) -> np.ndarray:
     return np.asarray(tris, np.int64).reshape(-1, 3)
 
 
-def _poly_parts(poly):
-    if hasattr(poly, "material"):
-        return poly.material, tuple(getattr(poly, "vertices", getattr(poly, "verts", ())))
-    return poly[0], tuple(poly[1])
+def mouth_parts(face) -> MouthParts:
+    """The :class:`MouthParts` of a :class:`cassi.data.face.FaceModel`.
 
-
-def _material_name(materials, mat):
-    if isinstance(mat, str):
-        return mat
-    if materials is None:
-        return None
-    try:
-        m = materials[mat]
-    except (KeyError, IndexError, TypeError):
-        return None
-    return m if isinstance(m, str) else getattr(m, "name", None)
-
-
-def mouth_parts(face, numbering=None) -> MouthParts:
-    """The :class:`MouthParts` of a :class:`cassi.data.face.FaceModel` (thesis numbering).
-
-    Vertex numbers come from :mod:`cassi.data.numbering` where it names them, else from the
-    thesis (Figures 3.7, 4.4-4.7, 4.17; Table 3.2). Teeth, tongue and palate surfaces come
-    from the face's polygons by material; vertices of the lower teeth are 255-286 (Table 3.2),
-    so teeth triangles using them belong to the lower set.
+    Vertex numbers come from :mod:`cassi.data.numbering` (thesis Figures 3.7, 4.4-4.7, 4.17,
+    Table 3.2). Teeth, tongue and palate surfaces come from the face's polygons by material;
+    teeth polygons using the lower teeth's vertices (255-286) are the lower set. The occlusal
+    line ends are the tips of tooth quad 7 (the second molars) and of quad 0 (the incisors).
     """
-    if numbering is None:
-        try:
-            from cassi.data import numbering  # noqa: PLC0415 - optional until it lands
-        except ImportError:
-            numbering = None
+    from cassi.data import numbering as N  # noqa: PLC0415 - data layer, imported lazily
+
     V = np.asarray(face.vertices).shape[0]
-    verts = np.asarray(face.vertices, dtype=np.float64)
-    teeth = _polys_by_material(face, {"teeth", "tooth"})
-    lower_first = _num(numbering, ("LOWER_TEETH_FIRST",), 255) - 1
-    lower_last = _num(numbering, ("LOWER_TEETH_LAST",), 286) - 1
-    is_lower = np.any((teeth >= lower_first) & (teeth <= lower_last), axis=1)
-    upper_tris, lower_tris = teeth[~is_lower], teeth[is_lower]
-    tongue_first = _num(numbering, ("TONGUE_FIRST",), 288) - 1
-    tongue_last = _num(numbering, ("TONGUE_LAST",), 299) - 1
-    tongue = np.arange(tongue_first, tongue_last + 1)
+    teeth = _polys_by_material(face, {"teeth"})
+    is_lower = np.any((teeth >= N.LOWER_TEETH_FIRST - 1) & (teeth <= N.LOWER_TEETH_LAST - 1), axis=1)
     tongue_tris = _polys_by_material(face, {"tongue"})
-    edges = np.concatenate([tongue_tris[:, [0, 1]], tongue_tris[:, [1, 2]],
-                            tongue_tris[:, [2, 0]]]) if len(tongue_tris) else np.zeros((0, 2))
-    edges = np.unique(np.sort(edges.astype(np.int64), axis=1), axis=0) if len(edges) else edges
-    palate_first = _num(numbering, ("PALATE_FIRST",), 301) - 1
-    palate = np.arange(palate_first, V)
-    palate_tris = _polys_by_material(face, {"palate"})
-
-    upper_v = np.unique(upper_tris) if len(upper_tris) else np.zeros(0, np.int64)
-    lower_v = np.unique(lower_tris) if len(lower_tris) else np.arange(lower_first, lower_last + 1)
-    lower_v = lower_v[lower_v < V]
-
-    def front_most(idx, pick):
-        # the vertex nearest the centerline among the front 20 % (by x) of a teeth set
-        p = verts[idx]
-        x0 = p[:, 0].max() - 0.2 * np.ptp(p[:, 0])
-        cand = idx[(p[:, 0] >= x0) & (np.abs(p[:, 1]) <= np.abs(p[:, 1]).min() + 0.15 * np.ptp(p[:, 1]) + 1e-9)]
-        return int(cand[pick(verts[cand, 2])])
-
-    def back_most(idx, pick):
-        p = verts[idx]
-        x0 = p[:, 0].min() + 0.2 * np.ptp(p[:, 0])
-        cand = idx[p[:, 0] <= x0]
-        return int(cand[pick(verts[cand, 2])])
-
-    n = lambda names, d: _num(numbering, names, d) - 1  # noqa: E731
-    lower_tip = _num(numbering, ("LOWER_INCISOR_TIP", "LOWER_TEETH_TIP"), None)
-    lower_tip = lower_tip - 1 if lower_tip else front_most(lower_v, np.argmax)
-    upper_molar = (n(("UPPER_MOLAR",), 0) if hasattr(numbering, "UPPER_MOLAR") else
-                   back_most(upper_v, np.argmin) if len(upper_v) else n(("TEETH_TIP",), 226))
-    lower_molar = (n(("LOWER_MOLAR",), 0) if hasattr(numbering, "LOWER_MOLAR") else
-                   back_most(lower_v, np.argmax))
-    subnasale = _num(numbering, ("SUBNASALE", "NOSE_BASE"), None)
-    if subnasale is None:
-        # the lowest centerline vertex of the nose (80-101, thesis 3.1.3) above the upper lip
-        nose = np.arange(79, 101)
-        nose = nose[np.abs(verts[nose, 1]) < 1e-6] if np.any(np.abs(verts[nose, 1]) < 1e-6) else nose
-        nose = nose[verts[nose, 2] > verts[66, 2]]
-        subnasale = int(nose[np.argmin(verts[nose, 2])]) + 1
-    chin = _num(numbering, ("CHIN", "POGONION"), None)
-    chin_low = _num(numbering, ("CHIN_LOW", "MENTON", "GNATHION"), None)
-    if chin is None or chin_low is None:
-        # jaw vertices 14-43 on the centerline below the lower lip: the most forward is the
-        # soft-tissue chin, the lowest the underside of the chin
-        jaw = np.arange(13, 43)
-        centre = jaw[(np.abs(verts[jaw, 1]) < 1e-6) & (verts[jaw, 2] < verts[40, 2])]
-        if len(centre) < 2:
-            centre = jaw[verts[jaw, 2] < verts[40, 2]]
-        chin = chin or int(centre[np.argmax(verts[centre, 0])]) + 1
-        chin_low = chin_low or int(centre[np.argmin(verts[centre, 2])]) + 1
-    lips = [v - 1 for v in range(49, 71)] + [286, 299]
+    if len(tongue_tris):
+        edges = np.concatenate([tongue_tris[:, [0, 1]], tongue_tris[:, [1, 2]], tongue_tris[:, [2, 0]]])
+        edges = np.unique(np.sort(edges, axis=1), axis=0)
+    else:
+        edges = np.zeros((0, 2), np.int64)
+    z = lambda nums: [int(v) - 1 for v in nums]  # noqa: E731 - Parke number -> row
+    lips = [v for v in z(N.LOWER_LIP + N.UPPER_LIP + (N.CORNER, N.INNER_CORNER, N.CORNER_MIDDLE))
+            if v < V]
     return MouthParts(
-        upper_teeth_tris=upper_tris, lower_teeth_tris=lower_tris, tongue=tongue,
-        tongue_edges=edges, palate=palate, palate_tris=palate_tris,
-        ul_outer=n(("UL", "UL_VERTEX"), 67), ll_outer=n(("LL", "LL_VERTEX"), 49),
-        ul_inner=60, ll_inner=57, upper_inner=[60, 61, 62], lower_inner=[57, 58, 59],
-        inner_corner=286, upper_outer=[66, 67, 68], lower_outer=[48, 49, 50], corner=69,
-        lip_points=[v for v in lips if v < V], above_lip=[70, 71, 72], below_lip=[40, 41, 42],
-        subnasale=subnasale - 1, chin=chin - 1, chin_low=chin_low - 1,
-        upper_incisor_tip=n(("TEETH_TIP", "UPPER_INCISOR_TIP"), 226), lower_incisor_tip=lower_tip,
-        lower_gum=n(("MANI",), 258), upper_molar=upper_molar, lower_molar=lower_molar,
-        jaw_point=n(("MANI",), 258), jaw=np.arange(13, 43))
+        upper_teeth_tris=teeth[~is_lower], lower_teeth_tris=teeth[is_lower],
+        tongue=z(N.TONGUE), tongue_edges=edges,
+        palate=[v for v in z(N.PALATE) if v < V], palate_tris=_polys_by_material(face, {"palate"}),
+        ul_outer=N.UL - 1, ll_outer=N.LL - 1,
+        ul_inner=N.UPPER_INNER[0] - 1, ll_inner=N.LOWER_INNER[0] - 1,
+        upper_inner=z(N.UPPER_INNER), lower_inner=z(N.LOWER_INNER), inner_corner=N.INNER_CORNER - 1,
+        upper_outer=z(N.UPPER_OUTER), lower_outer=z(N.LOWER_OUTER), corner=N.CORNER - 1,
+        lip_points=lips, above_lip=z(N.ABOVE_LIP), below_lip=z(N.BELOW_LIP),
+        subnasale=N.SUBNASALE - 1, chin=N.CHIN - 1, chin_low=N.CHIN_LOW - 1,
+        upper_incisor_tip=N.UPPER_INCISOR_TIP - 1, lower_incisor_tip=N.LOWER_INCISOR_TIP - 1,
+        lower_gum=N.MANI - 1,
+        # second molars' distal tips: upper quad 7 is gum-mesial, gum-distal, tip-distal,
+        # tip-mesial; lower quad 7 is tip-mesial, tip-distal, gum-distal, gum-mesial
+        upper_molar=N.upper_tooth(7)[2] - 1, lower_molar=N.lower_tooth(7)[1] - 1,
+        jaw_point=N.MANI - 1, jaw=z(N.JAW))
 
 
 def mm_per_unit(face_vertices: np.ndarray, jaw_length_mm: float | None, *,

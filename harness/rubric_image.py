@@ -72,27 +72,39 @@ def mouth_opening(lips: np.ndarray) -> np.ndarray:
 
 
 def teeth_split(teeth: np.ndarray, opening: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Split one teeth mask into upper and lower at the row of least teeth in the opening.
+    """Split one teeth mask into upper and lower teeth inside the lip opening.
 
-    Between the upper and the lower incisors the opening shows the mouth's inside (or, with the
-    teeth together, the incisal line): the row with the fewest teeth pixels between the first
-    and the last teeth row. Without an opening everything above the image's middle is upper.
+    Each connected region of teeth inside the opening hangs from its top (upper teeth) or stands
+    on its bottom (lower teeth): a region lying wholly above the opening's middle row is upper,
+    wholly below it lower. A region across the middle (the teeth touching) is cut at its
+    narrowest row, the incisal line, the middle one among ties. Without an opening, the rows
+    above the teeth's middle are upper.
     """
     teeth = np.asarray(teeth, bool)
+    opening = np.asarray(opening, bool)
+    upper = np.zeros_like(teeth)
+    lower = np.zeros_like(teeth)
     inside = teeth & opening if opening.any() else teeth
-    rows = np.flatnonzero(inside.any(axis=1))
-    if rows.size == 0:
-        return np.zeros_like(teeth), np.zeros_like(teeth)
-    counts = inside[rows[0]:rows[-1] + 1].sum(axis=1)
-    if rows.size < 3:
-        cut = rows[0] + (rows.size // 2)
-    else:
-        # the emptiest row, the middle one among ties (a gap several rows high)
-        m = counts.min()
-        ties = np.flatnonzero(counts == m)
-        cut = rows[0] + int(ties[len(ties) // 2])
+    if not inside.any():
+        return upper, lower
+    orows = np.flatnonzero((opening if opening.any() else teeth).any(axis=1))
+    mid = 0.5 * (orows[0] + orows[-1])
+    lab = measure.label(inside, connectivity=2)
     r = np.arange(teeth.shape[0])[:, None]
-    return teeth & (r < cut), teeth & (r >= cut)
+    for k in range(1, lab.max() + 1):
+        comp = lab == k
+        rows = np.flatnonzero(comp.any(axis=1))
+        if rows[-1] <= mid:
+            upper |= comp
+        elif rows[0] >= mid:
+            lower |= comp
+        else:
+            counts = comp[rows[0]:rows[-1] + 1].sum(axis=1)
+            ties = np.flatnonzero(counts == counts.min())
+            cut = rows[0] + int(ties[len(ties) // 2])
+            upper |= comp & (r < cut)
+            lower |= comp & (r >= cut)
+    return upper, lower
 
 
 def opening_extent(opening: np.ndarray) -> tuple[float, float]:

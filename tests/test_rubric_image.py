@@ -1,0 +1,150 @@
+"""Image checks on synthetic part masks: each fires on a planted defect and is silent when clean.
+
+A front-view frame is drawn as the renderer's masks would be: skin everywhere, a lip ring (an
+elliptical annulus, or a diamond one), and inside the opening upper teeth from the top, lower
+teeth from the bottom and the tongue behind them, with depths (the teeth nearer the camera than
+the tongue unless a defect plants the tongue in front).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from cassi.harness import rubric as R
+from cassi.harness import rubric_image as I
+
+H, W = 120, 160
+NAMES = ("background", "skin", "lips", "teeth", "tongue")
+SKIN, LIPS, TEETH, TONGUE = 1, 2, 3, 4
+
+
+@dataclass
+class Fake:
+    mask: np.ndarray
+    depth: np.ndarray
+    part_names: tuple = NAMES
+
+
+def frame(*, open_h=16.0, upper=6, lower=6, tongue=True, tongue_front=False, diamond=False,
+          split_names=False):
+    """One front-view frame. ``upper``/``lower``: rows of teeth showing from the top/bottom of
+    the opening; ``open_h``: half height of the opening (px)."""
+    yy, xx = np.mgrid[0:H, 0:W]
+    cy, cx, a = 60.0, 80.0, 40.0
+    dy, dx = (yy - cy), (xx - cx)
+    if open_h <= 0:
+        inner = np.zeros((H, W), bool)
+        outer = (dx / (a + 8)) ** 2 + (dy / 10) ** 2 <= 1.0
+    elif diamond:
+        inner = np.abs(dx) / a + np.abs(dy) / open_h <= 1.0
+        outer = np.abs(dx) / (a + 8) + np.abs(dy) / (open_h + 10) <= 1.0
+    else:
+        inner = (dx / a) ** 2 + (dy / open_h) ** 2 <= 1.0
+        outer = (dx / (a + 8)) ** 2 + (dy / (open_h + 10)) ** 2 <= 1.0
+    mask = np.full((H, W), SKIN, np.int32)
+    depth = np.full((H, W), 100.0, np.float32)
+    mask[outer & ~inner] = LIPS
+    top, bot = int(np.ceil(cy - open_h)), int(np.floor(cy + open_h))
+    mask[inner] = 0  # dark inside of the mouth (nothing hit)
+    depth[inner] = np.inf
+    names = NAMES
+    if tongue:
+        t = inner & (yy > cy) & (np.abs(dx) < 20)
+        mask[t] = TONGUE
+        depth[t] = 110.0 if not tongue_front else 95.0
+    teeth_cols = np.abs(dx) < 30
+    up = inner & teeth_cols & (yy < top + upper)
+    lo = inner & teeth_cols & (yy > bot - lower)
+    if tongue_front:
+        lo &= ~(np.abs(dx) < 20)
+    if split_names:
+        names = NAMES + ("teeth_lower",)
+        mask[up] = TEETH
+        mask[lo] = 5
+        names = ("background", "skin", "lips", "teeth_upper", "tongue", "teeth_lower")
+    else:
+        mask[up | lo] = TEETH
+    depth[up | lo] = 100.0
+    return Fake(mask, depth, names)
+
+
+def run(frames, task=5, checks=None):
+    df = R.run_image_checks({"front": dict(enumerate(frames))}, task=task, subject="SYN",
+                            version="v", checks=checks)
+    return df[df["frame"] == -1].set_index("check")
+
+
+CLEAN = [frame(open_h=h) for h in (4, 10, 16, 12, 6)] + [frame(open_h=0.0, tongue=False)]
+
+
+def test_clean_frames_are_silent():
+    for task in (5, 106, 118):
+        res = run(CLEAN, task)
+        assert set(res.index) == {c.name for c in R.checks_for(kind="image", task=task)}
+        assert (res["negatives"] == 0).all(), res[["value", "detail"]]
+        for name, r in res.iterrows():
+            assert not R.CHECKS[name].fires(r["value"]), (name, r["value"], r["detail"])
+
+
+def test_mouth_opening_and_teeth_split():
+    f = I.FrameMasks.of(0, frame(upper=6, lower=3))
+    o = I.mouth_opening(f.lips)
+    assert o.sum() > 1000
+    nu, nl = (f.upper_teeth & o).sum(), (f.lower_teeth & o).sum()
+    assert nu > 1.5 * nl > 0
+    # explicit part names are used as they are
+    g = I.FrameMasks.of(0, frame(upper=6, lower=3, split_names=True))
+    assert not g.split and (g.upper_teeth & o).sum() == nu and (g.lower_teeth & o).sum() == nl
+
+
+@pytest.mark.parametrize("upper,lower,negs", [(6, 6, 0), (7, 4, 0), (10, 2, 1), (12, 0, 1)])
+def test_centered_high_fires_when_little_lower_teeth_show(upper, lower, negs):
+    frames = [frame(open_h=h, upper=upper, lower=lower) for h in (10, 14, 16)]
+    r = run(frames, checks=["lips_centered_high"]).loc["lips_centered_high"]
+    assert r["negatives"] == negs, (r["value"], r["detail"])
+
+
+def test_centering_118_fires_both_ways():
+    for up, lo in ((12, 1), (1, 12)):
+        frames = [frame(open_h=h, upper=up, lower=lo) for h in (10, 14, 16)]
+        r = run(frames, task=118, checks=["lips_centering_118"]).loc["lips_centering_118"]
+        assert r["negatives"] == 1, r["detail"]
+
+
+def test_tongue_hidden_fires_when_never_seen():
+    frames = [frame(open_h=h, tongue=False) for h in (8, 12, 16)]
+    r = run(frames, checks=["tongue_hidden"]).loc["tongue_hidden"]
+    assert r["negatives"] == 1 and r["value"] == 0.0
+
+
+def test_tongue_in_front_of_teeth_is_measured_not_counted():
+    clean = run([frame()], checks=["tongue_in_front_of_teeth"]).loc["tongue_in_front_of_teeth"]
+    assert clean["value"] == 0
+    bad = run([frame(tongue_front=True)], checks=["tongue_in_front_of_teeth"])
+    r = bad.loc["tongue_in_front_of_teeth"]
+    assert r["value"] > 50 and r["negatives"] == 0 and r["detail"].startswith("fired")
+
+
+def test_lower_teeth_rarely_seen_fires():
+    frames = [frame(open_h=h, lower=0) for h in (8, 10, 12, 16)] + [frame(open_h=16, lower=5)]
+    r = run(frames, checks=["lower_lip_too_large"]).loc["lower_lip_too_large"]
+    assert r["negatives"] == 1 and r["value"] == pytest.approx(0.2)
+    r = run(frames[2:], checks=["lower_lip_too_large"]).loc["lower_lip_too_large"]
+    assert r["negatives"] == 0 and r["value"] == pytest.approx(1 / 3)
+
+
+def test_diamond_opening_is_flagged_by_extent():
+    ell = run([frame(open_h=h) for h in (12, 16)], task=106, checks=["lip_shape_image"])
+    dia = run([frame(open_h=h, diamond=True) for h in (12, 16)], task=106,
+              checks=["lip_shape_image"])
+    assert ell.loc["lip_shape_image", "value"] == pytest.approx(np.pi / 4, abs=0.05)
+    assert dia.loc["lip_shape_image", "value"] == pytest.approx(0.5, abs=0.06)
+    assert dia.loc["lip_shape_image", "detail"].startswith("fired (not counted)")
+
+
+def test_no_open_frame_gives_nan_not_a_negative():
+    res = run([frame(open_h=0.0)] * 3)
+    assert res["value"].isna().all() or (res["negatives"] == 0).all()
+    assert (res["negatives"] == 0).all()

@@ -1,0 +1,144 @@
+"""The rubric registry, the rating scale (thesis Table 5.2) and the tables built from results."""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from cassi.data.errors import CassiInputError
+from cassi.harness import rubric as R
+
+
+def test_rating_scale_is_thesis_table_5_2():
+    # thesis Table 5.2: EXCELLENT 0, VERY GOOD 1, GOOD 2, FAIR 3, POOR 4, VERY POOR 5,
+    # UNACCEPTABLE >= 6
+    expected = ["EXCELLENT", "VERY GOOD", "GOOD", "FAIR", "POOR", "VERY POOR", "UNACCEPTABLE",
+                "UNACCEPTABLE", "UNACCEPTABLE"]
+    assert [R.rate(n) for n in range(9)] == expected
+    assert R.rate(np.int64(2)) == "GOOD"
+    with pytest.raises(CassiInputError):
+        R.rate(-1)
+
+
+def test_registry_is_complete_and_consistent():
+    assert len(R.CHECKS) == len(set(R.CHECKS))
+    for name, c in R.CHECKS.items():
+        assert c.name == name
+        assert c.table in R.TABLES and c.thesis_table == R.TABLES[c.table][0]
+        assert c.text and c.reason and c.description and c.unit and c.frames
+        assert c.view in {"front", "side", "half", "top"}
+        assert c.kind in {"geometry", "image"}
+        assert callable(c.func)
+        assert all(1 <= n <= 3 for n in c.negatives)
+    # Tables D and E apply to their tasks only
+    assert all(c.tasks == (118,) for c in R.checks_for(table="D"))
+    assert all(c.tasks == (106,) for c in R.checks_for(table="E"))
+    assert not any(c.applies_to(5) for c in R.checks_for(table="D"))
+    # every table has at least one counted check
+    assert {c.table for c in R.CHECKS.values() if c.counted} == set(R.TABLES)
+
+
+def test_every_rubric_md_criterion_is_registered(shared_dir):
+    """Each bullet of rubric.md's Tables A-E (bar Table C's version comparison, done by
+    tabulate) maps to a registered check; the mapping is by key words of the bullet."""
+    text = " ".join((shared_dir / "spec" / "rubric.md").read_text().split())
+    expected_words = {
+        "front teeth overlap": "teeth_front_overlap", "back teeth overlap": "teeth_back_overlap",
+        "slant upward": "teeth_slope_up", "slant downward": "teeth_slope_down",
+        "too far apart": "teeth_too_far_apart", "never touching": "lips_never_touch",
+        "separated at the start": "lips_apart_at_start", "tightly pressed": "lips_pressed",
+        "centered low": "lips_centered_low", "centered high": "lips_centered_high",
+        "surface of the teeth": "lips_through_teeth", "protrudes farther": "lower_lip_protrudes",
+        "overlap (cross": "lips_overlap", "pokes through": "tongue_through_teeth",
+        "barely visible": "tongue_hidden", "palatal outline (most": "tongue_through_palate",
+        "below the tip of the upper front teeth": "palate_below_incisor",
+        "very long": "jaw_long", "very square": "jaw_square", "too large seen": "jaw_large",
+        "bottom teeth rarely seen": "lower_lip_too_large", "no lip rounding": "no_lip_rounding",
+        "stick out too much": "lips_stick_out", "above the lip cave in": "above_lip_cave_in",
+        "into the nose": "lips_into_nose", "too big at maximum": "lips_too_big",
+        "centered too high or too low": "lips_centering_118",
+        "protrudes in the initial": "lower_lip_protrudes_start",
+        "top lip protrudes more": "upper_protrudes_more", "sharp profile": "upper_lip_sharp",
+        "jitter of the lips beyond": "lip_jitter", "triangular or diamond": "lip_shape_triangular",
+        "through the bottom set": "lower_lip_through_teeth", "under the lip cave in": "below_lip_cave_in",
+        "corners badly placed": "corners_misplaced", "chin or lower jaw caves": "chin_cave_in",
+        "ellipse": "corner_jump_switch",
+    }
+    for words, check in expected_words.items():
+        assert words in text, f"rubric.md no longer says {words!r}"
+        assert check in R.CHECKS
+
+
+def test_grading_by_thresholds_and_direction():
+    c = R.CHECKS["lips_never_touch"]           # higher is worse: 1.0 -> 1, 4.0 -> 2
+    assert [c.grade(v) for v in (0.0, 1.0, 1.01, 3.9, 4.01, 100.0)] == [0, 0, 1, 1, 2, 2]
+    assert c.grade(float("nan")) == 0
+    lo = R.CHECKS["lips_into_nose"]            # lower is worse: 0.5 -> 1, 0.2 -> 2
+    assert [lo.grade(v) for v in (1.0, 0.49, 0.19, -1.0)] == [0, 1, 2, 2]
+    assert R.CHECKS["teeth_slope_up"].grade(30.0) == 3
+
+
+def test_bad_check_definitions_are_refused():
+    with pytest.raises(ValueError):
+        R.Check("x", "Z", "lips", "front", "mm", "", "", (1.0,), (1,), "higher", "r", "t",
+                "geometry", lambda ctx: None)
+    with pytest.raises(ValueError):
+        R.Check("x", "A", "lips", "front", "mm", "", "", (2.0, 1.0), (1, 2), "higher", "r", "t",
+                "geometry", lambda ctx: None)
+    with pytest.raises(ValueError):
+        R.Check("x", "A", "lips", "front", "mm", "", "", (1.0,), (0,), "higher", "r", "t",
+                "geometry", lambda ctx: None)
+
+
+def test_unknown_check_names_suggest_close_ones():
+    with pytest.raises(CassiInputError, match="lips_never_touch"):
+        R.get_check("lips_never_tuch")
+
+
+def test_thresholds_live_only_in_the_registry():
+    """No grading literal in the measure modules: they return values, the registry decides."""
+    src = Path(R.__file__).with_name("rubric_geometry.py").read_text()
+    assert "negatives" not in re.sub(r'""".*?"""', "", src, flags=re.S)
+
+
+def _rows(subject, version, items):
+    return pd.DataFrame([dict(subject=subject, task=5, rep=1, version=version, view="geometry",
+                              frame=-1, check=k, table=R.CHECKS[k].table,
+                              component=R.CHECKS[k].component, value=1.0, unit="mm",
+                              threshold=0.0, negatives=n, detail="") for k, n in items])
+
+
+def test_tabulate_sums_negatives_rates_and_lists_text():
+    res = pd.concat([
+        _rows("JW11", "cassi-1.0", [("lips_never_touch", 2), ("tongue_through_teeth", 1),
+                                    ("teeth_slope_up", 3), ("palate_below_incisor", 1)]),
+        _rows("JW11", "cassi-2.0", [("lips_never_touch", 0), ("lips_overlap", 1)]),
+        _rows("JW11", "cassi-2.1", [("lips_never_touch", 1), ("lips_overlap", 1)]),
+    ])
+    # per-frame evidence rows never count
+    ev = _rows("JW11", "cassi-1.0", [("tongue_through_teeth", 5)]).assign(frame=10)
+    tab = R.tabulate(pd.concat([res, ev]))
+    a = tab[(tab["table"] == "A") & (tab["version"] == "cassi-1.0")].set_index("component")
+    assert a.loc["all", "negatives"] == 6 and a.loc["all", "rating"] == "UNACCEPTABLE"
+    assert a.loc["lips", "negatives"] == 2 and a.loc["lips", "rating"] == "GOOD"
+    assert a.loc["teeth", "text"] == "--- lower teeth slant upward toward the front"
+    assert a.loc["tongue", "text"] == "- tongue pokes through the front teeth"
+    assert a.loc["all", "thesis_table"] == "5.3"
+    b = tab[(tab["table"] == "B") & (tab["component"] == "all")]
+    assert b["negatives"].tolist() == [1]
+    # Table C: lips of Table A per version; 2.0 improves on 1.0 (1 < 2), 2.1 looks worse than
+    # 2.0 (2 > 1) and earns one more
+    c = tab[(tab["table"] == "C") & (tab["component"] == "all")].set_index("version")
+    assert c.loc["cassi-1.0", "negatives"] == 2
+    assert c.loc["cassi-2.0", "negatives"] == 1
+    assert c.loc["cassi-2.1", "negatives"] == 3
+    assert "looks worse than the previous version" in c.loc["cassi-2.1", "text"]
+    summary = R.summary_counts(tab)
+    assert summary.loc["cassi-2.1", "FAIR"] == 1
+
+
+def test_tabulate_empty():
+    assert R.tabulate(pd.DataFrame()).empty
