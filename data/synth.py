@@ -19,11 +19,9 @@ Layout::
 from __future__ import annotations
 
 import json
-import math
 import os
 import shutil
 import tempfile
-import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,7 +35,7 @@ from cassi.data.synth_motion import PERIOD_S, Anatomy, add_noise, expand_phones,
 from cassi.data.synth_program import motor_segments, n_frames, spoken_phones, textgrid_phones
 from cassi.data.synth_subjects import SUBJECTS, SubjectFigures
 from cassi.data.synth_tasks import TASKS
-from cassi.data.xrmb import (BAD_VALUE, NOMINAL_PERIOD_US, PELLETS, HeadMeasures, MistrackEntry,
+from cassi.data.xrmb import (NOMINAL_PERIOD_US, PELLETS, HeadMeasures, MistrackEntry,
                              TaskRecording, format_txy, write_head_measures, write_mis, write_pal,
                              write_pha)
 
@@ -81,7 +79,8 @@ def _subject_key(name: str) -> int:
 
 def generate_task(fig: SubjectFigures, task: int, *, seed: int = DEFAULT_SEED, rep: int = 1,
                   textgrid: Path | None = None,
-                  ul_peak_mm: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+                  lip_peaks_mm: tuple[float, float] | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
     """Clean pellet tracks of one task (no artifacts).
 
     Parameters
@@ -90,8 +89,9 @@ def generate_task(fig: SubjectFigures, task: int, *, seed: int = DEFAULT_SEED, r
     task : 1..118.
     seed, rep : randomness (deterministic per subject, task, repetition and seed).
     textgrid : a Praat TextGrid that times the phones (spoken tasks only).
-    ul_peak_mm : if given, scale the task's forward UL movement so its largest protrusion beyond
-        rest is this many mm (used to place a subject's MAX UL in an error-free file).
+    lip_peaks_mm : (UL, LL); if given, scale the task's forward lip movements so their largest
+        protrusion beyond rest is this many mm (places a subject's MAX UL/LL in an error-free
+        file when task 118 is not error-free, as for JW32).
 
     Returns
     -------
@@ -111,16 +111,16 @@ def generate_task(fig: SubjectFigures, task: int, *, seed: int = DEFAULT_SEED, r
             phones, length = spoken_phones(spec, rng)
         segs = expand_phones(phones)
     starts, targets = segment_targets(anat, segs, rng)
-    # per-recording posture variability: the "rest" at the first row differs a little per file
-    targets = targets.copy()
     n = n_frames(length, PERIOD_S)
     ch = smooth(starts, targets, n)
-    if ul_peak_mm is not None:
-        peak = ch[:, 1].max()
-        if peak > 0.1:
-            ch[:, 1] = np.where(ch[:, 1] > 0, ch[:, 1] * (ul_peak_mm / peak), ch[:, 1])
+    if lip_peaks_mm is not None:
+        for col, want in zip((1, 3), lip_peaks_mm):
+            peak = ch[:, col].max()
+            if peak > 0.1:
+                ch[:, col] = np.where(ch[:, col] > 0, ch[:, col] * (want / peak), ch[:, col])
     xy = pellets(anat, ch)
-    xy = xy + rng.normal(0.0, 0.12, size=(1, 8, 2)) * np.array([1, 1, 1, 1, 1, 1, 0, 0])[None, :, None]
+    # posture differs a little from recording to recording (the jaw pellets are rigid: not them)
+    xy[:, :6] += rng.normal(0.0, 0.12, size=(1, 6, 2))
     xy = add_noise(xy, rng)
     time_us = np.arange(n, dtype=np.int64) * NOMINAL_PERIOD_US
     return time_us, xy
@@ -294,16 +294,16 @@ def make_subject(out_dir: Path, name: str, seed: int = DEFAULT_SEED,
                                                                   plan.rep)
         peak = None
         if name == "JW32" and plan.task == JW32_MAX_TASK and plan.rep == 1:
-            peak = fig.max_protrusion_ul_mm - 0.25
+            peak = (fig.max_protrusion_ul_mm - 0.25, fig.max_protrusion_ll_mm - 0.25)
         try:
             time_us, xy = generate_task(fig, plan.task, seed=seed, rep=plan.rep, textgrid=tg,
-                                        ul_peak_mm=peak)
+                                        lip_peaks_mm=peak)
             if tg is not None:
                 summary["aligned_tasks"].append(plan.task)
         except CassiInputError as err:
             summary["alignment_errors"].append(str(err))
             time_us, xy = generate_task(fig, plan.task, seed=seed, rep=plan.rep,
-                                        ul_peak_mm=peak)
+                                        lip_peaks_mm=peak)
         rng = _rng(seed, _subject_key(name), plan.task, plan.rep, 1)
         xy, valid, log = apply_artifacts(plan, xy, rng)
         if plan.rep == 1:
@@ -312,9 +312,9 @@ def make_subject(out_dir: Path, name: str, seed: int = DEFAULT_SEED,
         else:
             summary["repetitions"].append([plan.task, plan.rep])
         if plan.lost is not None:
-            pel, frac = plan.lost
-            lost_at = int(np.flatnonzero(~valid[:, pel])[-1] + 1 - (~valid[:, pel])[::-1]
-                          .argmin()) if frac > 0 else 0
+            pel = plan.lost[0]
+            still = np.flatnonzero(valid[:, pel])
+            lost_at = int(still[-1]) + 1 if still.size else 0
             summary["unlogged_lost"].append([plan.task, plan.rep, PELLETS[pel],
                                              int(time_us[lost_at])])
         rec = TaskRecording(path=None, subject=name, task=plan.task, rep=plan.rep,
@@ -379,7 +379,6 @@ def make_corpus(out_dir: str | os.PathLike, *, subjects=None, seed: int = DEFAUL
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     n_workers = workers if workers is not None else min(len(names), os.cpu_count() or 1)
-    t0 = time.perf_counter()
     if n_workers > 1 and len(names) > 1:
         with ProcessPoolExecutor(max_workers=n_workers) as pool:
             futs = [pool.submit(make_subject, out, n, int(seed), align) for n in names]
@@ -404,7 +403,6 @@ def make_corpus(out_dir: str | os.PathLike, *, subjects=None, seed: int = DEFAUL
         "artifacts": dict(zip(names, summaries)),
     }
     atomic_write_text(out / "corpus.json", json.dumps(meta, indent=1, sort_keys=True) + "\n")
-    _ = time.perf_counter() - t0
     return out
 
 

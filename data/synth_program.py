@@ -152,8 +152,9 @@ def motor_segments(task: TaskSpec, anat: Anatomy, rng: np.random.Generator) -> l
         t = _hold(seq, t, 1.8, lips)
         t = _hold(seq, t, 1.0, REST_SPEC)
         t = _hold(seq, t, 1.6, {"jaw": 9.0, "tip": ("abs", fig.ul_rest_mm[0] + 3.0, -4.0),
-                                "body": ("own", 12.0, -2.0), "lips": "open", "ulp_mm": 0.0,
-                                "llp_mm": 0.0})
+                                "body": ("own", 12.0, -2.0), "lips": "open",
+                                # lips drawn back out of the tongue's way: the subject's minimum
+                                "ulp_mm": -fig.spread_ul_mm + 0.2, "llp_mm": -1.0})
         t = _hold(seq, t, 1.0, REST_SPEC)
         t = _hold(seq, t, 1.8, lips)
     else:
