@@ -36,9 +36,15 @@ def register(subparsers) -> None:
 
     ck = sub.add_parser("check", help="validate a task file, a subject file or a whole corpus",
                         description="Read every file and report frames, first valid row, "
-                                    "usability and problems. Exit 2 if a file is malformed.")
+                                    "usability and problems. Exit 2 if a file is malformed "
+                                    "(file:line: reason on stderr); a well-formed file without "
+                                    "a valid row is reported UNUSABLE (exit 2 only with "
+                                    "--strict).")
     ck.add_argument("path", type=Path, help="a corpus directory, a subject directory or one file")
     ck.add_argument("--json", action="store_true", help="print a JSON list of records")
+    ck.add_argument("--strict", action="store_true",
+                    help="also exit 2 when a task file is unusable (no row with all eight "
+                         "pellets valid), not only when a file is malformed")
     ck.set_defaults(func=cmd_check)
 
     pp = sub.add_parser("preprocess", help="write maxprotru.txt and lipthick.txt (thesis 4.2)",
@@ -139,6 +145,9 @@ def cmd_check(args) -> int:
         print(json.dumps(records, indent=1))
     else:
         _print_table(records, synthetic=synthetic)
+    if getattr(args, "strict", False):
+        errors = errors + [p for r in records if r.get("task") is not None and not r.get("error")
+                           and not r.get("usable") for p in r.get("problems", [])]
     for e in errors:
         print(e, file=sys.stderr)
     return EXIT_BAD_INPUT if errors else EXIT_OK

@@ -394,7 +394,7 @@ class FileReport:
     error_free: bool = False
     problems: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
-    error: bool = False  # a malformed file (exit 2), not merely unusable
+    error: bool = False  # a malformed file (check exits 2), not merely unusable
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
@@ -419,10 +419,12 @@ def check_task_file(path: Path, *, subject: SubjectData | None = None) -> FileRe
     rep_obj.first_valid_us = rec.first_valid_time_us
     rep_obj.warnings.extend(rec.warnings)
     if rec.first_valid_index is None:
-        # No valid row is a malformed task file for validation purposes (issue 2).
-        rep_obj.problems.append(str(CassiInputError("no row has all eight pellets valid",
-                                                    path=path)))
-        rep_obj.error = True
+        # Well-formed but unusable (a pellet removed, as for the thesis's JW29 and JW32): reported
+        # with its reason; read_txy raises on it, so nothing downstream can animate it.
+        why = [w for w in rec.warnings if "no row has all eight pellets valid" in w]
+        rep_obj.problems.extend(why or [str(CassiInputError(
+            "no row has all eight pellets valid", path=path))])
+        rep_obj.warnings = [w for w in rep_obj.warnings if w not in why]
         return rep_obj
     if subject is not None:
         try:

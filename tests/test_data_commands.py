@@ -133,3 +133,20 @@ def test_copy_of_reference_subject_checks(tmp_path, capsys):
     (r,) = json.loads(capsys.readouterr().out)
     # JW12's Mis.dat lists task 13, so this file is usable but not error-free.
     assert r["usable"] and not r["error_free"] and r["first_valid_us"] == 27464
+
+
+def test_file_without_valid_row_is_unusable_not_malformed(corpus_dir, capsys):
+    """The thesis's JW29/JW32: the MNM pellet removed, so no row has all eight pellets valid.
+    The file is well-formed: reported UNUSABLE with the reason; exit 2 only with --strict."""
+    from cassi.data.xrmb import write_txy
+
+    write_txy(corpus_dir / "JW12" / "tp020.txy", recording(task=20, lost=("MNM", 0)))
+    assert main(["check", str(corpus_dir), "--json"]) == 0
+    records = json.loads(capsys.readouterr().out)
+    r = next(r for r in records if r["task"] == 20)
+    assert r["usable"] is False and r["first_valid_us"] is None and r["frames"] == 40
+    assert "tp020.txy" in r["problems"][0] and "never valid: MNM" in r["problems"][0]
+    assert main(["check", str(corpus_dir), "--strict"]) == 2
+    assert "never valid: MNM" in capsys.readouterr().err
+    assert main(["check", str(corpus_dir / "JW12" / "tp020.txy")]) == 0
+    assert "UNUSABLE" in capsys.readouterr().out
