@@ -1,12 +1,15 @@
 """The job model: batch -> job (subject, task, rep, version, view, frames, chunk) -> frame.
 
-Two kinds of job run the rubric on one task file and one version:
+Three kinds of job run the rubric on one task file and one version:
 
 - a **geometry** job (view ``"geometry"``) animates every frame, runs the rubric's geometric
   checks on every frame and picks the frames to render (the first frame, the extreme frames the
   checks point at, and a stride);
-- a **render** job (one per view and chunk of those frames) renders its frames and runs the
-  image checks on them.
+- a **render** job (one per view and chunk of those frames) renders its frames and keeps their
+  images and part masks;
+- an **image** job (one per view) runs the image checks over all the rendered frames of the view,
+  once every render chunk of it is done (the checks judge the whole task, e.g. "the tongue is
+  barely visible" is a fraction of the open-mouth frames).
 
 The ratings are derived from the combined rows once every job has finished (:mod:`.runner`).
 A job is a frozen, picklable value; its :meth:`Job.digest` names everything its outputs depend
@@ -58,7 +61,7 @@ class Job:
 
     Attributes
     ----------
-    stage : {"geometry", "render"}
+    stage : {"geometry", "render", "image"}
     subject, task, rep : the task file (``tpNNN.txy``; ``rep`` 1, or R for ``tpNNN_R.txy``)
     version : version name (``cassi-2.1`` ...)
     view : ``"geometry"`` for geometry jobs, else a render view (front, side, half, top)
@@ -66,10 +69,11 @@ class Job:
         Recording rows to render (render jobs); empty for geometry jobs (every frame).
     chunk : int
         Index of this chunk among the view's render jobs for the task file.
-    parent : str or None
-        Key of the job whose outputs this one reads (a render job's geometry job).
+    parents : tuple of str
+        Keys of the jobs whose outputs this one reads (a render job's geometry job, an image
+        job's render chunks).
     parent_digest : str
-        Content hash of the parent's outputs, so a changed parent invalidates this job.
+        Content hash of the parents' outputs, so a changed parent invalidates this job.
     """
 
     stage: str
@@ -80,13 +84,19 @@ class Job:
     view: str = GEOMETRY_VIEW
     frames: tuple[int, ...] = ()
     chunk: int = 0
-    parent: str | None = None
+    parents: tuple[str, ...] = ()
     parent_digest: str = ""
 
     @property
     def key(self) -> str:
-        """A readable, path-safe, unique name: ``JW11/019-1/cassi-2.1/front/c000``."""
-        return f"{self.subject}/{self.task:03d}-{self.rep}/{self.version}/{self.view}/c{self.chunk:03d}"
+        """A readable, path-safe, unique name: ``JW11/019-1/cassi-2.1/geometry``,
+        ``JW11/019-1/cassi-2.1/front/render-000``, ``JW11/019-1/cassi-2.1/front/checks``."""
+        head = f"{self.subject}/{self.task:03d}-{self.rep}/{self.version}"
+        if self.stage == "geometry":
+            return f"{head}/{GEOMETRY_VIEW}"
+        if self.stage == "render":
+            return f"{head}/{self.view}/render-{self.chunk:03d}"
+        return f"{head}/{self.view}/checks"
 
     @property
     def task_key(self) -> tuple[str, int, int, str]:
@@ -177,11 +187,14 @@ def execute_job(stage: StageFn, job: Job, ctx: StageContext, digest: str) -> Out
     t0 = time.perf_counter()
     store = OutputStore(ctx.out_dir)
     inputs: dict[str, bytes] = {}
-    if job.parent is not None:
-        parent = store.read_manifest(job.parent)
+    for key in job.parents:
+        parent = store.read_manifest(key)
         if parent is None:
-            return Outcome(job.key, State.SKIPPED, reason=f"no outputs of {job.parent}")
-        inputs = {name: store.get(ref) for name, ref in parent["outputs"].items()}
+            return Outcome(job.key, State.SKIPPED, reason=f"no outputs of {key}")
+        for name, ref in parent["outputs"].items():
+            if name == "rows" and len(job.parents) > 1:
+                continue  # each parent's rows are already in the results; names must not clash
+            inputs[name] = store.get(ref)
     try:
         out = stage(job, ctx, inputs)
     except SkipJob as why:

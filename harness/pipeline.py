@@ -8,7 +8,6 @@ jobs the process runs, instead of rebuilding them per job.
 """
 from __future__ import annotations
 
-import inspect
 import os
 import tempfile
 import threading
@@ -74,7 +73,10 @@ def get_face(corpus, subject: str, profile):
 
 def get_renderer(corpus, subject: str, face, view: str, preset: str, variant: str | None):
     """The process's renderer for (subject, view, preset): its Mitsuba scene is loaded once."""
-    from cassi.data.face import render_topology  # noqa: PLC0415
+    try:
+        from cassi.data.face import render_topology  # noqa: PLC0415 - where the contract says
+    except ImportError:
+        from cassi.data.topology import render_topology  # noqa: PLC0415 - where it lives
     from cassi.renderer.render import FaceRenderer  # noqa: PLC0415
 
     key = (str(corpus.root), subject, view, preset, variant)
@@ -90,31 +92,31 @@ def cache_sizes() -> dict[str, int]:
             "renderers": len(_renderers)}
 
 
-def _call(func, /, *args, **kwargs):
-    """Call ``func`` with the keyword arguments its signature accepts."""
-    try:
-        params = inspect.signature(func).parameters
-    except (TypeError, ValueError):
-        return func(*args, **kwargs)
-    if any(p.kind is p.VAR_KEYWORD for p in params.values()):
-        return func(*args, **kwargs)
-    return func(*args, **{k: v for k, v in kwargs.items() if k in params})
-
-
 def extreme_frames(rows: pd.DataFrame, *, limit: int = MAX_EXTREMES) -> list[int]:
-    """Frames the geometric checks point at: per check that earned negatives on some frame,
-    its worst frame (largest |value| among the frames with the most negatives)."""
+    """Frames the geometric checks point at.
+
+    The rubric gives each check a whole-task row (``frame == -1``, with the negatives) and an
+    evidence row at the check's worst frame. The worst frames of the checks that earned
+    negatives come first (most negatives first), then those of the other checks, up to
+    ``limit`` frames.
+    """
     if rows is None or not len(rows) or "frame" not in rows:
         return []
-    per_frame = rows[(rows["frame"] >= 0) & (rows["negatives"].fillna(0) > 0)].copy()
-    if per_frame.empty:
+    rows = rows.copy()
+    rows["negatives"] = pd.to_numeric(rows["negatives"], errors="coerce").fillna(0)
+    fired = rows[rows["frame"] == -1].groupby("check")["negatives"].max()
+    evidence = rows[rows["frame"] >= 0].copy()
+    if evidence.empty:
         return []
-    per_frame["abs"] = pd.to_numeric(per_frame["value"], errors="coerce").abs().fillna(0)
-    per_frame = per_frame.sort_values(["check", "negatives", "abs", "frame"],
-                                      ascending=[True, False, False, True])
-    worst = per_frame.groupby("check", sort=True).head(1)
-    worst = worst.sort_values(["negatives", "abs", "check"], ascending=[False, False, True])
-    return sorted({int(f) for f in worst["frame"].head(limit)})
+    evidence["fired"] = evidence["check"].map(fired).fillna(0)
+    evidence = evidence.sort_values(["fired", "check", "frame"], ascending=[False, True, True])
+    picked: list[int] = []
+    for f in evidence["frame"]:
+        if int(f) not in picked:
+            picked.append(int(f))
+        if len(picked) >= limit:
+            break
+    return sorted(picked)
 
 
 def _usable_or_skip(subject_data, job: Job) -> None:
@@ -146,8 +148,8 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
         raise SkipJob(f"subject cannot be preprocessed: {err}") from err
     face = get_face(corpus, job.subject, profile)
     anim = get_version(job.version).animate(profile, face, rec)
-    rows = _call(rubric.run_geometry_checks, anim, face, profile, recording=rec,
-                 version=job.version, subject=job.subject)
+    rows = rubric.run_geometry_checks(anim, face, profile, task=job.task, subject=job.subject,
+                                      rep=job.rep)
     rows = pd.DataFrame(rows)
     frames = np.asarray(anim.frames, dtype=np.int64)
     if frames.size == 0:
@@ -173,14 +175,20 @@ def _png_bytes(rgb: np.ndarray, metadata: dict | None = None) -> bytes:
         return path.read_bytes()
 
 
-def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> StageOutput:
-    """Render ``job.frames`` of ``job.view`` and run the image checks on them.
+class StoredFrame:
+    """A rendered frame as the image checks need it, rebuilt from a render job's outputs."""
 
-    Outputs: ``rows`` (image checks, per frame), one PNG per frame named ``render-<frame>``.
+    def __init__(self, mask: np.ndarray, depth: np.ndarray, part_names: tuple[str, ...]):
+        self.mask, self.depth, self.part_names = mask, depth, part_names
+
+
+def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> StageOutput:
+    """Render ``job.frames`` of ``job.view``.
+
+    Outputs: one PNG per frame (``render-<frame>``) and ``masks-<frame>`` (npz: ``mask`` uint8
+    (H, W) part ids, ``depth`` float32 (H, W) Parke units, ``part_names``) for the image checks.
     """
     import io  # noqa: PLC0415
-
-    from cassi.harness import rubric  # noqa: PLC0415
 
     data = np.load(io.BytesIO(inputs["keyframes"]))
     all_frames = data["frames"].tolist()
@@ -188,17 +196,42 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
     profile = get_profile(corpus, job.subject)
     face = get_face(corpus, job.subject, profile)
     renderer = get_renderer(corpus, job.subject, face, job.view, ctx.preset, ctx.variant)
-    files, rendered = {}, []
+    files = {}
+    seconds = 0.0
     for f in job.frames:
         res = renderer.render(data["positions"][all_frames.index(f)])
-        rendered.append((f, res))
+        seconds += float(getattr(res, "render_s", 0.0))
         meta = {"subject": job.subject, "task": job.task, "rep": job.rep,
-                "version": job.version, "frame": f}
+                "version": job.version, "view": job.view, "frame": f,
+                "synthetic": ctx.synthetic}
         files[f"render-{f:06d}"] = (_png_bytes(res.rgb, meta), ".png")
-    rows = _call(rubric.run_image_checks, rendered, view=job.view, face=face, profile=profile,
-                 version=job.version, subject=job.subject)
-    return StageOutput(rows=pd.DataFrame(rows), files=files,
-                       log=[f"rendered {len(rendered)} frame(s) of {job.view}"])
+        mask = np.asarray(res.mask)
+        if mask.max(initial=0) > 255:
+            raise ValueError("more than 255 parts: masks are stored as uint8")
+        files[f"masks-{f:06d}"] = (npz_bytes(mask=mask.astype(np.uint8),
+                                             depth=np.asarray(res.depth, np.float32),
+                                             part_names=np.asarray(res.part_names, dtype=str)),
+                                   ".npz")
+    return StageOutput(files=files, meta={"render_s": round(seconds, 3)},
+                       log=[f"rendered {len(job.frames)} frame(s) of {job.view} "
+                            f"({ctx.preset}, {renderer.variant}) in {seconds:.2f} s"])
+
+
+def image_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> StageOutput:
+    """The rubric's image checks over every rendered frame of ``job.view`` (all chunks)."""
+    import io  # noqa: PLC0415
+
+    from cassi.harness import rubric  # noqa: PLC0415
+
+    frames = {}
+    for f in job.frames:
+        d = np.load(io.BytesIO(inputs[f"masks-{f:06d}"]))
+        frames[int(f)] = StoredFrame(d["mask"].astype(np.int32), d["depth"],
+                                     tuple(str(n) for n in d["part_names"]))
+    rows = rubric.run_image_checks({job.view: frames}, task=job.task, subject=job.subject,
+                                   rep=job.rep, version=job.version)
+    return StageOutput(rows=pd.DataFrame(rows),
+                       log=[f"image checks on {len(frames)} frame(s): {len(rows)} row(s)"])
 
 
 def _rubric_attr(name: str):
@@ -212,7 +245,7 @@ def _rubric_attr(name: str):
 def cassi_pipeline(*, render: bool = True) -> Pipeline:
     """The real pipeline; ``render=False`` for geometry-only runs."""
     return Pipeline(geometry=geometry_stage, render=render_stage if render else None,
-                    aggregate=_rubric_attr("aggregate"), rate=_rubric_attr("rate"))
+                    image=image_stage if render else None, rate=_rubric_attr("rate"))
 
 
 def catalog(corpus):

@@ -41,17 +41,22 @@ class Pipeline:
 
     geometry : stage for geometry jobs (animate, geometric checks, pick the frames to render:
         ``meta["render_frames"]``).
-    render : stage for render jobs (render ``job.frames`` of ``job.view``, image checks), or
-        None for geometry-only runs.
-    aggregate : rows of the whole run -> extra rows (e.g. whole-task aggregates of per-frame
-        image checks that span several render chunks), or None.
+    render : stage for render jobs (render ``job.frames`` of ``job.view``), or None for
+        geometry-only runs.
+    image : stage for image jobs (image checks over every rendered frame of a view: its inputs
+        are the outputs of all the view's render chunks), or None.
+    aggregate : rows of the whole run -> extra rows, or None.
     rate : negatives -> rating words (thesis Table 5.2), or None for the rubric's.
     """
 
     geometry: StageFn
     render: StageFn | None = None
+    image: StageFn | None = None
     aggregate: Callable[[pd.DataFrame], pd.DataFrame] | None = None
     rate: Callable[[int], str] | None = None
+
+    def stage(self, name: str) -> StageFn:
+        return {"geometry": self.geometry, "render": self.render, "image": self.image}[name]
 
 
 @dataclass
@@ -66,27 +71,35 @@ class RunResult:
         return not self.summary.failed
 
 
-def _outputs_digest(manifest: dict) -> str:
-    doc = json.dumps({n: r.sha256 for n, r in sorted(manifest["outputs"].items())})
+def _outputs_digest(manifests: list[dict]) -> str:
+    doc = json.dumps([{n: r.sha256 for n, r in sorted(m["outputs"].items())} for m in manifests])
     return hashlib.sha256(doc.encode()).hexdigest()
+
+
+STAGES = ("geometry", "render", "image")
 
 
 def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterable[str],
               pipeline: Pipeline, ctx: StageContext, executor, *, progress: bool = True,
               extra_meta: dict | None = None) -> RunResult:
-    """Run every (task file x version) geometry job and every (view x chunk) render job.
+    """Run every (task file x version) geometry job, every (view x chunk) render job and every
+    view's image job; then derive the results and ratings tables.
 
     The caller prepares ``ctx.out_dir`` (:meth:`OutputStore.prepare`) and holds its lock.
-    Writes ``results.parquet/.csv``, ``ratings.parquet/.csv`` and ``summary.json`` there.
+    Writes ``results``, ``ratings`` and ``renders`` (``.parquet`` + ``.csv``) and
+    ``summary.json`` there.
     """
     t0 = time.perf_counter()
     store = OutputStore(ctx.out_dir)
     salt = ctx.salt()
     views = [v for v in views if v != GEOMETRY_VIEW] if pipeline.render is not None else []
+    versions = list(versions)
     records: dict[str, JobRecord] = {}
     jobs: dict[str, Job] = {}
     digests: dict[str, str] = {}
-    bars = Progress(enabled=progress)
+    groups: dict[tuple, list[str]] = {}      # (task key, view) -> render chunk keys
+    group_of: dict[str, tuple] = {}
+    bars = Progress(STAGES, enabled=progress)
 
     def record(job: Job, state: State, reason: str = "", **kw) -> JobRecord:
         rec = records.setdefault(job.key, JobRecord(job.key, job.stage))
@@ -104,21 +117,49 @@ def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterabl
         if manifest is not None:
             record(job, State.CACHED)
             bars.finished(job.stage, State.CACHED)
-            if job.stage == "geometry":
-                plan_renders(job, manifest)
+            after(job, manifest)
             return
-        record(job, State.PENDING)
-        stage = pipeline.geometry if job.stage == "geometry" else pipeline.render
-        executor.submit(job.key, call_job, stage, job, ctx, digest)
-        records[job.key].state = State.RUNNING
+        record(job, State.RUNNING)
+        executor.submit(job.key, call_job, pipeline.stage(job.stage), job, ctx, digest)
 
-    def plan_renders(geom: Job, manifest: dict) -> None:
-        frames = manifest.get("meta", {}).get("render_frames", [])
-        parent_digest = _outputs_digest(manifest)
-        for view in views:
-            for i, chunk in enumerate(chunk_frames(frames, ctx.chunk_size)):
-                schedule(Job("render", geom.subject, geom.task, geom.rep, geom.version, view,
-                             chunk, i, parent=geom.key, parent_digest=parent_digest))
+    def skip(job: Job, reason: str) -> None:
+        jobs[job.key] = job
+        rec = record(job, State.SKIPPED, reason)
+        write_job_log(store, rec)
+
+    def after(job: Job, manifest: dict | None) -> None:
+        """Plan what a finished job unlocks."""
+        if job.stage == "geometry" and manifest is not None:
+            frames = manifest.get("meta", {}).get("render_frames", [])
+            parent_digest = _outputs_digest([manifest])
+            for view in views:
+                chunks = chunk_frames(frames, ctx.chunk_size)
+                group = (job.task_key, view)
+                groups[group] = [Job("render", *job.task_key, view, c, i).key
+                                 for i, c in enumerate(chunks)]
+                for key in groups[group]:
+                    group_of[key] = group
+                for i, chunk in enumerate(chunks):
+                    schedule(Job("render", *job.task_key, view, chunk, i, parents=(job.key,),
+                                 parent_digest=parent_digest))
+        elif job.stage == "render" and pipeline.image is not None:
+            group = group_of[job.key]
+            keys = groups[group]
+            if not all(k in records and records[k].state.finished for k in keys):
+                return
+            (subject, task, rep, version), view = group
+            image = Job("image", subject, task, rep, version, view,
+                        tuple(f for k in keys for f in jobs[k].frames), parents=tuple(keys))
+            bad = [k for k in keys if records[k].state not in (State.DONE, State.CACHED)]
+            if bad:
+                skip(image, f"render job(s) not done: {', '.join(bad)}")
+                return
+            manifests = [store.verified(k, digests[k]) for k in keys]
+            if any(m is None for m in manifests):
+                skip(image, "render outputs missing or corrupt")
+                return
+            schedule(Job("image", subject, task, rep, version, view, image.frames,
+                         parents=tuple(keys), parent_digest=_outputs_digest(manifests)))
 
     def finish(key: str, outcome: Outcome | None, ok: bool, error: str, attempts: int) -> None:
         job = jobs[key]
@@ -128,14 +169,14 @@ def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterabl
         else:
             rec = record(job, outcome.state, outcome.reason, attempts=attempts,
                          seconds=outcome.seconds, log=outcome.log)
-        write_job_log(store, rec)
-        bars.finished(job.stage, rec.state)
-        if rec.state is State.DONE and job.stage == "geometry":
+        manifest = None
+        if rec.state is State.DONE:
             manifest = store.verified(job.key, digests[job.key])
             if manifest is None:
                 record(job, State.FAILED, "outputs missing or corrupt after the job finished")
-            else:
-                plan_renders(job, manifest)
+        write_job_log(store, rec)
+        bars.finished(job.stage, rec.state)
+        after(job, manifest)
 
     try:
         executor.start()
@@ -143,9 +184,7 @@ def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterabl
             for version in versions:
                 job = Job("geometry", spec.subject, spec.task, spec.rep, version)
                 if not spec.usable:
-                    jobs[job.key] = job
-                    rec = record(job, State.SKIPPED, spec.reason or "task file not usable")
-                    write_job_log(store, rec)
+                    skip(job, spec.reason or "task file not usable")
                     continue
                 schedule(job)
         while executor.pending():
@@ -153,7 +192,6 @@ def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterabl
                 finish(fin.key, fin.value, fin.ok, fin.error, fin.attempts)
     finally:
         bars.close()
-
     # The ratings stage: the rows of every finished job, combined, aggregated and rated.
     frames, renders = [], []
     for key, rec in sorted(records.items()):

@@ -64,16 +64,25 @@ def render_stage(job: Job, ctx: StageContext, inputs) -> StageOutput:
     """'Renders' a tiny image per frame from the parent's positions; one image check row each."""
     time.sleep(float(os.environ.get("FARM_TEST_SLEEP", 0)))
     pos = np.load(io.BytesIO(inputs["positions"]))["p"]
-    rows, files = [], {}
+    files = {}
     for f in job.frames:
         img = np.full((4, 4), pos[f].sum() + len(job.view), dtype=np.float32)
         files[f"render-{f:06d}"] = (npz_bytes(img=img), ".npz")
-        rows.append(dict(frame=f, check="teeth_visible", table="A", component="teeth",
-                         value=float(img.mean()), unit="px", threshold=0.0, negatives=0))
-    return StageOutput(rows=pd.DataFrame(rows), files=files)
+    return StageOutput(files=files)
 
 
-PIPE = Pipeline(geometry=geom_stage, render=render_stage)
+def image_stage(job: Job, ctx: StageContext, inputs) -> StageOutput:
+    """A whole-view check over every rendered frame of the view (all render chunks)."""
+    means = [float(np.load(io.BytesIO(inputs[f"render-{f:06d}"]))["img"].mean()) for f in job.frames]
+    worst = int(np.argmax(means))
+    return StageOutput(rows=pd.DataFrame([
+        dict(frame=-1, check="teeth_visible", table="A", component="teeth", value=max(means),
+             unit="px", threshold=20.0, negatives=int(max(means) > 20)),
+        dict(frame=job.frames[worst], check="teeth_visible", table="A", component="teeth",
+             value=means[worst], unit="px", threshold=20.0, negatives=0, detail="evidence")]))
+
+
+PIPE = Pipeline(geometry=geom_stage, render=render_stage, image=image_stage)
 TASKS = [TaskSpec("JW11", 19), TaskSpec("JW11", 21), TaskSpec("JW12", 2), TaskSpec("JW12", 5)]
 
 
@@ -115,15 +124,22 @@ def test_batch_runs_and_tables_are_consistent(reference):
     assert len(csv) == len(df)
     assert set(df["view"]) == {"geometry", "front", "half"}
     # every render frame was picked by the geometry stage (first, stride, extreme)
-    front = df[(df.view == "front") & (df.subject == "JW11") & (df.task == 19) & (df.version == "v1")]
     geo = df[(df.view == "geometry") & (df.subject == "JW11") & (df.task == 19) & (df.version == "v1")
              & (df.frame >= 0)]
     extreme = int(geo.loc[geo.value.idxmax(), "frame"])
+    renders = pd.read_parquet(out / "renders.parquet")
+    front = renders[(renders.view == "front") & (renders.subject == "JW11") & (renders.task == 19)
+                    & (renders.version == "v1")]
     assert set(front.frame) == {0, 10, 20, extreme}
+    assert all((out / p).is_file() for p in renders.path)
+    # one image job per view saw every frame of its render chunks
+    checks = df[(df.view == "front") & (df.subject == "JW11") & (df.task == 19) & (df.version == "v1")]
+    assert list(checks.frame) == [-1, int(checks.frame.max())] and checks.frame.max() in set(front.frame)
     rt = pd.read_parquet(out / "ratings.parquet")
-    assert len(rt) == 8  # one (table A, lips) rating per file x version: only frame -1 rows count
-    assert set(rt["rating"]) <= {"EXCELLENT", "VERY GOOD", "GOOD"}
-    assert (out / "logs" / "JW11" / "019-1" / "v1" / "geometry" / "c000.log").is_file()
+    # per file x version: (A, lips) and (A, teeth); only frame -1 rows count
+    assert len(rt) == 16 and set(rt.component) == {"lips", "teeth"}
+    assert set(rt["rating"]) <= {"EXCELLENT", "VERY GOOD", "GOOD", "FAIR"}
+    assert (out / "logs" / "JW11" / "019-1" / "v1" / "geometry.log").is_file()
 
 
 def test_rerun_skips_everything_and_gives_identical_tables(reference, tmp_path):
@@ -177,18 +193,18 @@ def test_kill_9_then_rerun_is_identical(reference, tmp_path):
 def test_worker_crash_is_retried_and_nothing_else_lost(reference, tmp_path):
     ref_out, first = reference
     out = tmp_path / "crash"
-    res = _run(out, workers=2, options=(("crash_once", "JW11/021-1/v2/geometry/c000"),))
+    res = _run(out, workers=2, options=(("crash_once", "JW11/021-1/v2/geometry"),))
     assert (out / "marker-crashed").exists()
     assert res.summary.worker_crashes == 1
     assert res.summary.counts()["failed"] == 0
-    assert res.records["JW11/021-1/v2/geometry/c000"].attempts == 2
+    assert res.records["JW11/021-1/v2/geometry"].attempts == 2
     assert (out / "results.csv").read_bytes() == (ref_out / "results.csv").read_bytes()
 
 
 def test_worker_crashing_every_time_fails_only_that_job(reference, tmp_path):
     _, first = reference
     out = tmp_path / "crash-always"
-    bad = "JW12/002-1/v1/geometry/c000"
+    bad = "JW12/002-1/v1/geometry"
     res = _run(out, workers=2, options=(("crash_always", bad),), retries=1)
     assert not res.ok
     assert [r.key for r in res.summary.failed] == [bad]
@@ -200,7 +216,7 @@ def test_worker_crashing_every_time_fails_only_that_job(reference, tmp_path):
 
 
 def test_exception_fails_job_with_traceback_in_log(tmp_path):
-    bad = "JW11/019-1/v1/geometry/c000"
+    bad = "JW11/019-1/v1/geometry"
     res = _run(tmp_path, tasks=TASKS[:1], versions=("v1",), views=(),
                options=(("raise_on", bad),))
     assert res.records[bad].state is State.FAILED

@@ -38,7 +38,13 @@ def render(job: Job, ctx: StageContext, inputs) -> StageOutput:
     return StageOutput(rows=rows, files={f"render-{f:06d}": (bytes([f]), ".bin") for f in job.frames})
 
 
-PIPE = Pipeline(geometry=geom, render=render)
+def image(job: Job, ctx: StageContext, inputs) -> StageOutput:
+    seen = sum(inputs[f"render-{f:06d}"][0] for f in job.frames)
+    return StageOutput(rows=pd.DataFrame({"frame": [-1], "check": ["seen_all"], "table": ["A"],
+                                          "component": ["teeth"], "value": [float(seen)]}))
+
+
+PIPE = Pipeline(geometry=geom, render=render, image=image)
 TASKS = [TaskSpec("S1", 1), TaskSpec("S1", 2), TaskSpec("S2", 3)]
 
 
@@ -66,7 +72,7 @@ def test_ray_gives_the_local_pool_results(cluster, tmp_path):
     local = _run(tmp_path / "local", LocalExecutor(1))
     rayed = _run(tmp_path / "ray", RayExecutor(None, retries=1))
     assert rayed.summary.counts()["failed"] == 0
-    assert rayed.summary.counts()["done"] == len(local.records) == 18  # 6 geometry + 6 x 2 render chunks
+    assert rayed.summary.counts()["done"] == len(local.records) == 24  # 6 geometry + 6 x 2 render chunks + 6 image
     assert (tmp_path / "ray" / "results.csv").read_bytes() == \
         (tmp_path / "local" / "results.csv").read_bytes()
     renders = pd.read_parquet(tmp_path / "ray" / "renders.parquet")
@@ -75,7 +81,7 @@ def test_ray_gives_the_local_pool_results(cluster, tmp_path):
 
 
 def test_ray_retries_a_dead_worker_without_duplicates(cluster, tmp_path):
-    bad = "S1/002-1/b/geometry/c000"
+    bad = "S1/002-1/b/geometry"
     ref = _run(tmp_path / "ref", RayExecutor(None))
     res = _run(tmp_path / "crash", RayExecutor(None, retries=1), options=(("crash_once", bad),))
     assert (tmp_path / "crash" / "crashed").exists()
