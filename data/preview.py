@@ -1,0 +1,109 @@
+"""Matplotlib previews of the face (for debugging; the renderer makes the real images).
+
+``preview_png(face, path)`` draws the mirrored head from the front, the side, three-quarters and
+the half-face cut, flat-shaded with the polygon edges on top, plus the mouth parts (teeth,
+tongue, palate) from the side. ``python -m cassi.data.preview OUT.png`` writes the neutral face.
+"""
+from __future__ import annotations
+
+import os
+import sys
+from os import PathLike
+
+import numpy as np
+
+from cassi.data.atomic import atomic_tmp_path
+
+_COLOURS = {
+    "skin": (0.86, 0.68, 0.58), "lips": (0.75, 0.35, 0.35), "eyelash": (0.15, 0.1, 0.1),
+    "eyebrow": (0.3, 0.2, 0.15), "teeth": (0.95, 0.94, 0.85), "tongue": (0.85, 0.35, 0.4),
+    "palate": (0.9, 0.55, 0.55), "eye_white": (0.95, 0.95, 0.93), "iris": (0.25, 0.4, 0.6),
+    "fringe": (0.1, 0.15, 0.2), "pupil": (0.02, 0.02, 0.02), "reflection": (1.0, 1.0, 1.0),
+}
+
+#: name -> (elevation, azimuth) for matplotlib's view_init, Parke axes (X forward, Z up).
+VIEWS = {"front": (5, 0), "side": (5, 90), "three-quarter": (15, 40), "half": (5, -90),
+         "below": (-60, 20)}
+
+
+def _draw(ax, topo, positions, *, parts=None, title="", view=(5, 0), edges=True):
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    v, tri, part = topo.mesh(positions)
+    names = list(topo.parts)
+    keep = np.ones(len(tri), bool) if parts is None else np.isin(
+        part, [names.index(p) for p in parts if p in names])
+    tri, part = tri[keep], part[keep]
+    p = v[tri]
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+    elev, azim = np.radians(view[0]), np.radians(view[1])
+    eye = np.array([np.cos(elev) * np.cos(azim), np.cos(elev) * np.sin(azim), np.sin(elev)])
+    light = eye + np.array([0.0, 0.3, 0.6])
+    light /= np.linalg.norm(light)
+    shade = 0.35 + 0.65 * np.clip(n @ light, 0.0, 1.0)
+    base = np.array([_COLOURS.get(names[i], (0.6, 0.6, 0.6)) for i in part])
+    col = base * shade[:, None]
+    # back faces (pointing away from the viewer) drawn dark so wrong windings stand out
+    back = (n @ eye) < 0
+    col[back] = col[back] * 0.25
+    pc = Poly3DCollection(p, facecolors=col, edgecolors=(0, 0, 0, 0.25) if edges else col,
+                          linewidths=0.2)
+    ax.add_collection3d(pc)
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    mid, span = (lo + hi) / 2, (hi - lo).max() / 2
+    ax.set_xlim(mid[0] - span, mid[0] + span)
+    ax.set_ylim(mid[1] - span, mid[1] + span)
+    ax.set_zlim(mid[2] - span, mid[2] + span)
+    ax.set_box_aspect((1, 1, 1))
+    ax.view_init(elev=view[0], azim=view[1])
+    ax.set_axis_off()
+    ax.set_title(title, fontsize=9)
+
+
+def preview_png(face, path: str | PathLike, *, positions=None, dpi: int = 110,
+                zoom_mouth: bool = True) -> None:
+    """Write a PNG preview (front, side, three-quarter, half cut, mouth parts) atomically."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from cassi.data.topology import render_topology
+
+    pos = face.vertices if positions is None else np.asarray(positions)
+    full = render_topology(face)
+    half = render_topology(face, half=True)
+    fig = plt.figure(figsize=(15, 9))
+    panels = [
+        (full, None, "front", VIEWS["front"]), (full, None, "side (left)", VIEWS["side"]),
+        (full, None, "three-quarter", VIEWS["three-quarter"]),
+        (half, None, "half (from the cut)", VIEWS["half"]),
+        (full, ["teeth", "tongue", "palate", "lips"], "mouth parts, side", (5, 80)),
+        (full, ["teeth", "tongue", "palate"], "mouth parts, from below", (-70, 10)),
+    ]
+    for k, (topo, parts, title, view) in enumerate(panels):
+        ax = fig.add_subplot(2, 3, k + 1, projection="3d")
+        _draw(ax, topo, pos, parts=parts, title=title, view=view)
+    fig.tight_layout()
+    tmp = atomic_tmp_path(path)
+    try:
+        fig.savefig(tmp, dpi=dpi, format="png")
+        os.replace(tmp, path)
+    finally:
+        plt.close(fig)
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def main(argv=None) -> int:
+    from cassi.data.face import build_face
+
+    argv = sys.argv[1:] if argv is None else argv
+    out = argv[0] if argv else "face_preview.png"
+    preview_png(build_face(), out)
+    print(out)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
