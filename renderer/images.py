@@ -128,7 +128,8 @@ def write_mask_png(path: str | os.PathLike, mask: np.ndarray, *, metadata: dict 
     spec = oiio.ImageSpec(w, h, 1, oiio.UINT8)
     spec.attribute("png:compressionLevel", PNG_COMPRESSION)
     _meta_attrs(spec, metadata)
-    _write(Path(path), mask.astype(np.uint8), spec, fmt=oiio.UINT8)
+    # (H, W, 1): OpenImageIO misreads a 2-D array's layout for one-channel images
+    _write(Path(path), mask.astype(np.uint8)[..., None], spec, fmt=oiio.UINT8)
     return Path(path)
 
 
@@ -146,7 +147,7 @@ def read_image(path: str | os.PathLike) -> np.ndarray:
     if inp is None:
         raise CassiInputError(f"cannot read image: {oiio.geterror()}", path=path)
     try:
-        return inp.read_image()
+        return inp.read_image(inp.spec().format)  # native type: float32 EXR, uint8 PNG
     finally:
         inp.close()
 

@@ -109,6 +109,16 @@ def part_triangles(topology) -> dict[str, np.ndarray]:
     return out
 
 
+def _near_offset(view: View, preset: Preset) -> np.ndarray:
+    """float32 (H, W): distance from the eye to the near-clip plane along each pixel-centre ray."""
+    h, w = preset.height, preset.width
+    tan = np.tan(np.radians(view.camera.fov) / 2.0)  # fov_axis = y
+    sx = ((np.arange(w) + 0.5) / w * 2.0 - 1.0) * tan * (w / h)
+    sy = (1.0 - (np.arange(h) + 0.5) / h * 2.0) * tan
+    cos = 1.0 / np.sqrt(1.0 + sx[None, :] ** 2 + sy[:, None] ** 2)
+    return (view.camera.near_clip / cos).astype(np.float32)
+
+
 class FaceRenderer:
     """Renders frames of one face topology from one view at one preset.
 
@@ -200,6 +210,7 @@ class FaceRenderer:
         for k, r in raw.items():
             lut[r] = k
         self._lut = lut
+        self._near_offset = _near_offset(self.view, self.preset)
 
     # -- per frame -------------------------------------------------------------------------
     def update(self, positions: np.ndarray) -> None:
@@ -234,7 +245,9 @@ class FaceRenderer:
         raw = np.rint(aov[..., 1]).astype(np.int64)
         raw[(raw < 0) | (raw >= len(self._lut))] = len(self._lut) - 1  # unknown -> background
         mask = self._lut[raw]
-        depth = aov[..., 0].copy()
+        # Mitsuba starts camera rays on the near-clip plane, so the aov distance lacks the
+        # stretch from the eye to that plane: near_clip / cos(angle to the optical axis).
+        depth = aov[..., 0] + self._near_offset
         depth[mask == 0] = np.inf
         return mask, depth
 

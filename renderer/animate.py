@@ -1,0 +1,125 @@
+"""Animations of a task: every ``stride``-th frame, the chosen views side by side, written as MP4
+(H.264) or GIF through imageio-ffmpeg. One ``FaceRenderer`` per view renders all frames (scene
+loaded once per view); frames stream to ffmpeg, so memory stays flat however long the task.
+"""
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Iterator, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from cassi.data.atomic import atomic_tmp_path
+from cassi.data.errors import CassiInputError
+
+from .images import to_srgb8
+from .views import VIEW_NAMES
+
+__all__ = ["side_by_side", "animation_frames", "write_animation", "animate_positions",
+           "realtime_fps"]
+
+NOMINAL_PERIOD_US = 6866  # XRMB frame period (cassi.data.xrmb.NOMINAL_PERIOD_US)
+
+
+def realtime_fps(stride: int, *, period_us: float = NOMINAL_PERIOD_US, cap: float = 50.0) -> float:
+    """Frames per second that play a recording at its own speed at ``stride``, capped (GIF
+    players round delays to 1/100 s; 50 fps is the fastest they keep)."""
+    return float(min(cap, 1e6 / (period_us * max(1, stride))))
+
+
+def side_by_side(images: Sequence[np.ndarray], gap: int = 0) -> np.ndarray:
+    """uint8 (H, sum W, 3) of equal-height images (linear float images are sRGB-encoded)."""
+    imgs = [i if i.dtype == np.uint8 else to_srgb8(i) for i in images]
+    if len({i.shape[0] for i in imgs}) != 1:
+        raise ValueError("side_by_side needs images of equal height")
+    if gap:
+        sep = np.zeros((imgs[0].shape[0], gap, 3), np.uint8)
+        imgs = [x for i in imgs for x in (i, sep)][:-1]
+    return np.concatenate([i[..., :3] for i in imgs], axis=1)
+
+
+def animation_frames(renderers: Sequence, positions: Iterable[np.ndarray]) -> Iterator[np.ndarray]:
+    """For each (V, 3) positions array, the views of all ``renderers`` side by side (uint8)."""
+    for pos in positions:
+        yield side_by_side([r.render(pos).rgb for r in renderers])
+
+
+def write_animation(path: str | os.PathLike, frames: Iterable[np.ndarray], *, fps: float) -> Path:
+    """Stream uint8 (H, W, 3) frames to ``path`` (``.mp4``: H.264 yuv420p; ``.gif``), atomically.
+
+    Returns the path. Raises CassiInputError for another suffix or no frames.
+    """
+    import imageio_ffmpeg
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".mp4":
+        kw = dict(codec="libx264", pix_fmt_out="yuv420p", quality=7)
+    elif suffix == ".gif":
+        kw = dict(codec="gif", pix_fmt_out="rgb8")
+    else:
+        raise CassiInputError("animation file must end in .mp4 or .gif", path=path)
+    tmp = atomic_tmp_path(path)
+    writer = None
+    n = 0
+    try:
+        for frame in frames:
+            frame = np.ascontiguousarray(frame, np.uint8)
+            h, w = frame.shape[:2]
+            if writer is None:
+                if suffix == ".mp4" and (h % 2 or w % 2):
+                    raise ValueError("MP4 frames need even width and height")
+                writer = imageio_ffmpeg.write_frames(str(tmp), (w, h), fps=fps, macro_block_size=2,
+                                                     ffmpeg_log_level="error", **kw)
+                writer.send(None)
+                size = (h, w)
+            elif (h, w) != size:
+                raise ValueError("all animation frames must have the same size")
+            writer.send(frame.tobytes())
+            n += 1
+        if writer is None:
+            raise CassiInputError("no frames to animate", path=path)
+        writer.close()
+        writer = None
+        os.replace(tmp, path)
+    except BaseException:
+        if writer is not None:
+            try:
+                writer.close()
+            except Exception:  # noqa: BLE001 - already failing
+                pass
+        tmp.unlink(missing_ok=True)
+        raise
+    return path
+
+
+def animate_positions(face, positions: np.ndarray, out: str | os.PathLike, *,
+                      views: Sequence[str] = ("front", "side"), stride: int = 1,
+                      preset: str = "preview", variant: str | None = None,
+                      fps: float | None = None) -> dict:
+    """Render frames 0, stride, 2*stride, ... of ``positions`` (float (F, V, 3), Parke units) in
+    ``views`` side by side and write the animation ``out`` (.mp4 or .gif).
+
+    ``face`` is the ``cassi.data.face.FaceModel`` whose topology the positions follow.
+    Returns a summary dict (frames written, views, fps, variant, path).
+    """
+    from cassi.data.face import render_topology
+
+    from .render import FaceRenderer
+
+    positions = np.asarray(positions)
+    if positions.ndim != 3 or positions.shape[2] != 3 or len(positions) == 0:
+        raise CassiInputError(f"positions must be (F, V, 3) with F >= 1, not {positions.shape}")
+    if stride < 1:
+        raise CassiInputError(f"stride must be >= 1, not {stride}")
+    bad = [v for v in views if v not in VIEW_NAMES]
+    if bad or not views:
+        raise CassiInputError(f"unknown view(s) {bad or views}; choose from {', '.join(VIEW_NAMES)}")
+    renderers = [FaceRenderer(render_topology(face, half=(v == "half")), v, preset, variant)
+                 for v in views]
+    picked = positions[::stride]
+    fps = fps or realtime_fps(stride)
+    path = write_animation(out, animation_frames(renderers, picked), fps=fps)
+    return {"path": str(path), "frames": int(len(picked)), "views": list(views), "fps": fps,
+            "stride": stride, "preset": preset, "variant": renderers[0].variant}

@@ -1,0 +1,144 @@
+"""Render benchmarks for ``cassi bench`` (``bench_render``).
+
+Figures (all on this machine's variant, one process):
+
+- ``render_per_s``: {"view/preset": frames per second} of ``FaceRenderer.render`` (vertex update,
+  colour pass, mask pass) on a moving face;
+- ``render_pipeline_efficiency``: a bare ``mi.render`` of the same scene, view and preset divided by
+  the renderer's end-to-end time per image (vertex update, render, masks, EXR + PNG + mask PNG +
+  JSON written through the background ``FrameWriter``), measured in alternating blocks so machine
+  load hits both alike; per view at the preview preset, and the front view's value as the headline
+  (goal >= 0.7);
+- ``render_rss_growth_mb``: resident memory growth over 2,000 consecutive pipeline frames (quick:
+  300) after a warm-up, with the samples so flatness can be seen (goal < 50 MB).
+"""
+from __future__ import annotations
+
+import os
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["bench_render", "rss_mb", "moving_positions"]
+
+
+def rss_mb() -> float:
+    """Resident set size of this process in MB (Linux /proc; 0.0 where unavailable)."""
+    try:
+        with open("/proc/self/statm") as fh:
+            return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+    except (OSError, ValueError, IndexError):
+        return 0.0
+
+
+def moving_positions(base: np.ndarray, k: int, *, period: int = 40, amplitude: float = 25.0) -> np.ndarray:
+    """Frame ``k`` of a synthetic jaw-like motion: everything below the base's mid height moves
+    down and forward by up to ``amplitude`` Parke units, smoothly, with period ``period`` frames."""
+    base = np.asarray(base, np.float32)
+    z = base[:, 2]
+    zmid = 0.5 * (float(z.min()) + float(z.max()))
+    weight = np.clip((zmid - z) / max(1.0, zmid - float(z.min())), 0.0, 1.0)
+    s = 0.5 - 0.5 * np.cos(2 * np.pi * k / period)
+    out = base.copy()
+    out[:, 2] -= amplitude * s * weight
+    out[:, 0] += 0.3 * amplitude * s * weight
+    return out
+
+
+def _neutral():
+    from cassi.data.face import build_face, render_topology
+
+    face = build_face()
+    base = np.asarray(face.vertices, np.float32)
+    return (lambda half: render_topology(face, half=half)), base
+
+
+def _time_loop(fn, n: int) -> float:
+    t = time.perf_counter()
+    for k in range(n):
+        fn(k)
+    return (time.perf_counter() - t) / n
+
+
+def bench_render(quick: bool = False, *, topology_for=None, positions=None,
+                 variant: str | None = None) -> dict:
+    """Run the render benchmarks; see the module docstring. Returns a JSON-ready dict.
+
+    ``topology_for(half: bool)`` and ``positions`` (V, 3) default to the neutral face of
+    ``cassi.data.face``.
+    """
+    import drjit as dr
+    import mitsuba as mi
+
+    from .images import FrameWriter
+    from .render import FaceRenderer
+    from .variant import choose_variant
+    from .views import PRESET_NAMES, VIEW_NAMES
+
+    if topology_for is None or positions is None:
+        topology_for, positions = _neutral()
+    variant = choose_variant(variant)
+    out: dict = {"variant": variant, "quick": quick, "render_per_s": {}, "efficiency_by_view": {},
+                 "ms_per_image": {}}
+    n_preview = 12 if quick else 40
+    renderers = {}
+    for preset in PRESET_NAMES:
+        for view in VIEW_NAMES:
+            if preset == "final" and quick and view != "front":
+                continue
+            r = FaceRenderer(topology_for(view == "half"), view, preset, variant)
+            renderers[(view, preset)] = r
+            r.render(moving_positions(positions, 0))  # load + compile kernels
+            n = n_preview if preset == "preview" else (1 if quick else 3)
+            dt = _time_loop(lambda k: r.render(moving_positions(positions, k + 1)), n)
+            out["render_per_s"][f"{view}/{preset}"] = round(1.0 / dt, 2)
+
+    tmp = Path(tempfile.mkdtemp(prefix="cassi-bench-render-"))
+    try:
+        # --- efficiency: bare mi.render vs the whole pipeline, alternating blocks -------------
+        block, rounds = (8, 3) if quick else (20, 4)
+        for view in VIEW_NAMES:
+            r = renderers[(view, "preview")]
+            frames = [moving_positions(positions, k) for k in range(block)]
+            bare_t, pipe_t = [], []
+            for _ in range(rounds):
+                def bare(k):
+                    mi.render(r._scene, sensor=r._sensor_colour, seed=r.preset.seed,
+                              spp=r.preset.spp)
+                    dr.sync_thread()
+                bare_t.append(_time_loop(bare, block))
+                with FrameWriter() as writer:
+                    t = time.perf_counter()
+                    for k in range(block):
+                        writer.submit(r.render(frames[k]), tmp / f"{view}_{k % 4}")
+                    writer.flush()
+                    pipe_t.append((time.perf_counter() - t) / block)
+            b, p = statistics.median(bare_t), statistics.median(pipe_t)
+            out["efficiency_by_view"][view] = round(b / p, 3)
+            out["ms_per_image"][view] = {"bare_render": round(1000 * b, 2),
+                                         "pipeline": round(1000 * p, 2)}
+        out["render_pipeline_efficiency"] = out["efficiency_by_view"]["front"]
+
+        # --- memory: many consecutive pipeline frames of one renderer --------------------------
+        n_frames = 300 if quick else 2000
+        r = renderers[("front", "preview")]
+        samples = []
+        with FrameWriter() as writer:
+            for k in range(n_frames):
+                writer.submit(r.render(moving_positions(positions, k)), tmp / f"rss_{k % 4}")
+                if k == 50 or (k > 50 and k % max(1, n_frames // 10) == 0) or k == n_frames - 1:
+                    writer.flush()
+                    samples.append((k, round(rss_mb(), 1)))
+        base = samples[0][1]
+        out["render_rss_growth_mb"] = round(max(s for _, s in samples) - base, 1)
+        out["rss_samples_mb"] = samples
+        out["rss_frames"] = n_frames
+        out["scene_loads"] = {f"{v}/{p}": r.loads for (v, p), r in renderers.items()}
+    finally:
+        for f in tmp.glob("*"):
+            f.unlink(missing_ok=True)
+        tmp.rmdir()
+    return out
