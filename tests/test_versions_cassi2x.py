@@ -187,22 +187,31 @@ def real_face():
 
 
 def test_real_face_lips_stay_in_front_of_the_upper_teeth(real_face, profile):
-    """Section 4.2.2: on the parabolic track no outer lip vertex goes behind the upper front
-    teeth's labial surface while the lips round and stretch."""
+    """Section 4.2.2: the parabolic track keeps the lips from folding through the teeth. Where
+    the data put a lip's centre line in front of the upper front teeth, no vertex of that lip's
+    outline goes behind the teeth's labial surface, while the lips round and stretch. (Where the
+    pellet itself is at or behind the incisors, as the stretched end of this task puts it, the
+    thesis promises nothing.)"""
     from cassi.data import numbering as N
 
     rec = protrusion_recording(profile)
     anim = Cassi20().animate(profile, real_face, rec)
     teeth = np.asarray(N.UPPER_TEETH) - 1
-    lips = [v - 1 for v in (67, 68, 69, 70, 64, 65, 66)]
-    for f in range(0, anim.n_frames, 25):
+    outlines = {67: (67, 68, 69, 70), 64: (64, 65, 66, 300)}
+    checked = 0
+    for f in range(anim.n_frames):
         tx, ty = anim.positions[f, teeth, 0], anim.positions[f, teeth, 1]
         order = np.argsort(ty)
-        for v in lips:
-            x, y, _ = anim.positions[f, v]
-            if y > ty.max():
+        surface = lambda y: np.interp(y, ty[order], tx[order])  # noqa: E731
+        for centre, outline in outlines.items():
+            if anim.positions[f, centre - 1, 0] <= surface(0.0):
                 continue
-            assert x >= np.interp(y, ty[order], tx[order]) - 1e-3, (f, v + 1)
+            for v in outline:
+                x, y, _ = anim.positions[f, v - 1]
+                if y <= ty.max():
+                    checked += 1
+                    assert x >= surface(y) - 1e-3, (f, v)
+    assert checked > 2 * anim.n_frames
 
 
 def test_real_face_runs_all_lip_versions(real_face, profile):

@@ -347,7 +347,7 @@ def lip_frames(
         "a_unlimited": track.a,
         "c_unlimited": track.c,
         "outer_abc_branch": track.branch_labels,
-        "ellipse": np.where(vertical, "vertical", "horizontal"),
+        "ellipse": np.where(vertical, "vertical", "horizontal").astype(object),
         "currthick": currthick,
         "currthick_upper": upper_thick,
         "currthick_lower": lower_thick,
@@ -480,6 +480,7 @@ class LipMovementStage:
         positions[:, idx, :] = lips.xyz
         ctx.diagnostics.update(lips.diagnostics)
         ctx.diagnostics["thickness_rule"] = np.full(len(lips.xyz), plan["rule"].name, dtype=object)
-        for number, (pellet, axis) in {63: ("UL", 0), 64: ("UL", 1), 65: ("LL", 0),
-                                       66: ("LL", 1)}.items():
-            ctx.diagnostics[f"param_{number}"] = ctx.displacement(pellet)[:, axis]
+        # Table 4.1's lip parameters drive steps 1-4 exactly as in 1.0: same diagnostics.
+        from .cassi10 import _parameters
+
+        _parameters(ctx, {63: ("UL", 0), 64: ("UL", 1), 65: ("LL", 0), 66: ("LL", 1)})
