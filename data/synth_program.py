@@ -68,8 +68,9 @@ def textgrid_phones(path: Path) -> tuple[list, float]:
             out.append((t, s, "sp"))
         out.append((max(s, t), f, e.label))
         t = max(t, f)
-    length = max(float(tg.maxTimestamp), t + 0.2)
-    out.append((t, length, "sp"))
+    length = max(float(tg.maxTimestamp), t)
+    if length > t + 1e-6:
+        out.append((t, length, "sp"))
     return out, length
 
 

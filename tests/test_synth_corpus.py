@@ -1,0 +1,260 @@
+"""The generated corpus as a whole: determinism, calibration, artifacts, alignments, cache.
+
+Calibration targets are thesis Figures 4.16 and 4.25 (tests/fixtures/profiles, see SOURCES.md).
+The default suite generates two subjects (JW45, and JW32 whose molar pellet came off, thesis
+3.2.5); the full 15-subject checks are marked slow.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cassi.data.corpus import Corpus
+from cassi.data.errors import CassiInputError
+from cassi.data.profile import preprocess, read_lipthick, read_maxprotru
+from cassi.data.synth import (GENERATOR_VERSION, JW32_MNM_LOST_FROM_TASK, PROTECTED_TASKS,
+                              default_corpus, generate_task, make_corpus)
+from cassi.data.synth_subjects import SUBJECTS
+from cassi.data.xrmb import PELLETS, read_head_measures, read_mis
+
+TOL = 0.03          # the issue's calibration tolerance (profile units: divided by jaw length)
+
+
+def _digest(root: Path) -> dict[str, str]:
+    return {str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory) -> Path:
+    return make_corpus(tmp_path_factory.mktemp("synth") / "c", subjects=["JW45", "JW32"],
+                       seed=0, workers=2)
+
+
+@pytest.fixture(scope="module")
+def corpus(small) -> Corpus:
+    return Corpus(small)
+
+
+def _check_profiles(profiles, fixtures_dir, names):
+    mp = read_maxprotru(fixtures_dir / "profiles" / "maxprotru.txt")
+    lt = read_lipthick(fixtures_dir / "profiles" / "lipthick.txt")
+    for name in names:
+        p, ref = profiles[name], mp[name]
+        assert p.rest_ul == pytest.approx(ref.rest_ul, abs=TOL), name
+        assert p.max_ul == pytest.approx(ref.max_ul, abs=TOL), name
+        assert p.lipthick == pytest.approx(lt[name], abs=TOL), name
+        assert p.rest_ll == pytest.approx(ref.rest_ll, abs=TOL), name
+        assert p.max_ll == pytest.approx(ref.max_ll, abs=TOL), name
+
+
+# ----------------------------------------------------------------------------- layout, metadata
+def test_layout_and_metadata_say_synthetic(small, corpus):
+    meta = json.loads((small / "corpus.json").read_text())
+    assert meta["synthetic"] is True and meta["seed"] == 0
+    assert meta["generator_version"] == GENERATOR_VERSION
+    assert corpus.is_synthetic and corpus.subjects == ["JW32", "JW45"]
+    for name in ("JW45", "JW32"):
+        d = small / name
+        for f in ("PAL.DAT", "PHA.DAT", "Mis.dat"):
+            assert (d / f).is_file()
+        tasks = {(t, r) for t, r in corpus.subject(name).tasks()}
+        assert {(t, 1) for t in range(1, 119)} <= tasks
+        assert len([1 for _, r in tasks if r > 1]) == 2          # two repetitions
+        assert np.allclose(corpus.subject(name).palate_mm, SUBJECTS[name].palate_outline(),
+                           atol=0.001)
+    hm = read_head_measures(small / "Headmeasures.txt")
+    assert np.allclose(hm["JW45"].gonion_mm, SUBJECTS["JW45"].gonion_mm)
+    assert np.allclose(hm["JW45"].gnathion_mm, SUBJECTS["JW45"].gnathion_mm)
+
+
+def test_task_files_are_xrmb_shaped(small):
+    first = (small / "JW45" / "tp013.txy").read_text().splitlines()
+    cols = [row.split("\t") for row in first[:10]]
+    assert all(len(c) == 17 for c in cols)
+    assert cols[0][1:] == ["1000000"] * 16                   # tracking not started yet
+    times = [int(c[0]) for c in cols]
+    assert times == [6866 * i for i in range(10)]
+    rec = Corpus(small).load("JW45", 13)
+    assert 2 <= rec.first_valid_index <= 8
+    assert rec.first_valid_time_us == 6866 * rec.first_valid_index
+
+
+# ----------------------------------------------------------------------------- determinism
+def test_same_seed_same_bytes_independent_of_the_subject_set(small, tmp_path):
+    one = make_corpus(tmp_path / "one", subjects=["JW45"], seed=0, workers=1)
+    a, b = _digest(small / "JW45"), _digest(one / "JW45")
+    assert a == b and len(a) == 123
+    again = make_corpus(tmp_path / "again", subjects="JW45", seed=0, workers=1)
+    assert _digest(again) == _digest(one)
+    other = make_corpus(tmp_path / "other", subjects=["JW45"], seed=1, workers=1)
+    da, do = _digest(one / "JW45"), _digest(other / "JW45")
+    assert sum(da[k] != do.get(k) for k in da) > 100
+
+
+# ----------------------------------------------------------------------------- calibration
+def test_preprocessing_reproduces_the_thesis_profiles(corpus, fixtures_dir):
+    profiles = preprocess(corpus)
+    _check_profiles(profiles, fixtures_dir, ["JW45", "JW32"])
+    assert len(profiles["JW45"].selected) == 20 and (118, 1) in profiles["JW45"].selected
+    assert len(profiles["JW32"].selected) == 4                 # thesis: four usable files
+    assert profiles["JW45"].jaw_length_mm == pytest.approx(SUBJECTS["JW45"].jaw_length_mm,
+                                                           abs=0.3)
+
+
+# ----------------------------------------------------------------------------- artifacts
+def test_error_free_files_per_subject(corpus):
+    jw45 = corpus.subject("JW45")
+    ok = {t for t, r in jw45.error_free_tasks() if r == 1}
+    assert len(ok) >= 80 and set(PROTECTED_TASKS) <= ok
+    jw32 = corpus.subject("JW32")
+    ok32 = sorted(t for t, r in jw32.error_free_tasks())
+    assert len(ok32) == 4 and max(ok32) < JW32_MNM_LOST_FROM_TASK
+    later = [t for t in range(JW32_MNM_LOST_FROM_TASK + 1, 119) if t not in jw32.mistracked_tasks]
+    assert len(later) > 80 and {106, 118} <= set(later)
+    for task in later[:3] + [106, 118]:
+        rec = jw32.load(task, require_valid=False)
+        assert not rec.valid[:, PELLETS.index("MNM")].any()   # pellet removed, not logged
+        assert not jw32.usability(task).usable
+    part = jw32.load(JW32_MNM_LOST_FROM_TASK, require_valid=False)
+    mnm = part.valid[:, PELLETS.index("MNM")]
+    assert mnm[part.first_valid_index] and not mnm[-1]      # came off part-way through
+
+
+def test_mistracking_is_logged_and_only_logged_files_deviate(small, corpus):
+    meta = json.loads((small / "corpus.json").read_text())["artifacts"]["JW45"]
+    subj = corpus.subject("JW45")
+    entries = read_mis(small / "JW45" / "Mis.dat")
+    assert len(entries) >= 10
+    listed = {e.task for e in entries}
+    assert listed == set(meta["logged_tasks"])
+    assert any(e.note for e in entries) and any(e.offset_ms == -1 for e in entries)
+    fig = SUBJECTS["JW45"]
+    checked = 0
+    for e in entries:
+        if e.xrmb_pellet is None:                              # MAX G: reference pellet
+            continue
+        rec = subj.load(e.task, require_valid=False)
+        _, clean = generate_task(fig, e.task, seed=0)
+        p = PELLETS.index(e.xrmb_pellet)
+        f0 = int(e.onset_ms / 6.866)
+        f1 = rec.n_frames if e.offset_ms == -1 else int(e.offset_ms / 6.866) + 1
+        seg_valid = rec.valid[f0:f1, p]
+        dev = np.abs(rec.xy_mm[f0:f1, p] - clean[f0:f1, p])
+        assert (~seg_valid).any() or np.nanmax(dev) > 0.3, e
+        checked += 1
+    assert checked >= 5
+    # an error-free file is exactly the clean tracks (to the micrometre) after the leading rows
+    for task in (13, 106, 118):
+        rec = subj.load(task)
+        _, clean = generate_task(fig, task, seed=0)
+        i = rec.first_valid_index
+        assert rec.valid[i:].all()
+        assert np.abs(rec.xy_mm[i:] - clean[i:]).max() <= 0.0005 + 1e-9
+
+
+def test_unlogged_lost_pellets_are_caught_by_usability(small, corpus):
+    meta = json.loads((small / "corpus.json").read_text())["artifacts"]["JW45"]
+    lost = meta["unlogged_lost"]
+    assert len(lost) == 2
+    subj = corpus.subject("JW45")
+    for task, rep, pellet, t_us in lost:
+        assert task not in subj.mistracked_tasks
+        rec = subj.load(task, rep)
+        p = PELLETS.index(pellet)
+        k = int(np.searchsorted(rec.time_us, t_us))
+        assert 0 < k < rec.n_frames and not rec.valid[k:, p].any() and rec.valid[k - 1, p]
+        use = subj.usability(task, rep)
+        assert use.usable and not use.error_free
+        assert any(pellet in r for r in use.reasons)
+
+
+# ----------------------------------------------------------------------------- alignments
+def test_alignments_time_the_gestures(annotations_dir, tmp_path):
+    from praatio import textgrid
+    out = make_corpus(tmp_path / "al", subjects=["JW45"], alignments=annotations_dir, workers=1)
+    meta = json.loads((out / "corpus.json").read_text())["artifacts"]["JW45"]
+    assert len(meta["aligned_tasks"]) >= 90
+    tg = textgrid.openTextgrid(str(annotations_dir / "JW45" / "tp013.TextGrid"),
+                               includeEmptyIntervals=False)
+    words = [e for e in tg.getTier("word").entries if e.label not in ("sp", "")]
+    rec = Corpus(out).load("JW45", 13)
+    assert rec.time_us[-1] / 1e6 == pytest.approx(tg.maxTimestamp, abs=0.01)
+    i = rec.first_valid_index
+    t = rec.time_us / 1e6
+    moved = np.linalg.norm(rec.xy_mm[:, :6] - rec.xy_mm[i, :6], axis=2).max(axis=1) > 1.5
+    onset = t[np.flatnonzero(moved & (t > t[i]))[0]]
+    assert words[0].start - 0.25 < onset < words[0].start + 0.15
+    # silence between the sVd words: the lips return close to rest
+    gap = [e for e in tg.getTier("word").entries if e.label == "sp" and e.end - e.start > 0.5
+           and e.start > words[0].start]
+    assert gap
+    mid = int(np.searchsorted(t, 0.5 * (gap[0].start + gap[0].end) + 0.15))
+    assert np.linalg.norm(rec.xy_mm[mid, :2] - rec.xy_mm[i, :2], axis=1).max() < 2.0
+
+
+def test_bad_arguments_are_input_errors(tmp_path):
+    with pytest.raises(CassiInputError, match="unknown subject"):
+        make_corpus(tmp_path / "x", subjects=["JW29"])
+    with pytest.raises(CassiInputError, match="seed"):
+        make_corpus(tmp_path / "x", subjects=["JW45"], seed=-1)
+    with pytest.raises(CassiInputError, match="alignments"):
+        make_corpus(tmp_path / "x", subjects=["JW45"], alignments=tmp_path / "none")
+
+
+def test_cli_make_writes_the_same_corpus(small, tmp_path):
+    exe = Path(sys.executable).with_name("cassi")
+    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "cassi.harness.cli"]
+    res = subprocess.run(cmd + ["corpus", "make", "--out", str(tmp_path / "cli"),
+                                "--subjects", "JW45", "--seed", "0"],
+                         capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert _digest(tmp_path / "cli" / "JW45") == _digest(small / "JW45")
+
+
+# ----------------------------------------------------------------------------- slow: full corpus
+@pytest.mark.slow
+def test_full_default_corpus_fast_cached_concurrent_and_calibrated(tmp_path, fixtures_dir):
+    env = dict(os.environ, CASSI_CACHE=str(tmp_path / "cache"))
+    code = ("import sys, time; from cassi.data.synth import default_corpus; "
+            "t = time.perf_counter(); p = default_corpus(); "
+            "print(p, time.perf_counter() - t)")
+    t0 = time.perf_counter()
+    procs = [subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.PIPE,
+                              text=True) for _ in range(3)]
+    outs = [p.communicate(timeout=600)[0].split() for p in procs]
+    wall = time.perf_counter() - t0
+    assert all(p.returncode == 0 for p in procs)
+    paths = {o[0] for o in outs}
+    assert len(paths) == 1
+    root = Path(paths.pop())
+    assert wall < 60.0                    # 30 s on 2 idle cores; shared CI machines are busier
+    leftovers = [p.name for p in (tmp_path / "cache").iterdir() if p.name.startswith(".corpus")
+                 and not p.name.endswith(".lock")]
+    assert leftovers == []
+    corpus = Corpus(root)
+    assert corpus.is_synthetic and len(corpus.subjects) == 15
+    _check_profiles(preprocess(corpus), fixtures_dir, list(SUBJECTS))
+    for name in SUBJECTS:
+        n_ok = len(corpus.subject(name).error_free_tasks())
+        assert n_ok >= (4 if name == "JW32" else 20), name
+    os.environ_backup = None
+    t1 = time.perf_counter()
+    old = os.environ.get("CASSI_CACHE")
+    os.environ["CASSI_CACHE"] = str(tmp_path / "cache")
+    try:
+        assert default_corpus() == root          # cached: no regeneration
+    finally:
+        if old is None:
+            del os.environ["CASSI_CACHE"]
+        else:
+            os.environ["CASSI_CACHE"] = old
+    assert time.perf_counter() - t1 < 1.0
