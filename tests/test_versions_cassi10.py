@@ -300,3 +300,27 @@ def test_lip_corners_take_half_of_each_lip(anim10):
     for n in K.LIP_CORNER_VERTICES:
         moved = anim10.vertex(n) - anim10.vertex(n)[0]
         np.testing.assert_allclose(moved, 0.5 * d67 + 0.5 * d49, atol=2e-3)
+
+
+def test_head_measures_equal_to_the_model_change_nothing(face, rec):
+    # Head measures placed exactly where the model's gnathion (17) and gonion (22) already are
+    # (mapped back to XRMB mm) give theta = 0: the chin and jaw keep Parke's placement.
+    from cassi.data.headmeasures import HeadMeasures
+    from cassi.data.profile import SubjectProfile
+    from dataclasses import replace
+
+    prof = toy_profile()
+    m = XrmbToParke.from_face(face.vertices, prof.jaw_length_mm)
+    hm = HeadMeasures(gnathion_mm=m.to_xrmb(face.vertices[16, [0, 2]]),
+                      gonion_mm=m.to_xrmb(face.vertices[21, [0, 2]]))
+    anim = Cassi10().animate(replace(prof, head_measures=hm), face, rec)
+    jaw = np.asarray(K.CASSI10_ZONES[0].vertices) - 1
+    np.testing.assert_allclose(anim.positions[0, jaw], face.vertices[jaw], atol=1e-3)
+    assert anim.diagnostics["init_jaw_angle_deg"].abs().max() < 1e-9
+    assert isinstance(prof, SubjectProfile)
+
+
+def test_init_angles_reported(anim10):
+    d = anim10.diagnostics
+    assert d["init_jaw_angle_deg"].nunique() == 1 and np.isfinite(d["init_jaw_angle_deg"]).all()
+    assert d["init_teeth_angle_deg"].nunique() == 1

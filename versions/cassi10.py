@@ -124,6 +124,13 @@ class JawStage:
         ctx.diagnostics["jaw_point_x"] = motion.point[:, 0]
         ctx.diagnostics["jaw_point_z"] = motion.point[:, 1]
         ctx.diagnostics["param_4"] = motion.degrees  # parameter 4 now follows the jaw pellets
+        # The initialisation's two rotations (constant per task), so a report can show how far
+        # the subject's teeth and jaw were turned from Parke's placement.
+        n = ctx.n_frames
+        ctx.diagnostics["init_teeth_angle_deg"] = np.full(n, np.degrees(ctx.state.get(
+            "init_teeth_theta", np.nan)))
+        ctx.diagnostics["init_jaw_angle_deg"] = np.full(n, np.degrees(ctx.state.get(
+            "init_jaw_theta", np.nan)))
 
 
 def _weights() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
