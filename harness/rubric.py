@@ -133,6 +133,8 @@ class Check:
     counted : bool
         False for what the thesis measured but did not count (tongue through the palate) and
         for image cross-checks of a geometric check; such rows always carry 0 negatives.
+    gate_tolerance : int
+        Extra negatives (summed over subjects) the metric gate of ``cassi gate`` allows.
     """
 
     name: str
@@ -151,6 +153,7 @@ class Check:
     func: Callable[[Any], Measurement] = field(repr=False, compare=False)
     tasks: tuple[int, ...] | None = None
     counted: bool = True
+    gate_tolerance: int = 0
 
     def __post_init__(self):
         if self.table not in TABLES:
@@ -245,6 +248,16 @@ class GeometryContext:
         return G.inner_lip_gap(self.pos, self.parts) * self.mm
 
     @functools.cached_property
+    def handled_overlap(self) -> np.ndarray:
+        """bool (F,): frames where the version reports it placed crossing lips itself (CASSI
+        2.0's rule, thesis 4.2.2: inner outlines at equal distances from the centerline);
+        diagnostics column ``lips_overlap``. All False when the version does not say."""
+        d = self.diagnostics
+        if d is None or "lips_overlap" not in d or len(d) != self.F:
+            return np.zeros(self.F, bool)
+        return d["lips_overlap"].fillna(False).to_numpy().astype(bool)
+
+    @functools.cached_property
     def max_protrusion(self) -> int:
         return G.max_protrusion_frame(self.pos, self.parts)
 
@@ -336,7 +349,15 @@ def m_lips_pressed(ctx):
 
 
 def m_lips_overlap(ctx):
-    return _m_sustained(-ctx.gap, detail="how far the lower lip's edge rises above the upper's")
+    cross = np.where(ctx.handled_overlap, np.minimum(-ctx.gap, 0.0), -ctx.gap)
+    return _m_sustained(cross, detail="how far the lower lip's edge rises above the upper's, in "
+                                      "frames where the version does not handle the overlap")
+
+
+def m_lips_too_large_moving(ctx):
+    cross = np.where(ctx.handled_overlap, -ctx.gap, 0.0)
+    n = int(np.sum(ctx.handled_overlap & (ctx.gap < 0)))
+    return _m_sustained(cross, detail=f"lip crossing the version handles ({n} frames)")
 
 
 def m_lips_centered_low(ctx):
@@ -400,7 +421,19 @@ def _jaw_ratio(ctx, i: int, what: str) -> Measurement:
     jaw = ctx.parts.jaw
     if ctx.neutral is None or len(jaw) < 3 or ctx.neutral.shape[0] <= jaw.max():
         return Measurement(float("nan"), -1, "no neutral face to compare with")
-    r = _jaw_shape(ctx.pos[0], jaw)[i] / _jaw_shape(ctx.neutral, jaw)[i]
+    # the version's initial jaw rotation is no shape change: align the jaw to the neutral one
+    # (rotation and translation in the side view, Kabsch) before measuring
+    a = ctx.pos[0][jaw][:, [0, 2]]
+    b = ctx.neutral[jaw][:, [0, 2]]
+    ac, bc = a - a.mean(0), b - b.mean(0)
+    u, _, vt = np.linalg.svd(ac.T @ bc)
+    d = np.sign(np.linalg.det(u @ vt))
+    rot = u @ np.diag([1.0, d]) @ vt
+    aligned = np.zeros((len(jaw), 3))
+    aligned[:, [0, 2]] = ac @ rot + b.mean(0)
+    full = ctx.neutral.copy()
+    full[jaw] = aligned
+    r = _jaw_shape(full, jaw)[i] / _jaw_shape(ctx.neutral, jaw)[i]
     return Measurement(float(r), 0, f"jaw {what} at initialization over Parke's neutral face",
                        frame_value=float(r))
 
@@ -426,8 +459,9 @@ def m_no_rounding(ctx):
 def m_lips_from_chin(ctx):
     p = ctx.parts
     f = ctx.max_protrusion
-    d = (ctx.pos[f, p.ll_outer, 0] - ctx.pos[f, p.chin, 0]) - (ctx.rest[p.ll_outer, 0] - ctx.rest[p.chin, 0])
-    return Measurement(float(d * ctx.mm), f, "x(49) - x(chin) at maximum protrusion, beyond rest",
+    d = (ctx.pos[f, p.ll_outer, 0] - ctx.pos[f, p.chin, 0]) - (ctx.pos[0, p.ll_outer, 0] - ctx.pos[0, p.chin, 0])
+    return Measurement(float(d * ctx.mm), f, "x(49) - x(chin) at maximum protrusion, beyond the "
+                                             "first frame",
                        frame_value=float(d * ctx.mm))
 
 
@@ -489,8 +523,8 @@ def m_upper_lip_sharp(ctx):
     f = ctx.max_protrusion
     a = G.profile_angle(ctx.pos[f:f + 1], p.above_lip[0], p.ul_outer, p.upper_inner[0])[0]
     a0 = G.profile_angle(ctx.rest[None], p.above_lip[0], p.ul_outer, p.upper_inner[0])[0]
-    return Measurement(float(a), f, f"profile angle 71-67-61 at maximum protrusion ({a0:.0f} deg "
-                                    "at rest)", frame_value=float(a))
+    return Measurement(float(a0 - a), f, f"profile angle 71-67-61 {a:.0f} deg at maximum "
+                                         f"protrusion, {a0:.0f} deg at rest", frame_value=float(a0 - a))
 
 
 def _derived_lip_points(p: G.MouthParts) -> np.ndarray:
@@ -681,6 +715,13 @@ _ALL: list[Check] = [
           "a quarter larger than Parke's reads as 'too large seen from the side'",
           "unusual jaw: too large seen from the side", "geometry", m_jaw_large),
     # ---------------- Table C (thesis 5.5) ----------------
+    Check("lips_too_large_moving", "C", "lips", "front", "mm", "all frames (sustained 3)",
+          "how far the lips' edges cross in frames where the version handles the overlap (inner "
+          "outlines placed symmetrically about the centerline)", (2.0,), (1,), "higher",
+          "handling the overlap is a strength (not counted); up to 2 mm it reads as lips pressed "
+          "together, beyond it the lips look too large (survey: CASSI 2.0 crosses by 12 mm on "
+          "synthetic JW11)", "lips appear too large when moving (overlapping)", "geometry",
+          m_lips_too_large_moving),
     Check("lower_lip_too_large", "C", "lips", "front", "fraction", "frames with the lips open",
           "fraction of open-lip front-view frames in which the lower teeth show", (0.25,), (1,),
           "lower", "'bottom teeth rarely seen' = in fewer than a quarter of the open frames",
@@ -692,8 +733,11 @@ _ALL: list[Check] = [
           "rounding draws the corners in; less than 5 % narrowing is no rounding (three negatives)",
           "no lip rounding", "geometry", m_no_rounding, tasks=(118,)),
     Check("lips_stick_out", "D", "lips", "side", "mm", "maximum protrusion",
-          "x(49) - x(chin) at maximum protrusion beyond its rest value", (10.0,), (1,), "higher",
-          "real maximum protrusion moves the lips 5-8 mm; beyond 10 mm past the chin is 'too much'",
+          "x(49) - x(chin) at maximum protrusion beyond its value at the first frame", (10.0,),
+          (1,), "higher",
+          "real maximum protrusion moves the lips 5-8 mm; beyond 10 mm past the chin is 'too much'. "
+          "Measured from the first frame, not Parke's rest face: the initial placement is the "
+          "data's (survey: against the rest face every CASSI version fired at 12.4 mm)",
           "lips stick out too much from the chin at maximum protrusion", "geometry",
           m_lips_from_chin, tasks=(118,)),
     Check("above_lip_cave_in", "D", "face", "side", "mm", "all frames (sustained 3)",
@@ -726,10 +770,11 @@ _ALL: list[Check] = [
           "the top lip protrudes more than the bottom at maximum protrusion", "geometry",
           m_upper_protrudes_more, tasks=(118,)),
     Check("upper_lip_sharp", "D", "lips", "side", "deg", "maximum protrusion",
-          "interior angle of the side profile 71-67-61 at the upper lip's edge at maximum "
-          "protrusion", (110.0, ), (1,), "lower",
-          "a lip edge turning by more than 70 deg (interior angle under 110 deg) reads as a point "
-          "rather than a rounded lip",
+          "how much sharper the side-profile angle 71-67-61 at the upper lip's edge is at maximum "
+          "protrusion than on the rest face", (40.0,), (1,), "higher",
+          "relative to the rest face because Parke's own profile turns sharply there (108 deg on "
+          "the generated face; an absolute 110 deg limit fired on every version, survey); 40 deg "
+          "sharper reads as a point",
           "the upper lip has a sharp profile", "geometry", m_upper_lip_sharp, tasks=(118,)),
     Check("lip_jitter", "D", "lips", "front", "mm", "all frames (sustained 3)",
           "frame-to-frame acceleration of the computed lip vertices beyond the jaw's and the lip "

@@ -121,6 +121,13 @@ def p_lips_cross(a, d):
     return a
 
 
+def p_handled_cross(a, d):
+    a = p_lips_cross(a, d)
+    a.diagnostics["lips_overlap"] = False
+    a.diagnostics.loc[95:105, "lips_overlap"] = True
+    return a
+
+
 def p_tongue_lower(a, d):
     # tongue tip through the back surface (x=-3) of the lower front teeth by d
     lt = M.rest[P.lower_incisor_tip]
@@ -285,6 +292,7 @@ CASES = {
     "lips_through_teeth": (5, p_lip_through_teeth, [0.2, 1.5], [0, 1]),
     "lower_lip_protrudes": (5, p_lower_protrudes, [1.0, 2.5, 5.0], [0, 1, 2]),
     "lips_overlap": (5, p_lips_cross, [0.4, 1.5], [0, 1]),
+    "lips_too_large_moving": (5, p_handled_cross, [1.5, 3.0], [0, 1]),
     "tongue_through_teeth": (5, p_tongue_lower, [0.2, 2.0], [0, 1]),
     "palate_below_incisor": (5, p_palate_low, [-1.0, 1.0, 3.0], [0, 1, 2]),
     "jaw_long": (5, p_jaw_long, [0.05, 0.3], [0, 1]),
@@ -292,12 +300,12 @@ CASES = {
     "jaw_square": (5, p_jaw_square, [0.02, 0.9], [0, 1]),
     "no_lip_rounding": (118, p_no_rounding, [0.5, 1.0], [0, 3]),
     "lips_stick_out": (118, p_stick_out, [2.0, 8.0], [0, 1]),
-    "above_lip_cave_in": (118, p_above_cave, [0.5, 2.5], [0, 1]),
+    "above_lip_cave_in": (118, p_above_cave, [0.5, 4.5], [0, 1]),
     "lips_into_nose": (118, p_into_nose, [0.3, 0.6, 0.9], [0, 1, 2]),
     "lips_too_big": (118, p_too_big, [0.5, 1.5], [0, 1]),
     "lower_lip_protrudes_start": (118, p_lower_protrudes_start, [1.0, 3.0], [0, 1]),
     "upper_protrudes_more": (118, p_upper_more, [2.0, 6.0], [0, 1]),
-    "upper_lip_sharp": (118, p_sharp, [1.0, 8.0], [0, 1]),
+    "upper_lip_sharp": (118, p_sharp, [1.0, 12.0], [0, 1]),
     "lip_jitter": (118, p_jitter, [0.05, 1.0], [0, 1]),
     "lip_shape_triangular": (106, p_diamond, [0.2, 1.0], [0, 1]),
     "lower_lip_through_teeth": (106, p_lower_lip_through_lower, [-1.0, 2.0], [0, 1]),
@@ -352,6 +360,29 @@ def test_tongue_through_both_front_teeth_grades_two_then_three():
     r = run(a, 5, checks=["tongue_through_teeth"]).loc["tongue_through_teeth"]
     assert r["negatives"] == 3, r["detail"]
     assert r["value"] == pytest.approx(3.0, abs=0.1)
+
+
+def test_crossing_the_version_handles_is_not_the_table_a_overlap():
+    a = p_handled_cross(S.copy(BASE[5]), 3.0)
+    res = run(a, 5, checks=["lips_overlap", "lips_too_large_moving"])
+    assert res.loc["lips_overlap", "negatives"] == 0
+    assert res.loc["lips_too_large_moving", "negatives"] == 1
+    a.diagnostics["lips_overlap"] = False
+    res = run(a, 5, checks=["lips_overlap", "lips_too_large_moving"])
+    assert res.loc["lips_overlap", "negatives"] == 1
+    assert res.loc["lips_too_large_moving", "negatives"] == 0
+
+
+def test_initial_jaw_rotation_is_not_an_unusual_jaw():
+    a = S.copy(BASE[5])
+    j = P.jaw
+    c = a.positions[:, j].mean(axis=1, keepdims=True)
+    t = np.radians(12)
+    d = a.positions[:, j] - c
+    a.positions[:, j, 0] = c[..., 0] + d[..., 0] * np.cos(t) - d[..., 2] * np.sin(t)
+    a.positions[:, j, 2] = c[..., 2] + d[..., 0] * np.sin(t) + d[..., 2] * np.cos(t)
+    res = run(a, 5, checks=["jaw_long", "jaw_square", "jaw_large"])
+    assert np.allclose(res["value"], 1.0, atol=0.02), res["value"]
 
 
 def test_tongue_two_mm_through_incisors_measures_two_mm():
