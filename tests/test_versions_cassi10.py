@@ -38,10 +38,6 @@ def anim10(face, rec) -> Animation:
     return Cassi10().animate(toy_profile(), face, rec)
 
 
-def parke_xz(mapping, xy_mm):
-    return mapping.to_parke(xy_mm)
-
-
 # --- mapping (4.1.1) ------------------------------------------------------------------------
 def test_mapping_hand_case():
     # 258 at (x, z) = (10, -20); 281 at (-28, -12) and 286 at (-32, -8): MANm site (-30, -10).
