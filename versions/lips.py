@@ -33,7 +33,6 @@ from cassi.data.errors import CassiInputError
 
 from . import lips_constants as K
 from .lips_ellipse import (
-    BRANCH_LABELS,
     OuterAbcParams,
     OuterAbcState,
     c_prime,
