@@ -320,3 +320,26 @@ def test_init_angles_reported(anim10):
     d = anim10.diagnostics
     assert d["init_jaw_angle_deg"].nunique() == 1 and np.isfinite(d["init_jaw_angle_deg"]).all()
     assert d["init_teeth_angle_deg"].nunique() == 1
+
+
+@settings(max_examples=30, deadline=None)
+@given(dx=st.floats(-4, 4), dy=st.floats(-6, 6), tilt=st.floats(-0.25, 0.25),
+       d=st.floats(30, 40))
+def test_mni_site_on_mni_pellet_any_first_row(dx, dy, tilt, d):
+    # Whatever the first valid row's jaw pellets (moved, tilted, any jaw length), the
+    # initialised vertex 258 sits on the mapped MANi pellet (Eqs. 4.6-4.7 anchored on MANi).
+    face = ToyFace(toy_vertices())
+    rec = toy_recording(n=8, invalid_head=1)
+    mni = JW45_ROW[MNI] + [dx, dy]
+    rec.xy_mm[1:, MNI] = mni
+    rec.xy_mm[1:, MNM] = mni + d * np.array([-math.cos(tilt), -math.sin(tilt)])
+    anim = Cassi10().animate(toy_profile(jaw_length_mm=d), face, rec)
+    m = XrmbToParke.from_face(face.vertices, d)
+    np.testing.assert_allclose(anim.vertex(K.V_MANI)[0, [0, 2]], m.to_parke(mni), atol=2e-3)
+
+
+def test_bad_inputs_are_input_errors(rec):
+    with pytest.raises(CassiInputError, match="vertices"):
+        Cassi10().animate(toy_profile(), ToyFace(toy_vertices()[:250]), rec)
+    with pytest.raises(CassiInputError, match="jaw length"):
+        Cassi10().animate(toy_profile(jaw_length_mm=0.0), ToyFace(toy_vertices()), rec)

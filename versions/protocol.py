@@ -220,6 +220,16 @@ class StagedVersion:
         """Find the first valid row, hold missing pellets, map to Parke space (4.1.1)."""
         from cassi.versions.mapping import XrmbToParke
 
+        xy_mm = np.asarray(rec.xy_mm)
+        if xy_mm.ndim != 3 or xy_mm.shape[1:] != (8, 2):
+            raise CassiInputError(f"pellets must be (F, 8, 2) mm, got {xy_mm.shape}",
+                                  path=getattr(rec, "path", None))
+        from cassi.data import numbering
+
+        n_vertices = np.shape(face.vertices)[0]
+        if n_vertices < numbering.CORNER_MIDDLE:
+            raise CassiInputError(f"the face has {n_vertices} vertices; CASSI needs Parke's 287, "
+                                  f"the tongue and vertex {numbering.CORNER_MIDDLE}")
         first = rec.first_valid_index
         if first is None:
             raise CassiInputError("no row with all eight pellets valid: nothing to animate",
