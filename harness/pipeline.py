@@ -29,7 +29,7 @@ MAX_EXTREMES = 8
 _lock = threading.Lock()
 _corpora: dict[str, object] = {}
 _profiles: dict[tuple[str, str], object] = {}
-_faces: dict[tuple[str, str], object] = {}
+_faces: dict = {}
 _renderers: dict[tuple, object] = {}
 
 
@@ -69,6 +69,15 @@ def get_face(corpus, subject: str, profile):
         _faces[key] = build_face(palate_mm=getattr(profile, "palate_mm", None),
                                  head_measures=getattr(profile, "head_measures", None))
     return _faces[key]
+
+
+def get_neutral():
+    """Vertices of the neutral face (no subject palate): the rubric's Table B reference."""
+    from cassi.data.face import build_face  # noqa: PLC0415
+
+    if "neutral" not in _faces:
+        _faces["neutral"] = np.asarray(build_face().vertices)
+    return _faces["neutral"]
 
 
 def get_renderer(corpus, subject: str, face, view: str, preset: str, variant: str | None):
@@ -149,7 +158,7 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
     face = get_face(corpus, job.subject, profile)
     anim = get_version(job.version).animate(profile, face, rec)
     rows = rubric.run_geometry_checks(anim, face, profile, task=job.task, subject=job.subject,
-                                      rep=job.rep)
+                                      rep=job.rep, neutral=get_neutral())
     rows = pd.DataFrame(rows)
     frames = np.asarray(anim.frames, dtype=np.int64)
     if frames.size == 0:
