@@ -20,7 +20,11 @@ __all__ = ["srgb_encode", "srgb_decode", "to_srgb8", "write_exr", "write_png", "
 
 #: Metadata keys are written as ``cassi:<key>`` attributes (EXR header / PNG text chunks).
 METADATA_PREFIX = "cassi:"
-PNG_COMPRESSION = 3  # zlib level: small files, a few ms per 512^2 image
+PNG_COMPRESSION = 3
+# mkstemp creates 0600 files; give written images the usual umask-based mode instead.
+_UMASK = os.umask(0o022)
+os.umask(_UMASK)
+FILE_MODE = 0o666 & ~_UMASK  # zlib level: small files, a few ms per 512^2 image
 
 
 def srgb_encode(linear: np.ndarray) -> np.ndarray:
@@ -62,6 +66,7 @@ def _write(path: Path, pixels: np.ndarray, spec, *, fmt) -> None:
         out.close()
         if not ok:
             raise OSError(f"cannot write {path}: {out.geterror()}")
+        os.chmod(tmp, FILE_MODE)
         os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)

@@ -106,9 +106,9 @@ class Preset:
 
 
 # Where the neutral face sits (Parke units): used only to place the fixed cameras.
-_FACE_CENTER = (90.0, 0.0, -120.0)
+_FACE_CENTER = (40.0, 0.0, -50.0)
 _MOUTH = (300.0, 0.0, -290.0)
-_PALATE = (250.0, 0.0, -230.0)
+_PALATE = (240.0, 0.0, -230.0)
 
 
 def _camera(target: Vec3, direction: Vec3, up: Vec3, frame: float, fov: float = 22.0,
@@ -128,9 +128,9 @@ _STUDIO = (
 )
 
 VIEWS: dict[str, View] = {
-    "front": View("front", _camera(_FACE_CENTER, (1, 0, 0), (0, 0, 1), frame=1350.0),
+    "front": View("front", _camera(_FACE_CENTER, (1, 0, 0), (0, 0, 1), frame=1230.0),
                   lights=_STUDIO, description="full face from the starting orientation"),
-    "side": View("side", _camera(_FACE_CENTER, (0, -1, 0), (0, 0, 1), frame=1350.0),
+    "side": View("side", _camera(_FACE_CENTER, (0, -1, 0), (0, 0, 1), frame=1230.0),
                  lights=_STUDIO, description="full head from its right side, face to image right"),
     "half": View("half", _camera(_MOUTH, (0, -1, 0), (0, 0, 1), frame=700.0), half=True,
                  lights=_STUDIO, ambient=0.30,

@@ -41,7 +41,8 @@ def test_scene_loaded_once_and_vertices_move(front, head):
     # the head's image moves down (rows grow downward)
     assert rows(b.mask)[0] > rows(a.mask)[0] + 3
     # back to the start: identical image (fixed seed, same scene)
-    assert np.array_equal(a.rgb, c.rgb) and np.array_equal(a.mask, c.mask)
+    np.testing.assert_allclose(a.rgb, c.rgb, rtol=1e-4, atol=1e-5)  # film splats: float order
+    assert np.array_equal(a.mask, c.mask)
 
 
 def test_render_result_fields(front, head):
