@@ -219,3 +219,18 @@ def test_real_face_runs_all_lip_versions(real_face, profile):
     for v in (Cassi20(), Cassi21()):
         anim = v.animate(profile, real_face, rec)
         assert np.isfinite(anim.positions).all()
+
+
+def test_real_face_no_jump_at_the_ellipse_switch(real_face, profile):
+    """Thesis 4.2.5 / Table 5.9: on a wide jaw-wagging task (task 106) the lips switch between
+    horizontal and vertical ellipses without a frame jump larger than the data's own (the
+    largest per-row step of the lip pellets' vertices 67 and 49)."""
+    anim = Cassi20().animate(profile, real_face, toy_recording(1200, wag_deg=20.0))
+    kind = anim.diagnostics["ellipse"].to_numpy()
+    switches = np.nonzero(kind[1:] != kind[:-1])[0]
+    assert len(switches) >= 4
+    lips = np.asarray(LIP_VERTICES) - 1
+    step = np.linalg.norm(np.diff(anim.positions[:, lips], axis=0), axis=-1).max(axis=1)
+    data = max(np.linalg.norm(np.diff(anim.vertex(v), axis=0), axis=1).max() for v in (67, 49))
+    assert step[switches].max() <= data
+    assert step.max() <= 1.05 * data

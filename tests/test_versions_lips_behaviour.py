@@ -20,6 +20,7 @@ from cassi.versions.lips import (
     LipSubject,
     LowLipsThicknessPolicy,
     EqualThicknessPolicy,
+    corner_stretch,
     lip_frames,
 )
 from cassi.versions.lips_thickness import EQUAL_THICKNESS, LOW_LIPS_THICKNESS
@@ -144,8 +145,13 @@ def test_vertex_70_at_a_when_round_and_farther_as_c_grows():
     lips = lip_frames(ul, ll, REST, SUBJECT)
     a, c = lips.diagnostics["a"], lips.diagnostics["c"]
     beyond = lips.vertex(70)[:, 1] - a
-    np.testing.assert_allclose(beyond, K.CORNER_STRETCH * c)
-    assert c.min() < 1.0 and beyond[c.argmin()] == pytest.approx(K.CORNER_STRETCH * c.min())
+    assert (lips.diagnostics["ellipse"] == "horizontal").all()
+    # 8 (c / 65)^2: 8 units at rest, 0 at c = 0.
+    np.testing.assert_allclose(beyond, K.CORNER_STRETCH_AT_REST * (c / 65.0) ** 2, atol=1e-9)
+    assert c.min() < 1.0 and beyond[c.argmin()] < 2e-3
+    assert corner_stretch(65.0, False) == pytest.approx(8.0)
+    assert corner_stretch(85.0, False) == pytest.approx(8.0 * (85 / 65) ** 2)
+    assert corner_stretch(40.0, True) == 0.0
     order = np.argsort(c)
     assert np.all(np.diff(beyond[order]) >= -1e-12)
     # The corner sits on the centre line of the outer ellipse (z = k).

@@ -67,6 +67,7 @@ __all__ = [
     "ThicknessPolicy",
     "EqualThicknessPolicy",
     "LowLipsThicknessPolicy",
+    "corner_stretch",
     "lip_frames",
     "lip_subject",
 ]
@@ -271,7 +272,7 @@ def lip_frames(
     track = outer_abc_sequence(height, cp, params=params, state=state)
     # Step 7: limits.
     a, c = limit_abc(track.a, track.c)
-    vertical = is_vertical(a, height)
+    vertical = is_vertical(track.a, height)  # OUTER_ABC_CALC's orientation (see limit_abc)
     # Step 8: currthick; steps 9-10: the centre line's z.
     currthick = current_thickness(subject.thick, cp)
     upper_thick, lower_thick = rule.split(currthick)
@@ -295,7 +296,7 @@ def lip_frames(
         y = frac * a
         put(vu, track_x(y, x67), y, ellipse_z(y, a, b_signed, k, upper=True))
         put(vl, track_x(y, x49), y, ellipse_z(y, a, b_signed, k, upper=False))
-    y70 = a + np.where(vertical, 0.0, K.CORNER_STRETCH * c)
+    y70 = a + corner_stretch(c, vertical)
     x70 = track_x(y70, 0.5 * (x67 + x49)) + rest.corner_dx
     put(V_CORNER, x70, y70, k)
 
@@ -357,6 +358,13 @@ def lip_frames(
     if blend_inner_corner:
         diagnostics["blend_t"] = rounding_t(cp)
     return LipFrames(vertices=LIP_VERTICES, xyz=xyz, diagnostics=diagnostics)
+
+
+def corner_stretch(c, vertical) -> np.ndarray:
+    """How far beyond a vertex 70 sits (section 4.2.1): 0 at c = 0 or for a vertical ellipse,
+    growing with c for a horizontal one (``CORNER_STRETCH_AT_REST * (c / c_rest)^2``)."""
+    c = np.asarray(c, dtype=np.float64)
+    return np.where(vertical, 0.0, K.CORNER_STRETCH_AT_REST * (c / K.C_REST) ** 2)
 
 
 # --- thickness policies: what differs between 2.0 and 2.1 -----------------------------------

@@ -95,13 +95,16 @@ A_MAX: float = 110.0
 C_LIMIT: float = C_MAX
 
 #: Vertex 70 "is placed at a when c = 0; otherwise ... increasingly far from a as c becomes
-#: larger" (section 4.2.1): y70 = a + CORNER_STRETCH * c for a horizontal ellipse.
-#: Reason: 0.15 moves the corner 9.75 units beyond a at rest (c = 65) and 12.75 when fully
-#: stretched: a visible sharpening (a tenth of the half-width) without a beak. For a vertical
-#: ellipse c measures height, not stretch, so the corner stays at a (a stretched corner on a
-#: wide open mouth is the "diamond-shaped lips" fault of thesis Table 5.9); both rules meet
-#: at c = 0, the switch, so the corner does not jump there.
-CORNER_STRETCH: float = 0.15
+#: larger" (section 4.2.1): y70 = a + CORNER_STRETCH_AT_REST * (c / c_rest)^2 for a horizontal
+#: ellipse. Reason: 8 units (2 mm at the face model's 0.25 mm a unit) beyond a at rest (c = 65),
+#: 13.7 when fully stretched (c = 85): a visible sharpening, about a tenth of the half-width,
+#: without a beak. Quadratic, not linear, in c because c = sqrt(a^2 - b^2) changes infinitely
+#: fast as the ellipse nears the switch (b -> a) while c^2 changes smoothly: with a linear rule
+#: the corner jumped up to 1.7 times the pellets' largest step per row at the switch on a
+#: jaw-wagging task. For a vertical ellipse c measures height, not stretch, so the corner stays
+#: at a (a stretched corner on a wide open mouth is the "diamond-shaped lips" fault of thesis
+#: Table 5.9); both rules give a at c = 0, the switch, so the corner does not jump there.
+CORNER_STRETCH_AT_REST: float = 8.0
 
 #: Middle outline (section 4.2.1): the lower-lip pairs 55/52, 56/53, 57/54 sit at equal
 #: distance either side of the ellipse, the distance shrinking toward the corner, 57/54

@@ -278,8 +278,17 @@ def limit_abc(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Step 7 of LIP MOVEMENT: limits on the outer a and c (Parke units).
 
+    ``a`` is clipped to [a_min, a_max] (the drawn width) and ``c`` to [0, c_limit] (how far the
+    corner is stretched). The orientation stays OUTER_ABC_CALC's own (height against its
+    unlimited width): c passes through 0 at that switch, so the corner does not jump there,
+    whereas judging it against the clipped width would switch it wherever a limit binds.
+
     The limits act on what is drawn; OUTER_ABC_CALC's state keeps its own values (its step 4
     runs before step 7 of LIP MOVEMENT).
+
+    Returns
+    -------
+    (a, c) : arrays (F,)
     """
     return (
         np.clip(np.asarray(a, dtype=np.float64), a_min, a_max),
