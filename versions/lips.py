@@ -287,6 +287,7 @@ def lip_frames(
     X = np.empty((n, len(LIP_VERTICES)))
     Y = np.empty_like(X)
     Z = np.empty_like(X)
+
     def put(v, x, y, z):
         j = _COL[v]
         X[:, j], Y[:, j], Z[:, j] = x, y, z
@@ -306,7 +307,7 @@ def lip_frames(
     x287 = track_x(y287, 0.5 * (xc[61] + xc[58])) + rest.inner_corner_dx
 
     # Inner outline: 61/58 at 0, 62/59 at a/3, 63/60 at 2a/3 (MID_INNER_ABC_CALC with 287).
-    a_in, b_in, _c_in = mid_inner_abc(zc[61], zc[58], y287)
+    a_in, b_in, c_in = mid_inner_abc(zc[61], zc[58], y287)
     a_in = np.maximum(a_in, 1e-9)
     k_in = 0.5 * (zc[61] + zc[58])
     overlap = zc[58] > zc[61]  # the lips cross at the centre line: 4.16 is not used
@@ -325,7 +326,7 @@ def lip_frames(
 
     # Middle outline: upper 64, 65, 66; lower pairs either side of the ellipse, gap tapering.
     z_low_mid = 0.5 * (zc[52] + zc[55])
-    a_mid, b_mid, _c_mid = mid_inner_abc(zc[64], z_low_mid, Y[:, _COL[V_MID_CORNER]])
+    a_mid, b_mid, c_mid = mid_inner_abc(zc[64], z_low_mid, Y[:, _COL[V_MID_CORNER]])
     a_mid = np.maximum(a_mid, 1e-9)
     k_mid = 0.5 * (zc[64] + z_low_mid)
     half_gap = 0.5 * (zc[55] - zc[52])
@@ -352,7 +353,11 @@ def lip_frames(
         "currthick_upper": upper_thick,
         "currthick_lower": lower_thick,
         "a_middle": a_mid,
+        "b_middle": b_mid,
+        "c_middle": c_mid,
         "a_inner": a_in,
+        "b_inner": b_in,
+        "c_inner": c_in,
         "lips_overlap": overlap,
     }
     if blend_inner_corner:

@@ -62,8 +62,8 @@ OUTLINE_FRACTIONS: tuple[float, float, float] = (0.0, 1.0 / 3.0, 2.0 / 3.0)
 #: Reason: when OUTER_ABC_CALC leaves branch 3(a)/3(b) for 3(c) (c' leaves the band near
 #: c_rest) or leaves a vertical ellipse, prev_c is Eq. 4.14's c, which can lie far from c'; the
 #: width then jumps by about rho times that gap in one row. On a jaw-wagging trajectory (see
-#: tests/test_versions_lips_behaviour.py) rho = 0.3 gave corner jumps of 2.4 times the pellets'
-#: largest step per row, rho = 0.15 1.2 times, rho = 0.1 no more than the data's own step
+#: tests/test_versions_lips_behaviour.py) the largest lip-vertex step per row was 2.7 times the
+#: pellets' largest step with rho = 0.3, 1.8 with 0.2, 1.3 with 0.15 and 1.0 with 0.1
 #: (section 4.2.5: "smooth motion, without sudden changes" at the ellipse transitions). The
 #: price is lag: a time constant of about 9.5 rows (~65 ms at 6.9 ms a row), about two of the
 #: frames the thesis displayed (every 5th row), short against a rounding gesture.
