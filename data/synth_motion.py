@@ -36,7 +36,7 @@ from cassi.data.synth_subjects import SubjectFigures, palate_y
 CHANNELS = ("jaw", "ulp", "ull", "llp", "llr", "tipx", "tipy", "bodx", "body")
 _IDX = {c: i for i, c in enumerate(CHANNELS)}
 #: Natural frequency (rad/s) of each channel's critically damped dynamics.
-OMEGA = np.array([26.0, 34.0, 34.0, 36.0, 40.0, 46.0, 46.0, 32.0, 32.0])
+OMEGA = np.array([26.0, 34.0, 34.0, 36.0, 40.0, 42.0, 42.0, 28.0, 28.0])
 PERIOD_S = 6866e-6
 #: Jaw slide forward (mm) per degree of opening, along the articular eminence.
 JAW_SLIDE_MM_PER_DEG = 0.12
