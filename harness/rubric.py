@@ -64,6 +64,11 @@ MIN_FRAMES = 3
 #: Lips are "open" for the image measures when the mouth opening covers at least this many pixels
 #: in the front view (a sliver between touching lips is not an opening to judge centering in).
 OPEN_MIN_PIXELS = 30
+#: The tongue "shows" when a connected patch of at least this many pixels of it lies inside the
+#: lip opening. Tuned on renders: at the preview front view (1.3 mm per pixel) the tongue shows
+#: through the 1-pixel gaps between the teeth as vertical slivers of 1-4 pixels, which the eye
+#: does not read as the tongue; 6 px (~10 mm^2) is a visible patch.
+TONGUE_MIN_PIXELS = 6
 
 
 def rate(negatives: int) -> str:

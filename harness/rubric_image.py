@@ -22,7 +22,7 @@ import numpy as np
 from scipy import ndimage
 from skimage import measure
 
-from .rubric import OPEN_MIN_PIXELS, Measurement
+from .rubric import OPEN_MIN_PIXELS, TONGUE_MIN_PIXELS, Measurement
 
 __all__ = ["FrameMasks", "ImageContext", "mouth_opening", "teeth_split", "opening_extent",
            "m_centered_high", "m_centering_offset", "m_tongue_visible", "m_tongue_in_front",
@@ -58,7 +58,7 @@ class FrameMasks:
         lower = parts(lambda n: ("teeth" in n or "tooth" in n) and "lower" in n)
         split = not (upper.any() or lower.any())
         if split:
-            upper, lower = teeth_split(teeth, mouth_opening(lips))
+            upper, lower = teeth_split(teeth, mouth_opening(lips), depth)
         tongue = parts(lambda n: n.startswith("tongue"))
         return cls(int(frame), lips, upper, lower, teeth, tongue, depth, split)
 
@@ -71,14 +71,16 @@ def mouth_opening(lips: np.ndarray) -> np.ndarray:
     return ndimage.binary_fill_holes(lips) & ~lips
 
 
-def teeth_split(teeth: np.ndarray, opening: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def teeth_split(teeth: np.ndarray, opening: np.ndarray,
+                depth: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Split one teeth mask into upper and lower teeth inside the lip opening.
 
     Each connected region of teeth inside the opening hangs from its top (upper teeth) or stands
     on its bottom (lower teeth): a region lying wholly above the opening's middle row is upper,
-    wholly below it lower. A region across the middle (the teeth touching) is cut at its
-    narrowest row, the incisal line, the middle one among ties. Without an opening, the rows
-    above the teeth's middle are upper.
+    wholly below it lower. A region across the middle (the teeth touching) is cut at the
+    incisal line: where the depth steps from the upper incisors to the lower ones behind them
+    (:func:`_depth_cut`), else at its narrowest row. Without an opening, the rows above the
+    teeth's middle are upper.
     """
     teeth = np.asarray(teeth, bool)
     opening = np.asarray(opening, bool)
@@ -99,12 +101,38 @@ def teeth_split(teeth: np.ndarray, opening: np.ndarray) -> tuple[np.ndarray, np.
         elif rows[0] >= mid:
             lower |= comp
         else:
-            counts = comp[rows[0]:rows[-1] + 1].sum(axis=1)
-            ties = np.flatnonzero(counts == counts.min())
-            cut = rows[0] + int(ties[len(ties) // 2])
+            cut = _depth_cut(comp, depth) if depth is not None else None
+            if cut is None:
+                counts = comp[rows[0]:rows[-1] + 1].sum(axis=1)
+                ties = np.flatnonzero(counts == counts.min())
+                cut = rows[0] + int(ties[len(ties) // 2])
             upper |= comp & (r < cut)
             lower |= comp & (r >= cut)
     return upper, lower
+
+
+def _depth_cut(comp: np.ndarray, depth: np.ndarray) -> int | None:
+    """The incisal line of touching teeth: the row of the largest depth step down each central
+    column of the region (the upper incisors stand in front of the lower ones, so the depth
+    jumps where one set gives way to the other), median over the columns; None if no column
+    shows a clear step (more than three times the column's typical step)."""
+    cols = np.flatnonzero(comp.any(axis=0))
+    q = len(cols) // 4
+    central = cols[q:len(cols) - q] if len(cols) - 2 * q >= 1 else cols
+    cuts = []
+    for c in central:
+        rr = np.flatnonzero(comp[:, c])
+        if rr.size < 4:
+            continue
+        d = depth[rr, c]
+        if not np.all(np.isfinite(d)):
+            continue
+        steps = np.abs(np.diff(d))
+        k = int(np.argmax(steps))
+        typical = float(np.median(steps))
+        if steps[k] > 3.0 * typical and steps[k] > 1e-6:
+            cuts.append(int(rr[k + 1]))
+    return int(np.median(cuts)) if cuts else None
 
 
 def opening_extent(opening: np.ndarray) -> tuple[float, float]:
@@ -175,15 +203,23 @@ def m_centering_offset(ctx: ImageContext) -> Measurement:
 
 
 def m_tongue_visible(ctx: ImageContext) -> Measurement:
-    """Fraction of open frames in which any tongue pixel shows."""
+    """Fraction of open frames in which the tongue shows inside the lip opening (a connected
+    patch of at least TONGUE_MIN_PIXELS: slivers seen through the gaps between teeth are not
+    'the tongue showing')."""
     of = ctx.open_frames()
     if not of:
         return _none("no frame with the lips open")
-    seen = np.asarray([int(f.tongue.sum()) > 0 for f, _ in of])
+    seen = np.asarray([_largest(f.tongue & o) >= TONGUE_MIN_PIXELS for f, o in of])
     i = int(np.argmin(seen))
     return Measurement(float(seen.mean()), of[i][0].frame,
                        f"tongue seen in {int(seen.sum())} of {seen.size} open frames",
                        frame_value=float(seen[i]))
+
+
+def _largest(mask: np.ndarray) -> int:
+    """Pixels in the largest connected region of a mask (0 if empty)."""
+    lab = measure.label(mask, connectivity=1)
+    return int(np.bincount(lab.ravel())[1:].max()) if lab.max() else 0
 
 
 def m_lower_teeth_seen(ctx: ImageContext) -> Measurement:

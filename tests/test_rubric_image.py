@@ -148,3 +148,20 @@ def test_no_open_frame_gives_nan_not_a_negative():
     res = run([frame(open_h=0.0)] * 3)
     assert res["value"].isna().all() or (res["negatives"] == 0).all()
     assert (res["negatives"] == 0).all()
+
+
+def test_touching_teeth_are_split_at_the_depth_step():
+    # one teeth region across the opening's middle: upper incisors (nearer, depth 100) down to
+    # 5 rows below the middle, lower ones (depth 103, behind them) below that
+    f = frame(open_h=16, upper=0, lower=0, tongue=False)
+    yy, xx = np.mgrid[0:H, 0:W]
+    inner = ((xx - 80.0) / 40) ** 2 + ((yy - 60.0) / 16) ** 2 <= 1.0
+    block = inner & (np.abs(xx - 80) < 30)
+    f.mask[block] = TEETH
+    f.depth[block & (yy < 65)] = 100.0
+    f.depth[block & (yy >= 65)] = 103.0
+    fm = I.FrameMasks.of(0, f)
+    assert fm.split
+    up_rows = np.flatnonzero(fm.upper_teeth.any(axis=1))
+    lo_rows = np.flatnonzero(fm.lower_teeth.any(axis=1))
+    assert up_rows.max() == 64 and lo_rows.min() == 65
