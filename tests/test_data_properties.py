@@ -2,6 +2,8 @@
 never another exception or a hang; well-formed data survives write -> read."""
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -17,7 +19,7 @@ from cassi.data.profile import (MaxProtru, format_lipthick, format_maxprotru, pa
                                 parse_maxprotru)
 from cassi.data.xrmb import PELLETS, TaskRecording, format_outline, format_txy, parse_outline, parse_txy
 
-FAST = settings(max_examples=150, deadline=2000, suppress_health_check=[HealthCheck.too_slow])
+FAST = settings(max_examples=int(os.environ.get("CASSI_FUZZ_EXAMPLES", 150)), deadline=2000, suppress_health_check=[HealthCheck.too_slow])
 
 # Bytes biased toward the formats' own alphabet, so the fuzzing reaches deep into the parsers.
 _ALPHABET = b"0123456789 \t\r\n-+.1000000 eE_xTBMANLUjk;#\"=[]<>ooTextFile item intervals"

@@ -81,6 +81,8 @@ def test_bad_task_names(name):
     (ROW + "\n6866 1 2\n", 2, "expected 17 columns, found 3"),
     ("0 " + " ".join(["1"] * 15) + " x1\n", 1, "column 17 (MNMy): 'x1' is not a number"),
     ("0 " + " ".join(["1"] * 15) + " 1_000\n", 1, "is not a number"),
+    ("0 " + " ".join(["1"] * 15) + " " + "9" * 30 + "\n", 1, "column 17 (MNMy): '999"),
+    ("0 " + " ".join(["1"] * 15) + " " + "9" * 13 + "\n", 1, "has too many digits"),
     ("0.5 " + " ".join(["1"] * 16) + "\n", 1, "column 1 (time)"),
     ("-5 " + " ".join(["1"] * 16) + "\n", 1, "must be a non-negative integer"),
     (ROW + "\n" + ROW + "\n", 2, "time not increasing: 6866 us after 6866 us"),
