@@ -19,6 +19,7 @@ Layout::
 from __future__ import annotations
 
 import json
+import multiprocessing
 import os
 import shutil
 import tempfile
@@ -380,7 +381,9 @@ def make_corpus(out_dir: str | os.PathLike, *, subjects=None, seed: int = DEFAUL
     out.mkdir(parents=True, exist_ok=True)
     n_workers = workers if workers is not None else min(len(names), os.cpu_count() or 1)
     if n_workers > 1 and len(names) > 1:
-        with ProcessPoolExecutor(max_workers=n_workers) as pool:
+        # spawn, not fork: callers may be multi-threaded (Ray workers, the farm)
+        ctx = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(max_workers=n_workers, mp_context=ctx) as pool:
             futs = [pool.submit(make_subject, out, n, int(seed), align) for n in names]
             summaries = [f.result() for f in futs]
     else:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import resource
 import subprocess
 import sys
@@ -160,6 +161,36 @@ def test_mistracking_is_logged_and_only_logged_files_deviate(small, corpus):
         i = rec.first_valid_index
         assert rec.valid[i:].all()
         assert np.abs(rec.xy_mm[i:] - clean[i:]).max() <= 0.0005 + 1e-9
+
+
+def test_mis_dat_lines_look_like_jw12s(small):
+    pattern = re.compile(r"\d{3} (TT|TB1|TB2|TD|UL|LL|MAN I|MAN M|MAX G) \d+ (-1|\d+)( [a-z];[a-z])?")
+    lines = (small / "JW45" / "Mis.dat").read_text().splitlines()
+    assert lines and all(pattern.fullmatch(line) for line in lines), lines
+
+
+def test_error_free_files_stay_in_physiological_ranges(corpus):
+    """Pellet speeds, jaw opening and lip order over JW45's error-free files."""
+    subj = corpus.subject("JW45")
+    keys = subj.error_free_tasks()[::3]
+    assert len(keys) >= 25
+    peaks = []
+    for task, rep in keys:
+        rec = subj.load(task, rep)
+        xy = rec.xy_mm[rec.first_valid_index:]
+        v = np.linalg.norm(np.diff(xy, axis=0), axis=2) / 6866e-6        # mm/s
+        peaks.append(v.max(axis=0))
+        opening = xy[0, 6, 1] - xy[:, 6, 1].min()
+        assert opening < (32.0 if task == 114 else 25.0), task
+        assert (xy[:, 0, 1] > xy[:, 1, 1]).all(), task                    # UL above LL
+        d = np.linalg.norm(xy[:, 6] - xy[:, 7], axis=1)
+        assert d.max() - d.min() < 2.0, task                              # rigid jaw
+    peaks = np.array(peaks)
+    assert peaks.max() < 600.0
+    med = np.median(peaks, axis=0)
+    # typical per-file peak speeds, mm/s: lips and jaw slower than the tongue tip
+    assert 20.0 < med[0] < 120.0 and 80.0 < med[1] < 300.0 and 120.0 < med[2] < 350.0
+    assert 40.0 < med[6] < 160.0 and med[7] < med[6]
 
 
 def test_unlogged_lost_pellets_are_caught_by_usability(small, corpus):
