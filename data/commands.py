@@ -158,7 +158,9 @@ def _print_table(records: list[dict], *, synthetic: bool) -> None:
         print("# synthetic corpus (generated): figures describe the software, not real speakers")
     for r in records:
         if r.get("task") is None and r.get("frames") is None:  # a subject file or a table
-            status = "ok" if r.get("usable") else "MALFORMED"
+            why = "; ".join(r.get("problems") or [])
+            print(f"{r['path']}\t" + ("ok" if r.get("usable") else f"MALFORMED\t{why}"))
+            continue
         else:
             status = ("error-free" if r.get("error_free") else
                       "usable" if r.get("usable") else "UNUSABLE")
@@ -167,6 +169,8 @@ def _print_table(records: list[dict], *, synthetic: bool) -> None:
         why = "; ".join(r.get("problems") or [])
         print(f"{r['path']}\t{frames} frames\tfirst valid {first}\t{status}"
               + (f"\t{why}" if why else ""))
+    if all(r.get("task") is None and r.get("frames") is None for r in records):
+        return
     n_ok = sum(1 for r in records if r.get("error_free"))
     n_use = sum(1 for r in records if r.get("usable"))
     print(f"# {len(records)} file(s): {n_use} usable, {n_ok} error-free")

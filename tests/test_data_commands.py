@@ -150,3 +150,16 @@ def test_file_without_valid_row_is_unusable_not_malformed(corpus_dir, capsys):
     assert "never valid: MNM" in capsys.readouterr().err
     assert main(["check", str(corpus_dir / "JW12" / "tp020.txy")]) == 0
     assert "UNUSABLE" in capsys.readouterr().out
+
+
+def test_through_the_cassi_console_script(corpus_dir):
+    """The installed ``cassi`` entry point reaches these commands (exit 2, file:line: reason)."""
+    import subprocess
+    import sys
+
+    bad = corpus_dir / "JW11" / "Mis.dat"
+    bad.write_text("003 TD 0 -1\n003 QQ 0 5\n")
+    proc = subprocess.run([sys.executable, "-m", "cassi.harness.cli", "corpus", "check",
+                           str(corpus_dir)], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2, proc.stderr
+    assert f"{bad}:2: unknown pellet code 'QQ'" in proc.stderr
