@@ -92,11 +92,9 @@ def test_task_files_are_xrmb_shaped(small):
 
 # ----------------------------------------------------------------------------- determinism
 def test_same_seed_same_bytes_independent_of_the_subject_set(small, tmp_path):
-    one = make_corpus(tmp_path / "one", subjects=["JW45"], seed=0, workers=1)
+    one = make_corpus(tmp_path / "one", subjects="JW45", seed=0, workers=1)
     a, b = _digest(small / "JW45"), _digest(one / "JW45")
     assert a == b and len(a) == 123
-    again = make_corpus(tmp_path / "again", subjects="JW45", seed=0, workers=1)
-    assert _digest(again) == _digest(one)
     other = make_corpus(tmp_path / "other", subjects=["JW45"], seed=1, workers=1)
     da, do = _digest(one / "JW45"), _digest(other / "JW45")
     assert sum(da[k] != do.get(k) for k in da) > 100
