@@ -94,6 +94,8 @@ class SubjectData:
                                   path=self.directory) from None
         for e in entries:
             if e.name.startswith("."):
+                if e.name.lower().endswith((".txy", ".dat", ".txt", ".textgrid")):
+                    self.warnings.append(f"{self.directory / e.name}: hidden file ignored")
                 continue
             key = e.name.lower()
             if key in files:

@@ -140,11 +140,13 @@ def test_bad_metadata_names_file_and_line(corpus_dir):
 def test_duplicate_task_names_and_stray_files_are_warnings(corpus_dir):
     shutil.copy(corpus_dir / "JW45" / "tp013.txy", corpus_dir / "JW45" / "JW45_013.TXY")
     (corpus_dir / "JW45" / "notes.txy").write_text("x")
+    (corpus_dir / "JW45" / ".tp014.txy").write_text("x")
     s = Corpus(corpus_dir).subject("JW45")
     s.task_files()
     assert list(s.task_files()) == [(13, 1)]
     joined = "\n".join(s.warnings)
     assert "already read" in joined and "not a task file name" in joined
+    assert ".tp014.txy: hidden file ignored" in joined
 
 
 def test_single_subject_directory_is_a_corpus():
