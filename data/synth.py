@@ -59,15 +59,29 @@ JW32_MNM_LOST_FROM_TASK = 19
 
 @dataclass
 class TaskPlan:
-    """Artifacts planned for one task file (all times in frames of the file)."""
+    """Artifacts planned for one task file.
+
+    Times are fractions of the file's length, so a plan does not depend on how long the
+    recording turns out. Pellets are indices into :data:`PELLETS`.
+
+    Attributes
+    ----------
+    lead_rows : rows of 1000000 before tracking starts.
+    late_pellets : pellets whose tracking starts one or two rows after the others.
+    episodes : ``(pellet, start, end or -1 (to the end), kind)`` with kind ``"hop"`` (raster
+        hop onto the neighbouring tongue pellet), ``"stuck"`` (reported where first found) or
+        ``"bad"`` (1000000); each is logged in Mis.dat.
+    logged_reference : a reference-pellet line (``MAX G``) only: logged, no effect on the data.
+    lost : ``(pellet, start)``: the pellet is gone from ``start`` to the end, NOT logged.
+    """
 
     task: int
     rep: int = 1
     lead_rows: int = 3
     late_pellets: tuple[int, ...] = ()
-    episodes: list = field(default_factory=list)   # (pellet, f0, f1 or -1, kind, note)
-    logged_reference: bool = False                 # a MAX G line only (no data effect)
-    lost: tuple[int, int] | None = None            # (pellet index, first frame), unlogged
+    episodes: list = field(default_factory=list)
+    logged_reference: bool = False
+    lost: tuple[int, float] | None = None
 
 
 def _rng(seed: int, *keys: int) -> np.random.Generator:
@@ -302,7 +316,9 @@ def make_subject(out_dir: Path, name: str, seed: int = DEFAULT_SEED,
             if tg is not None:
                 summary["aligned_tasks"].append(plan.task)
         except CassiInputError as err:
-            summary["alignment_errors"].append(str(err))
+            # name the file relative to the alignments directory: corpus.json stays the same
+            # wherever the alignments live
+            summary["alignment_errors"].append(f"{name}/{tg.name}: {err.reason}")
             time_us, xy = generate_task(fig, plan.task, seed=seed, rep=plan.rep,
                                         lip_peaks_mm=peak)
         rng = _rng(seed, _subject_key(name), plan.task, plan.rep, 1)
