@@ -93,6 +93,7 @@ def teeth_split(teeth: np.ndarray, opening: np.ndarray,
     mid = 0.5 * (orows[0] + orows[-1])
     lab = measure.label(inside, connectivity=2)
     r = np.arange(teeth.shape[0])[:, None]
+    spanning = np.zeros_like(teeth)
     for k in range(1, lab.max() + 1):
         comp = lab == k
         rows = np.flatnonzero(comp.any(axis=1))
@@ -101,13 +102,18 @@ def teeth_split(teeth: np.ndarray, opening: np.ndarray,
         elif rows[0] >= mid:
             lower |= comp
         else:
-            cut = _depth_cut(comp, depth) if depth is not None else None
-            if cut is None:
-                counts = comp[rows[0]:rows[-1] + 1].sum(axis=1)
-                ties = np.flatnonzero(counts == counts.min())
-                cut = rows[0] + int(ties[len(ties) // 2])
-            upper |= comp & (r < cut)
-            lower |= comp & (r >= cut)
+            spanning |= comp
+    if spanning.any():
+        # one incisal line for every region across the middle, found on the central teeth
+        # (the side teeth curve away from the camera and have no clear step of their own)
+        cut = _depth_cut(spanning, depth) if depth is not None else None
+        if cut is None:
+            rows = np.flatnonzero(spanning.any(axis=1))
+            counts = spanning[rows[0]:rows[-1] + 1].sum(axis=1)
+            ties = np.flatnonzero(counts == counts.min())
+            cut = rows[0] + int(ties[len(ties) // 2])
+        upper |= spanning & (r < cut)
+        lower |= spanning & (r >= cut)
     return upper, lower
 
 
