@@ -231,6 +231,18 @@ def test_alignments_time_the_gestures(annotations_dir, tmp_path):
     assert np.linalg.norm(rec.xy_mm[mid, :2] - rec.xy_mm[i, :2], axis=1).max() < 2.0
 
 
+def test_a_malformed_alignment_falls_back_and_is_recorded(fixtures_dir, tmp_path):
+    al = tmp_path / "al" / "JW45"
+    al.mkdir(parents=True)
+    (al / "tp001.TextGrid").write_bytes((fixtures_dir / "textgrid" / "tp001.TextGrid").read_bytes())
+    (al / "tp002.TextGrid").write_text("not a TextGrid\n")
+    out = make_corpus(tmp_path / "c", subjects=["JW45"], alignments=tmp_path / "al", workers=1)
+    meta = json.loads((out / "corpus.json").read_text())["artifacts"]["JW45"]
+    assert meta["aligned_tasks"] == [1]
+    assert len(meta["alignment_errors"]) == 1 and "JW45/tp002.TextGrid" in meta["alignment_errors"][0]
+    assert Corpus(out).subject("JW45").usability(2).usable           # built-in timing instead
+
+
 def test_bad_arguments_are_input_errors(tmp_path):
     with pytest.raises(CassiInputError, match="unknown subject"):
         make_corpus(tmp_path / "x", subjects=["JW29"])
