@@ -148,7 +148,7 @@ def cmd_check(args) -> int:
     if getattr(args, "strict", False):
         errors = errors + [p for r in records if r.get("task") is not None and not r.get("error")
                            and not r.get("usable") for p in r.get("problems", [])]
-    for e in errors:
+    for e in dict.fromkeys(errors):  # once each (a missing Mis.dat concerns every task file)
         print(e, file=sys.stderr)
     return EXIT_BAD_INPUT if errors else EXIT_OK
 
