@@ -23,7 +23,7 @@ from cassi.data.corpus import Corpus
 from cassi.data.errors import CassiInputError
 from cassi.data.profile import preprocess, read_lipthick, read_maxprotru
 from cassi.data.synth import (GENERATOR_VERSION, JW32_MNM_LOST_FROM_TASK, PROTECTED_TASKS,
-                              default_corpus, generate_task, make_corpus)
+                              TABLE_5_1_TASKS, default_corpus, generate_task, make_corpus)
 from cassi.data.synth_subjects import SUBJECTS
 from cassi.data.xrmb import PELLETS, read_head_measures, read_mis
 
@@ -37,7 +37,7 @@ def _digest(root: Path) -> dict[str, str]:
 
 @pytest.fixture(scope="module")
 def small(tmp_path_factory) -> Path:
-    return make_corpus(tmp_path_factory.mktemp("synth") / "c", subjects=["JW45", "JW32"],
+    return make_corpus(tmp_path_factory.mktemp("synth") / "c", subjects=["JW45", "JW32", "JW12"],
                        seed=0, workers=2)
 
 
@@ -63,7 +63,7 @@ def test_layout_and_metadata_say_synthetic(small, corpus):
     meta = json.loads((small / "corpus.json").read_text())
     assert meta["synthetic"] is True and meta["seed"] == 0
     assert meta["generator_version"] == GENERATOR_VERSION
-    assert corpus.is_synthetic and corpus.subjects == ["JW32", "JW45"]
+    assert corpus.is_synthetic and corpus.subjects == ["JW12", "JW32", "JW45"]
     for name in ("JW45", "JW32"):
         d = small / name
         for f in ("PAL.DAT", "PHA.DAT", "Mis.dat"):
@@ -103,7 +103,7 @@ def test_same_seed_same_bytes_independent_of_the_subject_set(small, tmp_path):
 # ----------------------------------------------------------------------------- calibration
 def test_preprocessing_reproduces_the_thesis_profiles(corpus, fixtures_dir):
     profiles = preprocess(corpus)
-    _check_profiles(profiles, fixtures_dir, ["JW45", "JW32"])
+    _check_profiles(profiles, fixtures_dir, ["JW45", "JW32", "JW12"])
     assert len(profiles["JW45"].selected) == 20 and (118, 1) in profiles["JW45"].selected
     assert len(profiles["JW32"].selected) == 4                 # thesis: four usable files
     assert profiles["JW45"].jaw_length_mm == pytest.approx(SUBJECTS["JW45"].jaw_length_mm,
@@ -159,6 +159,25 @@ def test_mistracking_is_logged_and_only_logged_files_deviate(small, corpus):
         i = rec.first_valid_index
         assert rec.valid[i:].all()
         assert np.abs(rec.xy_mm[i:] - clean[i:]).max() <= 0.0005 + 1e-9
+
+
+def test_jw12_has_its_published_mistracking_log_and_table_5_1_tasks_are_error_free(
+        small, corpus, fixtures_dir):
+    key = lambda e: (e.task, e.pellet, e.onset_ms, e.offset_ms, e.note)   # noqa: E731
+    real = sorted(map(key, read_mis(fixtures_dir / "xrmb" / "JW12" / "Mis.dat")))
+    made = sorted(map(key, read_mis(small / "JW12" / "Mis.dat")))
+    assert made == real
+    jw12 = corpus.subject("JW12")
+    rec = jw12.load(106, require_valid=False)                  # "106 LL 0 -1": lower lip lost
+    assert not rec.valid[:, PELLETS.index("LL")].any()
+    rec = jw12.load(11, require_valid=False)                   # "011 TD 2330 -1 k;j": raster hop
+    t4, t3 = rec.pellet("T4"), rec.pellet("T3")
+    k = int(round(3000 / 6.866))
+    assert np.linalg.norm(t4[k:] - t3[k:], axis=1).max() < 2.0
+    for name, tasks in TABLE_5_1_TASKS.items():
+        if name in corpus.subjects:
+            for task in tasks:
+                assert corpus.subject(name).usability(task).error_free, (name, task)
 
 
 def test_mis_dat_lines_look_like_jw12s(small):
