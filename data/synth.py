@@ -462,7 +462,11 @@ def make_corpus(out_dir: str | os.PathLike, *, subjects=None, seed: int = DEFAUL
         if not align.is_dir():
             raise CassiInputError("alignments directory not found", path=align)
     out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise CassiInputError("output exists and is not a directory", path=out)
     out.mkdir(parents=True, exist_ok=True)
+    if workers is not None and (not isinstance(workers, (int, np.integer)) or workers < 1):
+        raise CassiInputError(f"workers must be a positive integer, not {workers!r}")
     n_workers = workers if workers is not None else min(len(names), os.cpu_count() or 1)
     if n_workers > 1 and len(names) > 1:
         # spawn, not fork: callers may be multi-threaded (Ray workers, the farm)

@@ -269,6 +269,11 @@ def test_bad_arguments_are_input_errors(tmp_path):
         make_corpus(tmp_path / "x", subjects=["JW45"], seed=-1)
     with pytest.raises(CassiInputError, match="alignments"):
         make_corpus(tmp_path / "x", subjects=["JW45"], alignments=tmp_path / "none")
+    (tmp_path / "file").write_text("")
+    with pytest.raises(CassiInputError, match="not a directory"):
+        make_corpus(tmp_path / "file", subjects=["JW45"])
+    with pytest.raises(CassiInputError, match="workers"):
+        make_corpus(tmp_path / "x", subjects=["JW45"], workers=0)
 
 
 def test_cli_make_writes_the_same_corpus(small, tmp_path):
