@@ -90,8 +90,8 @@ def head_sdf(p: np.ndarray) -> np.ndarray:
     """Approximate signed distance (Parke units, < 0 inside) of the base head: cranium, face
     and neck blended (no profile, no relief)."""
     cranium = _ellipsoid_sdf(p, np.array([-10.0, 0.0, 118.0]), np.array([372.0, 282.0, 382.0]))
-    face = _ellipsoid_sdf(p, np.array([135.0, 0.0, -175.0]), np.array([232.0, 200.0, 250.0]))
-    jaw = _ellipsoid_sdf(p, np.array([60.0, 0.0, -300.0]), np.array([240.0, 215.0, 130.0]))
+    face = _ellipsoid_sdf(p, np.array([135.0, 0.0, -175.0]), np.array([232.0, 180.0, 250.0]))
+    jaw = _ellipsoid_sdf(p, np.array([60.0, 0.0, -300.0]), np.array([240.0, 158.0, 130.0]))
     f = _smin(cranium, face, 80.0)
     f = _smin(f, jaw, 60.0)
     return _smin(f, _neck_sdf(p), 70.0)
@@ -102,17 +102,45 @@ def _directions(theta_deg, phi_deg):
     return np.stack([np.cos(p) * np.cos(t), np.cos(p) * np.sin(t), np.sin(p)], axis=-1)
 
 
-def base_radius(theta_deg, phi_deg) -> np.ndarray:
-    """Distance from :data:`CENTRE` to the base head along (azimuth, elevation), degrees."""
+def _base_radius_exact(theta_deg, phi_deg) -> np.ndarray:
     d = _directions(np.asarray(theta_deg, float), np.asarray(phi_deg, float))
     lo = np.zeros(d.shape[:-1])
     hi = np.full(d.shape[:-1], 1500.0)
-    for _ in range(48):  # bisection: the base head is star-shaped about CENTRE
+    for _ in range(34):  # bisection: the base head is star-shaped about CENTRE
         mid = 0.5 * (lo + hi)
         inside = head_sdf(CENTRE + d * mid[..., None]) < 0
         lo = np.where(inside, mid, lo)
         hi = np.where(inside, hi, mid)
     return 0.5 * (lo + hi)
+
+
+_GRID_STEP = 0.5
+_GRID: list = []
+
+
+def _radius_grid():
+    """The base head's radius tabulated every 0.5 degree (computed once per process)."""
+    if not _GRID:
+        th = np.arange(-10.0, 190.0 + 1e-9, _GRID_STEP)
+        ph = np.arange(-90.0, 90.0 + 1e-9, _GRID_STEP)
+        T, P = np.meshgrid(th, ph, indexing="ij")
+        _GRID.append((th, ph, _base_radius_exact(T, P)))
+    return _GRID[0]
+
+
+def base_radius(theta_deg, phi_deg) -> np.ndarray:
+    """Distance from :data:`CENTRE` to the base head along (azimuth, elevation), degrees
+    (bilinear in a 0.5-degree table of the exact bisection)."""
+    th, ph, R = _radius_grid()
+    t = np.clip(np.asarray(theta_deg, float), th[0], th[-1])
+    p = np.clip(np.asarray(phi_deg, float), ph[0], ph[-1])
+    ft = (t - th[0]) / _GRID_STEP
+    fp = (p - ph[0]) / _GRID_STEP
+    i = np.clip(np.floor(ft).astype(int), 0, len(th) - 2)
+    j = np.clip(np.floor(fp).astype(int), 0, len(ph) - 2)
+    a, b = ft - i, fp - j
+    return ((1 - a) * (1 - b) * R[i, j] + a * (1 - b) * R[i + 1, j]
+            + (1 - a) * b * R[i, j + 1] + a * b * R[i + 1, j + 1])
 
 
 def _profile_radius(phi_deg):
@@ -300,11 +328,36 @@ def merge(own: list[str], base: list[str], from_theta: float, lay: "Layout | Non
 _CURRENT: list = [None]
 
 
-def _fixed_row(lay, name, numbers, phi_back, extra_thetas, extra_wants, knee=90.0):
-    """A row starting with some of Parke's excerpt vertices, continuing on the surface."""
+def surface_at_z(theta_deg, z) -> np.ndarray:
+    """Skin points (..., 3) at azimuths ``theta_deg`` whose heights are ``z`` (bisection on
+    the elevation, vectorised)."""
+    th = np.asarray(theta_deg, float)
+    zz = np.asarray(z, float)
+    th, zz = np.broadcast_arrays(th, zz)
+    lo = np.full(th.shape, -89.0)
+    hi = np.full(th.shape, 89.0)
+    for _ in range(36):
+        mid = 0.5 * (lo + hi)
+        below = surface_point(th, mid)[..., 2] < zz
+        lo = np.where(below, mid, lo)
+        hi = np.where(below, hi, mid)
+    return surface_point(th, 0.5 * (lo + hi))
+
+
+def _fixed_row(lay, name, numbers, phi_back, extra_thetas, extra_wants, knee=90.0, *,
+               zs=None):
+    """A row starting with some of Parke's excerpt vertices, continuing on the surface (at
+    elevations blending to ``phi_back``, or at heights ``zs``)."""
     keys = [lay.add(f"{name}.p{n}", PARKE_EXCERPT[n], n) for n in numbers]
     th0, ph0 = angles_of(PARKE_EXCERPT[numbers[-1]])
     ths = np.asarray(extra_thetas, float)
+    if zs is not None:
+        pts = surface_at_z(ths, np.asarray(zs, float))
+        for k, (t, p, w) in enumerate(zip(ths, pts, extra_wants)):
+            if abs(t - 180.0) < 1e-9:
+                p[1] = 0.0
+            keys.append(lay.add(f"{name}.{k}", p, w))
+        return keys
     phs = ph0 + (phi_back - ph0) * _smooth((ths - th0) / (180.0 - th0))
     keys += _surface_row(lay, name, list(ths), list(phs), extra_wants)
     return keys
@@ -322,40 +375,73 @@ def build_layout(*, palate_xz: np.ndarray | None = None) -> Layout:
 
     # --- neck and under the chin: Parke's excerpt vertices, continued round the back -------
     F = "free"
-    plain(_fixed_row(lay, "r0", [1, 2, 3, 4, 5], -64.0, [145.0, 180.0], [F] * 2))
-    plain(_fixed_row(lay, "r1", [6, 7, 8, 9, 10], -58.0, [140.0, 180.0], [F] * 2))
-    r2 = plain(_fixed_row(lay, "r2", [11, 12, 13], -50.0, [58.0, 90.0, 135.0, 180.0], [F] * 4))
-    plain(merge(_fixed_row(lay, "r3", [14, 15], -46.0, [30.0, 46.0, 64.0], ["jaw", "jaw", F]),
-                r2, 100.0))
-    r4 = plain(_fixed_row(lay, "r4", [16, 17], -36.0,
-                          [22.0, 32.0, 44.0, 58.0, 74.0, 100.0, 140.0, 180.0],
-                          ["jaw", "jaw", "jaw", 22, "jaw", F, F, F]))
+    # the base of the neck rises from the front (z = -594) round to the back, like a bust's cut
+    plain(_fixed_row(lay, "r0", [1, 2, 3, 4, 5], 0, [145.0, 180.0], [F] * 2,
+                     zs=[-492.0, -485.0]))
+    plain(_fixed_row(lay, "r1", [6, 7, 8, 9, 10], 0, [140.0, 180.0], [F] * 2,
+                     zs=[-400.0, -395.0]))
+    r2 = plain(_fixed_row(lay, "r2", [11, 12, 13], 0, [58.0, 84.0, 128.0, 180.0], [F] * 4,
+                          zs=[-392.0, -312.0, -320.0, -325.0]))
+    def mixed(name, numbers, spec):
+        """Excerpt vertices, then nodes at (azimuth, ("phi", elevation) | ("z", height))."""
+        keys = [lay.add(f"{name}.p{n}", PARKE_EXCERPT[n], n) for n in numbers]
+        ts = np.array([t for t, _, _ in spec], float)
+        vals = np.array([v for _, (_, v), _ in spec], float)
+        by_phi = surface_point(ts, vals)
+        by_z = surface_at_z(ts, vals)
+        for k, (t, (kind, val), w) in enumerate(spec):
+            p = (by_phi if kind == "phi" else by_z)[k].copy()
+            if abs(t - 180.0) < 1e-9:
+                p[1] = 0.0
+            keys.append(lay.add(f"{name}.{k}", p, w))
+        return keys
 
-    # --- chin and jaw ------------------------------------------------------------------------
+    plain(merge(mixed("r3", [14, 15], [(30.0, ("phi", -57.5), "jaw"),
+                                       (46.0, ("z", -380.0), "jaw")]), r2, 84.0))
+    # the jaw line: from the chin (16) back to the angle of the jaw (22), then round the nape
+    r4 = plain(mixed("r4", [16, 17], [
+        (22.0, ("phi", -50.5), "jaw"), (32.0, ("phi", -52.5), "jaw"),
+        (44.0, ("phi", -55.0), "jaw"), (58.0, ("z", -352.0), "jaw"), (74.0, ("z", -318.0), 22),
+        (100.0, ("z", -280.0), F), (140.0, ("z", -270.0), F), (180.0, ("z", -265.0), F)]))
+
+    # --- chin and jaw: rows given by height at the side (the jaw line rises to the ear) -------
     def srow(name, phi_f, phi_b, thetas, wants, knee=90.0):
         phis = _row_angles(phi_f, phi_b, thetas, knee=knee)
         return _surface_row(lay, name, thetas, list(phis), wants)
 
-    r5 = plain(srow("r5", -43.5, -28.0, [0, 7, 15, 24, 34, 46, 60, 80, 104, 130, 155, 180],
-                    ["jaw"] * 6 + [30, F, F, F, F, F]))
-    plain(merge(srow("r6", -39.0, -25.0, [0, 7, 14, 22, 31, 42, 56],
-                     [24, "jaw", "jaw", "jaw", "jaw", "jaw", F]), r5, 80.0))
+    def zrow(name, thetas, zs, wants):
+        keys = []
+        pts = surface_at_z(np.asarray(thetas, float), np.asarray(zs, float))
+        for k, (t, p, w) in enumerate(zip(thetas, pts, wants)):
+            if abs(t) < 1e-9 or abs(t - 180.0) < 1e-9:
+                p[1] = 0.0
+            keys.append(lay.add(f"{name}.{k}", p, w))
+        return keys
+
+    r5 = plain(zrow("r5", [0, 7, 15, 24, 34, 46, 60, 74, 100, 130, 155, 180],
+                    [-395, -393, -388, -378, -358, -336, -318, -295, -245, -230, -225, -222],
+                    ["jaw"] * 7 + [30, F, F, F, F]))
+    plain(merge(zrow("r6", [0, 7, 14, 22, 31, 42, 56],
+                     [-358, -357, -355, -350, -340, -325, -302],
+                     [24, "jaw", "jaw", "jaw", "jaw", F, F]), r5, 74.0))
 
     # --- the mouth: below-lip row, lips, above-lip row ---------------------------------------
     lip = _lips(lay)
     corner_theta = lip["corner_theta"]
-    r7 = plain(srow("r7", -35.0, -18.0, [0.0, lip["col_theta"][1], lip["col_theta"][2],
-                                         corner_theta + 6.0, 34, 46, 60, 82, 106, 142, 180],
+    r7 = plain(zrow("r7", [0.0, lip["col_theta"][1], lip["col_theta"][2], corner_theta + 6.0,
+                           34, 46, 60, 82, 106, 142, 180],
+                    [-306, -304, -299, -292, -286, -276, -262, -215, -190, -175, -170],
                     [41, 42, 43, 45, "jaw", "jaw", "jaw", F, F, F, F]))
     # the mouth row: the lower and upper outer lip outlines share the corner and the cheek
-    mouth_tail = srow("rm", -29.0, -10.0, [corner_theta + 9.0, 36, 48, 62],
+    mouth_tail = zrow("rm", [corner_theta + 9.0, 36, 48, 62], [-250, -248, -243, -235],
                       [44, 46, 47, 48])
     mouth_tail = merge(mouth_tail, r7, 82.0)
     lower_path = list(lip["lower_outer"]) + [lip["corner"]] + mouth_tail
     upper_path = list(lip["upper_outer"]) + [lip["corner"]] + mouth_tail
     rows.append((lower_path, upper_path))
-    r8 = plain(srow("r8", -19.5, -4.0, [0.0, lip["col_theta"][1], lip["col_theta"][2],
-                                        corner_theta + 4.0, 35, 48, 64, 84, 108, 143, 180],
+    r8 = plain(zrow("r8", [0.0, lip["col_theta"][1], lip["col_theta"][2], corner_theta + 4.0,
+                           35, 48, 64, 84, 108, 143, 180],
+                    [-194, -195, -198, -204, -212, -210, -202, -178, -150, -130, -125],
                     [71, 72, 73] + [F] * 8))
 
     # --- nose rows ---------------------------------------------------------------------------
@@ -380,7 +466,7 @@ def build_layout(*, palate_xz: np.ndarray | None = None) -> Layout:
     plain(srow("r14", 34.0, 51.0, [0, 12, 25, 38, 53, 72, 95, 122, 150, 180], [F] * 10))
     plain(srow("r15", 48.0, 62.0, [0, 15, 31, 48, 68, 92, 120, 150, 180], [F] * 9))
     plain(srow("r16", 63.0, 72.0, [0, 20, 44, 72, 104, 140, 180], [F] * 7))
-    plain(srow("r17", 76.0, 80.0, [0, 45, 100, 150, 180], [F] * 5))
+    plain(srow("r17", 76.0, 80.0, [0, 38, 76, 114, 150, 180], [F] * 6))
     top = [lay.add("top", surface_point(90.0, 89.9) * np.array([1, 0, 1]), F)]
     rows.append((top, top))
 
@@ -472,6 +558,8 @@ def _lips(lay: Layout) -> dict:
 #: Parke's start values: eyeball radius (parameter 44) and eyelid sphere radius (45).
 EYEBALL_RADIUS = 70.0
 EYELID_RADIUS = 80.0
+#: Radius of the sphere (about the eyeball centre) that carries the skin ring round the lids.
+ORBIT_RADIUS = 94.0
 #: Eyelid rings in 2D (width along y, height along z) about the eye centre, open and closed:
 #: ring B is the lid margin (8 points: inner corner, 3 lower, outer corner, 3 upper), ring A
 #: the lid above/below it; ring C (the lid's lip, touching the eyeball) follows ring B.
@@ -492,7 +580,7 @@ def eyelid_ring_2d(opening: float, ring: str = "B", *, y_scale: float = 1.0,
     up = _LID_CLOSED["upper"] + (_LID_OPEN["upper"] - _LID_CLOSED["upper"]) * o
     lo = _LID_CLOSED["lower"] + (_LID_OPEN["lower"] - _LID_CLOSED["lower"]) * o
     w = _EYE_W
-    grow = {"C": 0.92, "B": 1.0, "A": 1.45}[ring]
+    grow = {"C": 0.92, "B": 1.0, "A": 1.3}[ring]
     shape = np.array([0.0, 0.82, 1.0, 0.82])  # height profile across the lid
     ys = np.array([-w, -w / 2, 0.0, w / 2, w * 1.05])
     pts = [(ys[0] * grow, 2.0)]
@@ -527,11 +615,19 @@ def _eye(lay: Layout) -> dict:
     c = EYE_CENTRE
     # orbital ring on the skin surface, around the eye's angular position
     et, ep = _eye_angles()
-    orbit_d = [(-15.0, -1.0), (-9.0, -9.5), (0.0, -12.0), (9.0, -10.0), (16.5, -1.0),
-               (10.0, 9.5), (0.0, 12.0), (-9.0, 9.5)]
+    # the orbit ring: a wider 2D ring projected onto a sphere about the eyeball, so that the
+    # skin round the lids always clears the eyeball
+    orbit_yz = np.array([(-94.0, 4.0), (-50.0, -38.0), (0.0, -44.0), (52.0, -38.0),
+                         (100.0, 2.0), (56.0, 46.0), (0.0, 52.0), (-50.0, 44.0)])
+    orbit_p = project_to_sphere(orbit_yz, c, ORBIT_RADIUS)
     orbit = []
-    for k, (dt, dp) in enumerate(orbit_d):
-        orbit.append(lay.add(f"eye.o{k}", surface_point(et + dt, ep + dp), "free"))
+    for k in range(8):
+        t_, p_ = angles_of(orbit_p[k])
+        surf = surface_point(t_, p_)
+        # the farther of the sphere and the skin (seen from the head's centre)
+        pt = surf if np.linalg.norm(surf - CENTRE) > np.linalg.norm(orbit_p[k] - CENTRE) \
+            else orbit_p[k]
+        orbit.append(lay.add(f"eye.o{k}", pt, "free"))
     rings = {}
     for ring, radius in (("A", EYELID_RADIUS + 6.0), ("B", EYELID_RADIUS),
                          ("C", EYEBALL_RADIUS + 1.5)):
@@ -565,6 +661,8 @@ def _eye(lay: Layout) -> dict:
 TOOTH_WIDTHS_MM = np.array([8.5, 6.5, 7.5, 7.0, 6.5, 5.0, 5.0, 10.0])
 LOWER_TOOTH_WIDTHS_MM = np.array([5.3, 5.9, 6.9, 7.0, 7.1, 5.6, 5.6, 10.5])
 UPPER_TIP = np.array([345.0, 0.0, -258.0])     # vertex 226
+#: Gap between neighbouring teeth along the arch, Parke units (each side).
+TOOTH_GAP = 0.8
 UPPER_TOOTH_HEIGHT = 42.0
 LOWER_TIP = np.array([338.0, 0.0, -250.0])     # lower incisor tip (overbite 8, overjet 7)
 LOWER_TOOTH_HEIGHT = 38.0
@@ -601,11 +699,15 @@ def _teeth(lay: Layout):
     for which in ("upper", "lower"):
         pts, _ = arch_points(which)
         for k in range(N.TEETH_PER_SET):
-            y0, y1 = pts[k, 1], pts[k + 1, 1]
-            x0, x1 = pts[k, 0], pts[k + 1, 0]
+            # a small gap between neighbouring teeth (none at the centre line)
+            a, b = pts[k], pts[k + 1]
+            g = TOOTH_GAP / max(np.linalg.norm(b - a), 1e-9)
+            a2 = a if k == 0 else a + (b - a) * g
+            b2 = b - (b - a) * g
+            (x0, y0), (x1, y1) = a2, b2
             # molars are shorter crowns; the occlusal plane curves up slightly behind
             if which == "upper":
-                tip = UPPER_TIP[2] + np.array([0.0, 2.0])[0] + 0.02 * (UPPER_TIP[0] - np.array([x0, x1]))
+                tip = UPPER_TIP[2] + 0.02 * (UPPER_TIP[0] - np.array([x0, x1]))
                 h = UPPER_TOOTH_HEIGHT * (1.0 if k < 3 else 0.8)
                 gum = tip + h
                 v = N.upper_tooth(k)  # gum-mesial, gum-distal, tip-distal, tip-mesial

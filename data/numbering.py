@@ -107,7 +107,9 @@ UPPER_INCISOR_TIP = 226
 #: MANi pellet vertex: outer surface of the lower central incisors at the gum line (4.1.1).
 MANI = 258
 #: MANm: the point halfway between these two vertices (4.1.1), where the lower first and second
-#: molars meet at the gum line.
+#: molars meet at the gum line. The generated teeth: quads 0-4 the incisors, canine and
+#: premolars, quads 5 and 6 the two halves of the broad first molar, quad 7 the second molar,
+#: so that 281 (end of quad 6) and 286 (start of quad 7) flank the first/second molar contact.
 MANM_PAIR = (281, 286)
 #: Tip of the lower central incisors (same quad as MANi, the biting edge at the centre line).
 LOWER_INCISOR_TIP = 255
@@ -176,8 +178,9 @@ GONION = 22
 #: Lowest centre-line point of the nose (above the upper lip) and the nose tip.
 SUBNASALE = 80
 NOSE_TIP_CENTRE = 82
-#: Vertices raised by CASSI's nose clearance rule (4.1.1): the tip and the underside.
-NOSE_TIP = (80, 81, 82, 83, 84, 85)
+#: Vertices raised by CASSI's nose clearance rule (4.1.1): the tip and the underside (the
+#: subnasale row 80, 81, 83, the nostril row 85-87 and the tip row 82, 90, 91).
+NOSE_TIP = (80, 81, 82, 83, 85, 86, 87, 90, 91)
 
 # --- jaw zones as data (Table 3.2 and Table 4.3) ------------------------------------------------
 #: Parke's zones (Table 3.2): (zone, fraction of the jaw angle, vertices, axes adjusted).

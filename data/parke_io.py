@@ -124,8 +124,11 @@ def _int(tok: str, path, line: int, what: str) -> int:
         raise CassiInputError(f"{what} {tok!r} is not an integer", path=path, line=line) from None
 
 
-def read_pts(path: str | PathLike) -> PtsFile:
+def read_pts(path: str | PathLike, *, strict: bool = True) -> PtsFile:
     """Read a Parke vertex file (``st1.pts`` / ``st2.pts``).
+
+    ``strict=False`` accepts a file with fewer vertex lines than its header declares (an
+    excerpt, like the thesis's Figure 3.2); every line present is still checked.
 
     Returns
     -------
@@ -171,7 +174,7 @@ def read_pts(path: str | PathLike) -> PtsFile:
             raise CassiInputError(f"vertex {n} defined twice", path=path, line=i + 1)
         verts[n - 1] = [_number(t, path, i + 1, "coordinate") for t in toks[1:]]
         seen[n - 1] = True
-    if declared is not None and int(seen.sum()) != declared:
+    if strict and declared is not None and int(seen.sum()) != declared:
         raise CassiInputError(f"header says {declared} vertices are defined, file has "
                               f"{int(seen.sum())}", path=path, line=k + 1)
     return PtsFile(description, verts, seen)
@@ -213,13 +216,16 @@ def write_pts(path: str | PathLike, pts: PtsFile | np.ndarray, description: str 
     atomic_write_text(path, "\n".join(out) + "\n")
 
 
-def read_top(path: str | PathLike, *, vertex_count: int | None = None) -> TopFile:
+def read_top(path: str | PathLike, *, vertex_count: int | None = None,
+             strict: bool = True) -> TopFile:
     """Read a Parke topology file (``stt.top``).
 
     Parameters
     ----------
     vertex_count
         When given, vertex numbers above it are an error.
+    strict
+        False accepts fewer polygon lines than the header declares (an excerpt).
 
     Raises
     ------
@@ -263,7 +269,7 @@ def read_top(path: str | PathLike, *, vertex_count: int | None = None) -> TopFil
             raise CassiInputError(f"polygon repeats a vertex: {lines[i].strip()!r}",
                                   path=path, line=i + 1)
         polys.append(Polygon(mat, tuple(vs), tuple(cs)))
-    if len(polys) != count:
+    if len(polys) != count and (strict or len(polys) > count):
         raise CassiInputError(f"header says {count} polygons, file has {len(polys)}",
                               path=path, line=k + 1)
     return TopFile(description, tuple(polys))

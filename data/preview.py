@@ -26,7 +26,8 @@ VIEWS = {"front": (5, 0), "side": (5, 90), "three-quarter": (15, 40), "half": (5
          "below": (-60, 20)}
 
 
-def _draw(ax, topo, positions, *, parts=None, title="", view=(5, 0), edges=True):
+def _draw(ax, topo, positions, *, parts=None, title="", view=(5, 0), edges=True,
+          centre=None, span=None):
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
     v, tri, part = topo.mesh(positions)
@@ -50,12 +51,14 @@ def _draw(ax, topo, positions, *, parts=None, title="", view=(5, 0), edges=True)
     pc = Poly3DCollection(p, facecolors=col, edgecolors=(0, 0, 0, 0.25) if edges else col,
                           linewidths=0.2)
     ax.add_collection3d(pc)
-    lo, hi = v.min(axis=0), v.max(axis=0)
-    mid, span = (lo + hi) / 2, (hi - lo).max() / 2
+    used = v[np.unique(tri)] if len(tri) else v
+    lo, hi = used.min(axis=0), used.max(axis=0)
+    mid = (lo + hi) / 2 if centre is None else np.asarray(centre, float)
+    span = (hi - lo).max() / 2 if span is None else float(span)
     ax.set_xlim(mid[0] - span, mid[0] + span)
     ax.set_ylim(mid[1] - span, mid[1] + span)
     ax.set_zlim(mid[2] - span, mid[2] + span)
-    ax.set_box_aspect((1, 1, 1))
+    ax.set_box_aspect((1, 1, 1), zoom=1.35)
     ax.view_init(elev=view[0], azim=view[1])
     ax.set_axis_off()
     ax.set_title(title, fontsize=9)

@@ -1,0 +1,288 @@
+"""The generated face: numbering as the thesis names it, a closed outward-facing skin where
+Parke's is closed, the render topology, the palate, and the files round-trip."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cassi.data import numbering as N
+from cassi.data.errors import CassiInputError
+from cassi.data.face import FaceModel, build_face
+from cassi.data.face_build import (CENTRE, EYEBALL_RADIUS, EYELID_RADIUS, PARKE_EXCERPT,
+                                   arch_points)
+from cassi.data.topology import (boundary_loops, inconsistent_edges, nonmanifold_edges,
+                                 render_topology, signed_volume)
+
+
+@pytest.fixture(scope="module")
+def face():
+    return build_face()
+
+
+@pytest.fixture(scope="module")
+def topo(face):
+    return render_topology(face)
+
+
+def v(face, n):
+    return face.vertices[n - 1]
+
+
+# --- numbering ---------------------------------------------------------------------------------
+
+def test_every_vertex_defined_and_counts(face):
+    assert face.vertex_count == N.EYES_FIRST - 1 + 2 * 105
+    assert np.isfinite(face.vertices).all()
+    assert N.PALATE_FIRST == 301 and N.PALATE_COUNT == N.PALATE_STATIONS * N.PALATE_ACROSS
+    used = {n for p in face.polygons for n in p.vertices}
+    # every vertex but the jaw pivot (a point, not a surface) belongs to some polygon
+    assert set(range(1, face.vertex_count + 1)) - used == {N.JAW_PIVOT}
+
+
+def test_parke_excerpt_vertices_kept(face):
+    for n, xyz in PARKE_EXCERPT.items():
+        np.testing.assert_array_equal(v(face, n), xyz)
+    assert v(face, 1)[2] == -594
+
+
+def test_centre_lines(face):
+    for n in N.LOWER_LIP_CENTRE + N.UPPER_LIP_CENTRE + (N.TEETH_TIP, N.MANI) + \
+            N.TONGUE_CENTRE + N.PALATE_CENTRE + (N.MENTON, N.POGONION, N.SUBNASALE):
+        assert v(face, n)[1] == 0.0, n
+    for rows in (N.UPPER_LIP_ROWS, N.LOWER_LIP_ROWS):
+        for row in rows:
+            ys = [v(face, n)[1] for n in row]
+            assert ys[0] == 0 and ys[0] < ys[1] < ys[2], row
+
+
+def test_lip_order_top_to_bottom(face):
+    z = [v(face, n)[2] for n in N.LIP_CENTRE_TOP_TO_BOTTOM]
+    assert z == sorted(z, reverse=True)       # 67 at the top ... 49 at the bottom
+    # UL and LL pellet vertices on the outer edges, in front of the teeth
+    assert v(face, N.UL)[0] > v(face, N.TEETH_TIP)[0] + 20
+    assert v(face, N.LL)[0] > v(face, N.MANI)[0] + 20
+    # the corner is the widest point of the lips; the corners' order outer-middle-inner
+    lips = np.asarray(N.UPPER_LIP + N.LOWER_LIP) - 1
+    assert v(face, N.CORNER)[1] > face.vertices[lips, 1].max()
+    assert v(face, N.CORNER)[0] > v(face, N.CORNER_MIDDLE)[0] > v(face, N.INNER_CORNER)[0]
+    # above the lip / below the lip follow the centre-to-corner columns
+    for row in (N.ABOVE_LIP, N.BELOW_LIP):
+        assert v(face, row[0])[1] == 0 and v(face, row[1])[1] < v(face, row[2])[1]
+    assert all(v(face, n)[2] > v(face, N.UL)[2] for n in N.ABOVE_LIP)
+    assert all(v(face, n)[2] < v(face, N.LL)[2] for n in N.BELOW_LIP)
+
+
+def test_teeth(face):
+    tip = v(face, N.TEETH_TIP)
+    upper = face.vertices[np.asarray(N.UPPER_TEETH) - 1]
+    # 226: the bottom of the top front teeth: front-most and lowest of the front teeth
+    assert tip[0] == upper[:, 0].max()
+    assert tip[2] <= upper[upper[:, 0] > tip[0] - 30, 2].min() + 1e-9
+    # MANi 258 on the lower incisor's outer surface at the gum line, below 226
+    mani = v(face, N.MANI)
+    assert mani[2] < tip[2] and abs(mani[0] - tip[0]) < 20
+    lower_tip = v(face, N.LOWER_INCISOR_TIP)
+    assert lower_tip[2] > mani[2] and lower_tip[2] > tip[2]      # overbite
+    # MANm site: about 35 mm behind MANi (XRMB jaw lengths are ~30-40 mm)
+    assert 30 < face.jaw_length * N.MM_PER_UNIT < 40
+    mm = 0.5 * (v(face, 281) + v(face, 286))
+    assert mm[0] < mani[0] - 100 and mm[1] > 50
+    teeth = [p for p in face.polygons if face.material_name(p.material) == "teeth"]
+    assert len(teeth) == 16 and all(len(p.vertices) == 4 for p in teeth)
+    assert sorted(n for p in teeth for n in p.vertices) == list(N.TEETH)
+
+
+def test_tongue_flat_inside_lower_arch(face):
+    t = face.vertices[np.asarray(N.TONGUE) - 1]
+    assert np.ptp(t[:, 2]) == 0.0                     # flat: no width in z (4.1.1)
+    xs = [v(face, n)[0] for n in N.TONGUE_CENTRE]
+    assert xs == sorted(xs, reverse=True)            # tip, T1..T4, back: front to back
+    # T1 about 10 mm behind the tip (thesis 3.2.3)
+    assert abs((xs[0] - xs[1]) * N.MM_PER_UNIT - 10) < 1
+    pts, _ = arch_points("lower")
+    order = np.argsort(pts[:, 0])
+    for n in N.TONGUE_EDGE:
+        x, y, _ = v(face, n)
+        if x >= pts[:, 0].min():
+            assert y < np.interp(x, pts[order, 0], pts[order, 1]), n
+    tongue = face.polygons_of("tongue")
+    assert sorted({n for p in tongue for n in p.vertices}) == list(N.TONGUE)
+
+
+def test_jaw_zones_as_data():
+    parke = {z: f for z, f, _, _ in N.PARKE_JAW_ZONES}
+    assert parke == {"1st": 1.0, "2nd": 0.9, "3rd": 0.75, "4th": 0.5, "5th": 0.35}
+    cassi = dict((z, f) for z, f, _, _ in N.CASSI10_JAW_ZONES)
+    for z in parke:
+        assert cassi[z] == pytest.approx(parke[z] * 1.11111, abs=1e-6)
+    first = next(vs for z, _, vs, _ in N.CASSI10_JAW_ZONES if z == "1st")
+    assert 22 not in first and 30 not in first and len(first) == 28
+    assert all(ax == "z" for z, _, vs, ax in N.PARKE_JAW_ZONES if 6 in vs or 11 in vs)
+
+
+def test_jaw_and_cheek_regions(face):
+    jaw = face.vertices[np.asarray(N.JAW) - 1]
+    assert (jaw[:, 2] < v(face, N.LL)[2] + 60).all()   # the jaw is below the mouth
+    # 22 and 30 at the back of the jaw: among the rearmost jaw vertices
+    back = np.asarray(N.JAW)[np.argsort(jaw[:, 0])[:5]]
+    assert 22 in back and 30 in back
+    pivot = v(face, N.JAW_PIVOT)
+    assert pivot[0] < jaw[:, 0].min() + 120 and pivot[2] > jaw[:, 2].max()
+    cheek = face.vertices[np.asarray(N.LOWER_CHEEK) - 1]
+    assert (cheek[:, 1] > v(face, N.CORNER)[1] * 0.9).all()
+    nose = face.vertices[np.asarray(N.NOSE) - 1]
+    assert v(face, N.NOSE_TIP_CENTRE)[0] == nose[:, 0].max()
+    assert v(face, N.SUBNASALE)[2] > v(face, N.UL)[2]
+
+
+# --- the mesh ----------------------------------------------------------------------------------
+
+def _shell(topo, face):
+    verts, tri, part = topo.mesh(face.vertices)
+    names = list(topo.parts)
+    shell = np.isin(part, [names.index(p) for p in ("skin", "lips", "eyelash", "eyebrow")
+                           if p in names])
+    return verts, tri[shell]
+
+
+def test_skin_closed_except_neck_mouth_eyes(face, topo):
+    verts, tri = _shell(topo, face)
+    assert len(nonmanifold_edges(tri)) == 0
+    assert len(inconsistent_edges(tri)) == 0
+    loops = boundary_loops(tri)
+    centres = sorted((verts[loop].mean(axis=0).tolist() for loop in loops), key=lambda c: c[2])
+    assert len(loops) == 4, [len(loop) for loop in loops]
+    neck, mouth, eye1, eye2 = centres
+    assert neck[2] < -450                                 # the base of the neck
+    assert abs(mouth[2] - v(face, N.TEETH_TIP)[2]) < 20 and abs(mouth[1]) < 1e-6
+    assert {np.sign(eye1[1]), np.sign(eye2[1])} == {-1.0, 1.0}
+    # the mouth opening is bounded by the inner lip outline and inner corners
+    mouth_loop = next(lp for lp in loops if abs(verts[lp].mean(axis=0)[2] - mouth[2]) < 1e-9)
+    assert len(mouth_loop) == 2 * 2 * len(N.UPPER_INNER) - 2 + 2
+
+
+def test_skin_normals_face_outward(face, topo):
+    verts, tri = _shell(topo, face)
+    assert signed_volume(verts, tri) > 0
+    # the skin is star-shaped about CENTRE: every skin triangle faces away from it, except the
+    # eyelids' inner lip (which touches the eyeball and faces it)
+    verts, tri, part = topo.mesh(face.vertices)
+    skin = tri[part == list(topo.parts).index("skin")]
+    p = verts[skin]
+    d_eye = np.min([np.linalg.norm(p - c * np.array([1, s, 1]), axis=2)
+                    for c in face.eye_centres[:1] for s in (1, -1)], axis=0)
+    lid_lip = (d_eye < 0.5 * (EYEBALL_RADIUS + EYELID_RADIUS)).any(axis=1)
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    c = p.mean(axis=1) - CENTRE
+    out = np.einsum("ij,ij->i", n, c) > 0
+    assert out[~lid_lip].all(), np.round(p[~lid_lip & ~out].mean(axis=1))
+    assert lid_lip.sum() < 40
+
+
+def test_closed_parts(face, topo):
+    verts, tri, part = topo.mesh(face.vertices)
+    names = list(topo.parts)
+    eye = np.isin(part, [names.index(p) for p in ("eye_white", "iris", "fringe", "pupil")])
+    assert len(boundary_loops(tri[eye])) == 0               # eyeballs are closed
+    assert signed_volume(verts, tri[eye]) > 0
+    for name in ("teeth", "tongue", "palate"):
+        assert name in names
+
+
+def test_expand_mirrors(face, topo):
+    parts = topo.expand(face.vertices)
+    assert set(parts) == set(topo.parts)
+    for name, arr in parts.items():
+        assert arr.dtype == np.float32 and arr.shape == (len(topo.parts[name].gather), 3)
+        tri = topo.parts[name].triangles
+        assert tri.min() >= 0 and tri.max() < len(arr)
+    skin = parts["skin"]
+    # mirrored: for every left vertex off the centre line a right copy exists
+    ys = np.sort(skin[:, 1])
+    np.testing.assert_allclose(ys, -ys[::-1], atol=1e-4)
+    # moving a vertex moves both copies
+    moved = face.vertices.copy()
+    moved[N.CHEEK_BY_CORNER - 1, 0] += 10.0
+    skin2 = topo.expand(moved)["skin"]
+    assert int((np.abs(skin2 - skin).sum(axis=1) > 1e-3).sum()) == 2
+
+
+def test_half_topology(face):
+    half = render_topology(face, half=True)
+    assert half.half
+    parts = half.expand(face.vertices)
+    assert all((arr[:, 1] >= -1e-6).all() for arr in parts.values())
+    full = render_topology(face)
+    assert len(half.parts["skin"].triangles) * 2 == len(full.parts["skin"].triangles)
+    # one eye only
+    assert len(half.parts["pupil"].triangles) * 2 == len(full.parts["pupil"].triangles)
+    # open at the cut: the boundary runs along y = 0
+    verts, tri, part = half.mesh(face.vertices)
+    skin = tri[part == list(half.parts).index("skin")]
+    loops = boundary_loops(skin)
+    on_cut = np.abs(verts[np.unique(np.concatenate(loops)), 1]) < 1e-6
+    assert on_cut.sum() > 20
+
+
+# --- palate ------------------------------------------------------------------------------------
+
+def test_palate_fixed_count_and_shape(face):
+    pal1 = face.vertices[np.asarray(N.PALATE) - 1]
+    short = np.array([(-4.0, 8.0), (-20.0, 20.0), (-45.0, 22.0)])
+    long = np.column_stack([np.linspace(-3, -55, 40), 10 + 12 * np.sin(np.linspace(0, 2.5, 40))])
+    for outline in (short, long):
+        f = build_face(palate_mm=outline)
+        assert f.vertex_count == face.vertex_count
+        pal = f.vertices[np.asarray(N.PALATE) - 1].reshape(N.PALATE_STATIONS, N.PALATE_ACROSS, 3)
+        width = pal[:, -1, 1]
+        assert width[-1] > width[0] * 1.5                    # narrow in front, wider behind
+        assert (pal[:, 1:, 2] <= pal[:, :-1, 2] + 1e-9).all()  # slopes down to the edges
+        assert (np.diff(pal[:, 0, 0]) < 0).all()             # stations front to back
+        # the centre line follows PAL.DAT mapped to 226 at 4 units/mm
+        front = f.vertex(N.TEETH_TIP)[[0, 2]] + outline[0] * N.UNITS_PER_MM
+        np.testing.assert_allclose(pal[0, 0, [0, 2]], front, atol=1e-6)
+    assert not np.allclose(pal1.reshape(pal.shape), pal)
+
+
+def test_palate_scale_from_jaw_length():
+    outline = np.array([(-5.0, 8.0), (-40.0, 20.0)])
+    f = build_face(palate_mm=outline, jaw_length_mm=70.0)
+    pal = f.vertex(N.PALATE_FIRST)
+    scale = f.jaw_length / 70.0                              # p / d
+    np.testing.assert_allclose(pal[[0, 2]], f.vertex(N.TEETH_TIP)[[0, 2]] + outline[0] * scale)
+
+
+@pytest.mark.parametrize("bad", [np.zeros((1, 2)), np.full((3, 2), np.nan), np.zeros((3, 3))])
+def test_bad_palate(bad):
+    with pytest.raises(CassiInputError):
+        build_face(palate_mm=bad)
+
+
+# --- files -------------------------------------------------------------------------------------
+
+def test_face_files_round_trip(face, tmp_path):
+    paths = face.write(tmp_path)
+    assert paths["st1"].read_text().splitlines()[1] == f"{face.vertex_count} {face.vertex_count}"
+    back = FaceModel.read(paths["st1"], paths["top"], paths["st2"])
+    np.testing.assert_array_equal(back.st1, face.st1)
+    np.testing.assert_array_equal(back.st2, face.st2)
+    assert back.polygons == face.polygons
+    np.testing.assert_allclose(back.eye_centres, face.eye_centres, atol=1e-6)
+
+
+def test_parke_sized_files_load(tmp_path):
+    """A Parke-sized model (287 vertices, some undefined, no eyes) loads and renders."""
+    verts = np.full((287, 3), np.nan)
+    for n, xyz in PARKE_EXCERPT.items():
+        verts[n - 1] = xyz
+    from cassi.data.parke_io import Polygon, write_pts, write_top
+    write_pts(tmp_path / "st1.pts", verts, "st1.pts - first vertices set FIP 10 May 90")
+    write_top(tmp_path / "stt.top", [Polygon(1, (1, 6, 7, 2)), Polygon(1, (7, 8, 2)),
+                                     Polygon(1, (2, 8, 3))], "stt.top - simple face")
+    f = FaceModel.read(tmp_path / "st1.pts", tmp_path / "stt.top")
+    assert f.vertex_count == 287 and f.eyes_first is None
+    t = render_topology(f)
+    assert len(t.parts["skin"].triangles) == 2 * 4
+    write_top(tmp_path / "bad.top", [Polygon(1, (1, 6, 40))])
+    with pytest.raises(CassiInputError):
+        FaceModel.read(tmp_path / "st1.pts", tmp_path / "bad.top")
