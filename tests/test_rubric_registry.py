@@ -74,7 +74,7 @@ def test_every_rubric_md_criterion_is_registered(shared_dir):
 
 def test_grading_by_thresholds_and_direction():
     c = R.CHECKS["lips_never_touch"]           # higher is worse: 1.0 -> 1, 4.0 -> 2
-    assert [c.grade(v) for v in (0.0, 1.0, 1.01, 3.9, 4.01, 100.0)] == [0, 0, 1, 1, 2, 2]
+    assert [c.grade(v) for v in (0.0, 1.5, 1.51, 3.9, 4.01, 100.0)] == [0, 0, 1, 1, 2, 2]
     assert c.grade(float("nan")) == 0
     lo = R.CHECKS["lips_into_nose"]            # lower is worse: 0.5 -> 1, 0.2 -> 2
     assert [lo.grade(v) for v in (1.0, 0.49, 0.19, -1.0)] == [0, 1, 2, 2]
