@@ -59,24 +59,29 @@ def cpu_stage(job: Job, ctx: StageContext, inputs) -> StageOutput:
     return StageOutput(rows=pd.DataFrame(rows), meta={"render_frames": [], "iterations": n})
 
 
+def _noop() -> int:
+    return os.getpid()
+
+
 def _workload(quick: bool):
     """The batch to time: the real pipeline (geometry and renders of the default corpus) when
     its packages are present, else the CPU-bound stage; with a description of which."""
     try:
-        from .farm import plan  # noqa: PLC0415
         from .config import RunConfig  # noqa: PLC0415
-        from .pipeline import cassi_pipeline  # noqa: PLC0415
+        from .farm import plan  # noqa: PLC0415
+        from .pipeline import cassi_pipeline, warm_worker  # noqa: PLC0415
 
         views = ("front",) if quick else ("front", "half")
-        cfg = RunConfig(versions=("cassi-2.1",) if quick else None, views=views,
-                        stride=0 if quick else 50)
+        cfg = RunConfig(subjects=("JW11",), versions=("cassi-2.1",) if quick else None,
+                        views=views, stride=0 if quick else 200)
         corpus, tasks, versions, views = plan(cfg)
-        tasks = [t for t in tasks if t.usable][: 4 if quick else 12]
+        tasks = [t for t in tasks if t.usable]
         if not tasks:
             raise RuntimeError("the default corpus gave no usable task file")
-        return {"kind": "cassi pipeline (default corpus, geometry + renders)",
+        return {"kind": "cassi pipeline (default corpus JW11, geometry + renders + image checks)",
                 "tasks": tasks, "versions": versions, "views": list(views),
                 "pipeline": cassi_pipeline(render=True),
+                "warm": (warm_worker, (str(corpus.root), "JW11", tuple(views), "preview", None, 1)),
                 "ctx": dict(corpus=Path(corpus.root), stride=cfg.stride, chunk_size=4,
                             preset="preview", synthetic=True)}, None
     except Exception as err:  # noqa: BLE001 - fall back, and say why
@@ -84,30 +89,40 @@ def _workload(quick: bool):
     n = 8 if quick else 16
     return {"kind": "cpu-bound test stage (~0.2 s/job) - the CASSI pipeline was unavailable",
             "tasks": [TaskSpec("BENCH", i + 1) for i in range(n)], "versions": ["bench"],
-            "views": [], "pipeline": Pipeline(geometry=cpu_stage),
+            "views": [], "pipeline": Pipeline(geometry=cpu_stage), "warm": (None, ()),
             "ctx": dict(options=(("work", 0.1 if quick else 0.2),))}, why
 
 
-def _time_batch(work: dict, executor, tmp: Path, name: str) -> dict:
-    out = tmp / name
-    ctx = StageContext(out_dir=out, **work["ctx"])
+def _time_batch(work: dict, executor, n_workers: int, tmp: Path, name: str) -> dict:
+    """Start ``executor``, wait until each of its workers has run the warm-up, time the batch."""
     t0 = time.perf_counter()
     executor.start()
-    # Warm every worker (imports, caches) on a throwaway copy of the batch's first job, so the
-    # timed batch measures steady-state throughput, not process start-up.
-    warm = tmp / f"{name}-warm"
-    first = work["tasks"][:1]
-    run_batch(first, work["versions"][:1], work["views"][:1], work["pipeline"],
-              StageContext(out_dir=warm, **work["ctx"]), executor, progress=False)
+    # One trivial item per worker: a worker runs its set-up (the warm-up) before its first item,
+    # so when these come back every worker is warm. (Ray: concurrent warm-up tasks.)
+    init, initargs = work["warm"]
+    for i in range(n_workers):
+        if isinstance(executor, RayExecutor) and init is not None:
+            executor.submit(f"warm{i}", init, *initargs)
+        else:
+            executor.submit(f"warm{i}", _noop)
+    while executor.pending():
+        for fin in executor.wait(timeout=1.0):
+            if not fin.ok:
+                raise RuntimeError(f"warm-up failed: {fin.error}")
     startup = time.perf_counter() - t0
+    ctx = StageContext(out_dir=tmp / name, **work["ctx"])
     t1 = time.perf_counter()
     res = run_batch(work["tasks"], work["versions"], work["views"], work["pipeline"], ctx,
                     executor, progress=False)
     wall = time.perf_counter() - t1
     c = res.summary.counts()
     jobs = c["done"]
-    return {"jobs": jobs, "failed": c["failed"], "skipped": c["skipped"],
-            "seconds": round(wall, 3), "jobs_per_s": round(jobs / wall, 3) if wall else None,
+    by_stage = {}
+    for rec in res.records.values():
+        by_stage[rec.stage] = by_stage.get(rec.stage, 0) + 1
+    return {"jobs": jobs, "jobs_by_stage": by_stage, "failed": c["failed"],
+            "skipped": c["skipped"], "seconds": round(wall, 3),
+            "jobs_per_s": round(jobs / wall, 3) if wall else None,
             "startup_s": round(startup, 3)}
 
 
@@ -115,24 +130,27 @@ def bench_farm(quick: bool = False) -> dict:
     """Jobs per second with 1 and 2 local workers, and with Ray, on the same batch."""
     work, fallback_reason = _workload(quick)
     out: dict = {"workload": work["kind"], "versions": work["versions"], "views": work["views"],
-                 "task_files": len(work["tasks"])}
+                 "task_files": len(work["tasks"]), "threads_per_worker": 1}
     if fallback_reason:
         out["pipeline_unavailable"] = fallback_reason
     tmp = Path(tempfile.mkdtemp(prefix="cassi-bench-"))
+    init, initargs = work["warm"]
     try:
         for n in (1, 2):
-            with LocalExecutor(n) as ex:
-                out[f"local_{n}"] = _time_batch(work, ex, tmp, f"local{n}")
+            with LocalExecutor(n, initializer=init, initargs=initargs) as ex:
+                out[f"local_{n}"] = _time_batch(work, ex, n, tmp, f"local{n}")
         a, b = out["local_1"]["jobs_per_s"], out["local_2"]["jobs_per_s"]
         out["speedup_2_workers"] = round(b / a, 3) if a and b else None
         out["speedup_goal"] = SPEEDUP_GOAL
         try:
             import ray  # noqa: PLC0415
 
+            from .pipeline import worker_env  # noqa: PLC0415
+
             owned = not ray.is_initialized()
-            ex = RayExecutor(None, num_cpus=2)
+            ex = RayExecutor(None, num_cpus=2, initializer=worker_env, initargs=(1,))
             try:
-                out["ray_2"] = _time_batch(work, ex, tmp, "ray")
+                out["ray_2"] = _time_batch(work, ex, 2, tmp, "ray")
             finally:
                 ex.close()
                 if owned and ray.is_initialized():

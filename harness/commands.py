@@ -34,6 +34,7 @@ def _add_run(sub) -> None:
     p.add_argument("--executor", choices=C.EXECUTORS, help="local processes (default) or ray")
     p.add_argument("--address", help="Ray cluster address (default: start a local cluster)")
     p.add_argument("--workers", help="worker processes (default 1)")
+    p.add_argument("--threads", help="CPU threads per worker process (default 1)")
     p.add_argument("--retries", help="retries of a job whose worker died (default 1)")
     p.add_argument("--out", type=Path, help="output directory (required here or in --config)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")

@@ -12,6 +12,7 @@ Example ``run.toml``::
     preset = "preview"
     executor = "local"               # or "ray" (with address = "host:port", else a local cluster)
     workers = 2
+    threads = 1                      # CPU threads per worker (renderer); a worker is one core
 
 Fields are checked when loaded (types and ranges, unknown keys with the list of valid ones);
 names (subjects, tasks, versions, views, presets) are checked against what exists before any
@@ -56,6 +57,7 @@ class RunConfig:
     executor: str = "local"
     address: str | None = None
     workers: int = 1
+    threads: int = 1
     retries: int = 1
 
     def replace(self, **changes) -> "RunConfig":
@@ -64,7 +66,7 @@ class RunConfig:
 
 FIELDS = tuple(f.name for f in dataclasses.fields(RunConfig))
 _LISTS = {"subjects": str, "tasks": int, "versions": str, "views": str}
-_INTS = {"stride": 0, "chunk": 1, "workers": 1, "retries": 0}   # name -> minimum
+_INTS = {"stride": 0, "chunk": 1, "workers": 1, "threads": 1, "retries": 0}   # name -> minimum
 _STRS = ("preset", "variant", "executor", "address")
 
 

@@ -40,8 +40,12 @@ class _Item:
 
 def _worker_main(conn, initializer, initargs) -> None:
     """A worker process: run items sent over ``conn`` until told to stop or the pipe closes."""
+    init_error = ""
     if initializer is not None:
-        initializer(*initargs)
+        try:
+            initializer(*initargs)
+        except Exception as err:  # noqa: BLE001 - every item then fails with this reason
+            init_error = f"worker set-up failed: {type(err).__name__}: {err}"
     while True:
         try:
             msg = conn.recv()
@@ -50,6 +54,12 @@ def _worker_main(conn, initializer, initargs) -> None:
         if msg is None:
             return
         key, fn, args = msg
+        if init_error:
+            try:
+                conn.send((key, False, None, init_error))
+                continue
+            except (BrokenPipeError, OSError):
+                return
         try:
             value = fn(*args)
             reply = (key, True, value, "")
@@ -201,7 +211,9 @@ class LocalExecutor:
         self._busy.clear()
 
 
-def _ray_call(fn, args):
+def _ray_call(init, initargs, fn, args):
+    if init is not None:  # Ray reuses its workers too; the set-up is idempotent and cheap
+        init(*initargs)
     return fn(*args)
 
 
@@ -219,8 +231,10 @@ class RayExecutor:
 
     name = "ray"
 
-    def __init__(self, address: str | None = None, *, retries: int = 1, num_cpus: int = 2):
+    def __init__(self, address: str | None = None, *, retries: int = 1, num_cpus: int = 2,
+                 initializer: Callable | None = None, initargs: tuple = ()):
         self.address = address
+        self._init = (initializer, initargs)
         self.retries = int(retries)
         self.num_cpus = int(num_cpus)
         self._refs: dict[Any, _Item] = {}
@@ -253,7 +267,7 @@ class RayExecutor:
 
     def submit(self, key: str, fn: Callable, *args) -> None:
         item = _Item(key, fn, args, attempts=1)
-        self._refs[self._remote.remote(fn, args)] = item
+        self._refs[self._remote.remote(*self._init, fn, args)] = item
 
     def pending(self) -> int:
         return len(self._refs)
@@ -296,14 +310,16 @@ class RayExecutor:
 
 
 def make_executor(kind: str, *, workers: int = 1, address: str | None = None,
-                  retries: int = 1, initializer: Callable | None = None):
+                  retries: int = 1, initializer: Callable | None = None, initargs: tuple = ()):
     """``"local"`` -> :class:`LocalExecutor`, ``"ray"`` -> :class:`RayExecutor`.
 
-    ``initializer`` runs once in each local worker process before its first item.
+    ``initializer(*initargs)`` runs in each local worker process before its first item (and
+    before every Ray task: it must be idempotent).
     """
     if kind == "local":
-        return LocalExecutor(workers, retries=retries, initializer=initializer)
+        return LocalExecutor(workers, retries=retries, initializer=initializer, initargs=initargs)
     if kind == "ray":
         # The brief's local cluster: 2 CPUs, or more when more workers were asked for.
-        return RayExecutor(address, retries=retries, num_cpus=max(2, int(workers)))
+        return RayExecutor(address, retries=retries, num_cpus=max(2, int(workers)),
+                           initializer=initializer, initargs=initargs)
     raise CassiInputError(f"unknown executor {kind!r}; valid: local, ray")

@@ -69,9 +69,9 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
     with store.lock():
         store.remove_partials()
         atomic_write_text(store.root / "run.json", json.dumps(meta, indent=1, default=str))
-        worker_env()
         executor = make_executor(cfg.executor, workers=cfg.workers, address=cfg.address,
-                                 retries=cfg.retries, initializer=worker_env)
+                                 retries=cfg.retries, initializer=worker_env,
+                                 initargs=(cfg.threads,))
         with executor:
             result = run_batch(tasks, versions, views, pipeline, ctx, executor,
                                progress=progress, extra_meta={"synthetic": synthetic})

@@ -270,8 +270,34 @@ def catalog(corpus):
                    presets=tuple(PRESET_NAMES))
 
 
-def worker_env() -> None:
-    """Environment a worker needs before importing Mitsuba (LLVM for the llvm variants)."""
-    llvm = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
-    if "DRJIT_LIBLLVM_PATH" not in os.environ and os.path.exists(llvm):
-        os.environ["DRJIT_LIBLLVM_PATH"] = llvm
+def worker_env(threads: int | None = 1) -> None:
+    """Set up a worker process: ``threads`` CPU threads for its native libraries.
+
+    A farm worker is one core by default: the farm scales by processes, and a renderer that
+    spread over every core in each of N workers would only make them fight (Dr.Jit's LLVM
+    backend otherwise starts a thread per core in every process). None leaves the defaults.
+    """
+    if threads is None:
+        return
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, str(threads))
+    try:
+        import drjit  # noqa: PLC0415
+
+        drjit.set_thread_count(int(threads))
+    except (ImportError, AttributeError, RuntimeError):
+        pass
+
+
+def warm_worker(corpus: str | None, subject: str, views=(), preset: str = "preview",
+                variant: str | None = None, threads: int | None = 1) -> None:
+    """:func:`worker_env`, then fill this process's caches for ``subject`` (corpus, profile,
+    face, one renderer per view, its kernels compiled by one render), so that timings after it
+    describe the steady state (``cassi bench``)."""
+    worker_env(threads)
+    c = get_corpus(corpus)
+    profile = get_profile(c, subject)
+    face = get_face(c, subject, profile)
+    get_neutral()
+    for view in views:
+        get_renderer(c, subject, face, view, preset, variant).render(np.asarray(face.vertices))
