@@ -300,3 +300,35 @@ def test_2_1_policy_adjusts_low_lips():
 
 def test_lip_vertex_list_is_the_thesis_lips():
     assert set(LIP_VERTICES) == set(range(49, 71)) | {287, 300}
+
+
+def test_lip_subject_maps_maxprotru_and_lipthick_into_parke_space():
+    """4.2.1 and 4.2.3: key x values scaled by Parke's jaw distance p and translated to vertex
+    226; Thick = lipthick * p / 2. With p = 200 and x_226 = 10:
+    x_rest = 0.5 * 200 + 10 = 110, x_max = 0.7 * 200 + 10 = 150, x_min = 0.1 * 200 + 10 = 30,
+    Thick = 0.6 * 200 / 2 = 60."""
+    from types import SimpleNamespace
+
+    from cassi.versions.lips import lip_subject
+
+    prof = SimpleNamespace(subject="T", rest_ul=0.5, max_ul=0.7, min_ul=0.1, lipthick=0.6)
+    s = lip_subject(prof, 200.0, 10.0)
+    assert (s.x_rest, s.x_max, s.x_min, s.thick) == pytest.approx((110.0, 150.0, 30.0, 60.0))
+    with pytest.raises(CassiInputError, match="lipthick"):
+        lip_subject(SimpleNamespace(**{**vars(prof), "lipthick": float("nan")}), 200.0, 10.0)
+
+
+def test_corners_keep_the_face_depth_behind_their_track():
+    ul, ll = protrusion_trajectory()
+    lips = lip_frames(ul, ll, REST, SUBJECT)
+    # On the stand-in face: 70 at (78, 68): track of the outer centre (100 + 98)/2 = 99 at
+    # y = 68 is 99 - 68^2/148 = 67.76, so 70 sits 10.24 in front of it; 287 at (76, 60) against
+    # (97 + 96)/2 - 60^2/148 = 72.18: 3.82 in front.
+    assert REST.corner_dx == pytest.approx(78 - (99 - 68 ** 2 / 148))
+    assert REST.inner_corner_dx == pytest.approx(76 - (96.5 - 60 ** 2 / 148))
+    h = 0.5 * (lips.vertex(67)[:, 0] + lips.vertex(49)[:, 0])
+    y70 = lips.vertex(70)[:, 1]
+    np.testing.assert_allclose(lips.vertex(70)[:, 0], h - y70 ** 2 / 148 + REST.corner_dx)
+    # 287 keeps 60/68 of 70's y and its height above the mouth's centre line (0 here).
+    np.testing.assert_allclose(lips.vertex(287)[:, 1], 60 / 68 * y70)
+    np.testing.assert_allclose(lips.vertex(287)[:, 2], lips.vertex(70)[:, 2])
