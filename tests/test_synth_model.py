@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from cassi.data.profile import read_lipthick, read_maxprotru
 from cassi.data.synth import PERIOD_S, generate_task
@@ -198,3 +200,26 @@ def test_same_seed_same_tracks_other_seed_other_tracks():
     c = generate_task(fig, 24, seed=2)[1]
     assert np.array_equal(a, b)
     assert a.shape != c.shape or not np.array_equal(a, c)
+
+
+# ----------------------------------------------------------------------------- properties
+
+@settings(max_examples=25, deadline=None)
+@given(name=st.sampled_from(sorted(SUBJECTS)), task=st.integers(1, 118),
+       seed=st.integers(0, 2**31 - 1), rep=st.integers(1, 3))
+def test_any_subject_task_and_seed_gives_plausible_tracks(name, task, seed, rep):
+    fig = SUBJECTS[name]
+    t_us, xy = generate_task(fig, task, seed=seed, rep=rep)
+    assert xy.shape == (t_us.size, 8, 2) and t_us.size > 200
+    assert np.isfinite(xy).all() and np.abs(xy).max() < 120.0
+    assert _speeds(xy).max() < 600.0
+    # the recording starts at rest: lips where the profile says (posture jitter and noise only)
+    d = fig.jaw_length_mm
+    assert abs(xy[0, 0, 0] / d - fig.rest_ul) < 0.03
+    assert abs(np.hypot(*(xy[0, 0] - xy[0, 1])) / d - fig.lipthick) < 0.03
+    # the upper lip never goes beyond the subject's maximum protrusion
+    assert xy[:, 0, 0].max() / d < fig.max_ul + 0.02
+    pal = fig.palate
+    tongue = xy[:, 2:6].reshape(-1, 2)
+    inside = tongue[:, 0] < pal[0]
+    assert (tongue[inside, 1] <= palate_y(pal, tongue[inside, 0]) + 0.8).all()
