@@ -86,9 +86,9 @@ SMALL_C_PRIME: float = 25.0
 #: real lips at full protrusion keep roughly that fraction of their resting width; without
 #: it Eq. 4.8 with c' = 0 and closed lips gives a pinhole mouth (a = b ~ 0).
 A_MIN: float = 40.0
-#: A_MAX: 110 units = sqrt(c_max^2 + 70^2): fully stretched lips (c = 85) opened to the
-#: widest jaw-wagging height seen on the face model (b ~ 70) and no wider, so the corners
-#: never leave the cheeks.
+#: A_MAX: 110 units = sqrt(c_max^2 + 70^2): fully stretched lips (c = 85) opened to a wide
+#: jaw-wagging height on the face model (b ~ 70, a 10-12 degree wag) and no wider, so the
+#: corners (at most a + 13.7) stay inside the cheeks (the face model's resting corner is at 98).
 A_MAX: float = 110.0
 #: C_LIMIT: c never exceeds c_max = 85, the most stretched shape the thesis defines; it also
 #: caps the focal distance of tall vertical ellipses (Eq. 4.14 'otherwise').
@@ -99,9 +99,9 @@ C_LIMIT: float = C_MAX
 #: ellipse. Reason: 8 units (2 mm at the face model's 0.25 mm a unit) beyond a at rest (c = 65),
 #: 13.7 when fully stretched (c = 85): a visible sharpening, about a tenth of the half-width,
 #: without a beak. Quadratic, not linear, in c because c = sqrt(a^2 - b^2) changes infinitely
-#: fast as the ellipse nears the switch (b -> a) while c^2 changes smoothly: with a linear rule
-#: the corner jumped up to 1.7 times the pellets' largest step per row at the switch on a
-#: jaw-wagging task. For a vertical ellipse c measures height, not stretch, so the corner stays
+#: fast as the ellipse nears the switch (b -> a) while c^2 changes smoothly: on jaw-wagging
+#: tasks on the face model (12-28 degrees) a linear rule (0.15 c) made the lips step up to 1.23
+#: times the lip pellets' largest step per row at the switch, the quadratic one at most 1.0. For a vertical ellipse c measures height, not stretch, so the corner stays
 #: at a (a stretched corner on a wide open mouth is the "diamond-shaped lips" fault of thesis
 #: Table 5.9); both rules give a at c = 0, the switch, so the corner does not jump there.
 CORNER_STRETCH_AT_REST: float = 8.0
