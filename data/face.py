@@ -71,6 +71,10 @@ class FaceModel:
         The PAL.DAT outline the palate was built from (XRMB mm), None for the default palate.
     head_measures : object | None
         The subject's head measures as given (used by the versions' chin adjustment).
+    regions : dict[str, tuple[int, ...]]
+        Vertex groups the generator names for the parameters (eyelid, eyelid_lip, brow,
+        eye_socket, forehead, cheek, mouth_expression); empty for Parke's own files, where the
+        parameters acting on them have no effect.
     """
 
     vertices: np.ndarray
@@ -84,6 +88,7 @@ class FaceModel:
     palate_mm: np.ndarray | None = None
     head_measures: object | None = None
     description: str = "cassi-farm face"
+    regions: dict[str, tuple[int, ...]] = field(default_factory=dict)
 
     def __post_init__(self):
         v = np.asarray(self.vertices, dtype=np.float64)
@@ -282,8 +287,10 @@ def _base_face(palate_xz) -> FaceModel:
     if np.isnan(st1).any():
         missing = np.flatnonzero(np.isnan(st1).any(axis=1)) + 1
         raise AssertionError(f"face generator left vertices undefined: {missing.tolist()}")
+    regions = {name: tuple(sorted(numbers[k] for k in keys))
+               for name, keys in lay.regions.items()}
     face = FaceModel(st1.copy(), tuple(polys), st1=st1, st2=st2, eye_centres=centres,
-                     eyes_first=N.EYES_FIRST,
+                     eyes_first=N.EYES_FIRST, regions=regions,
                      description="cassi-farm generated face (Parke's structure)")
     _BASE_CACHE[key] = face
     return face

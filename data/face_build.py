@@ -225,6 +225,8 @@ class Layout:
 
     nodes: dict[str, _Node] = field(default_factory=dict)
     polys: list[tuple[int, tuple[str, ...], tuple[int, ...]]] = field(default_factory=list)
+    #: named groups of node keys that parameters act on (eyelid, brow, cheek, ...)
+    regions: dict[str, list[str]] = field(default_factory=dict)
 
     def add(self, key, pos, want, closed=None) -> str:
         if key in self.nodes:
@@ -428,6 +430,7 @@ def build_layout(*, palate_xz: np.ndarray | None = None) -> Layout:
     # --- the mouth: below-lip row, lips, above-lip row ---------------------------------------
     lip = _lips(lay)
     corner_theta = lip["corner_theta"]
+    _mouth_expression(lay)
     r7 = plain(zrow("r7", [0.0, lip["col_theta"][1], lip["col_theta"][2], corner_theta + 6.0,
                            34, 46, 60, 82, 106, 142, 180],
                     [-306, -304, -299, -292, -286, -276, -262, -215, -190, -175, -170],
@@ -461,8 +464,9 @@ def build_layout(*, palate_xz: np.ndarray | None = None) -> Layout:
     rows.append((head + eye["lower"] + tail, head + eye["upper"] + tail))
 
     # --- brows, forehead, crown ----------------------------------------------------------------
-    plain(srow("r13", 22.0, 40.0, [0, 7, 14, 22, 31, 41, 53, 68, 90, 118, 148, 180],
-               ["nose", "nose"] + [F] * 10))
+    r13 = plain(srow("r13", 22.0, 40.0, [0, 7, 14, 22, 31, 41, 53, 68, 90, 118, 148, 180],
+                     ["nose", "nose"] + [F] * 10))
+    _brows(lay, r13[2:7], eye)
     plain(srow("r14", 34.0, 51.0, [0, 12, 25, 38, 53, 72, 95, 122, 150, 180], [F] * 10))
     plain(srow("r15", 48.0, 62.0, [0, 15, 31, 48, 68, 92, 120, 150, 180], [F] * 9))
     plain(srow("r16", 63.0, 72.0, [0, 20, 44, 72, 104, 140, 180], [F] * 7))
@@ -472,6 +476,15 @@ def build_layout(*, palate_xz: np.ndarray | None = None) -> Layout:
 
     for (_, up), (low, _) in zip(rows[:-1], rows[1:]):
         _stitch(lay, up, low)
+    # the brow: the band between the brow row and the orbit ring's upper nodes
+    band = set(lay.regions["brow"]) | set(eye["upper"][1:4])
+    lay.polys = [(EYEBROW if m == SKIN and set(k) <= band else m, k, c)
+                 for m, k, c in lay.polys]
+    lay.regions["eye_socket"] = list(eye["orbit"])
+    lay.regions["forehead"] = [k for k in lay.nodes if k.startswith(("r14.", "r15."))]
+    lay.regions["cheek"] = [k for k in lay.nodes if k.split(".")[0] in
+                            ("r8", "r9", "r10", "r11", "r12", "rm") and
+                            22.0 <= angles_of(lay.nodes[k].pos)[0] <= 62.0]
 
     _teeth(lay)
     _tongue(lay)
@@ -482,6 +495,26 @@ def build_layout(*, palate_xz: np.ndarray | None = None) -> Layout:
 
 #: Parke's jaw pivot (vertex 107): about the temporomandibular joint, in front of the ear.
 JAW_PIVOT_POS = np.array([12.0, 190.0, -95.0])
+
+
+#: Mouth expression (parameter 13): st1 is the neutral mouth (value 1, "slightly turned up"),
+#: st2 the corners turned down (value 0). Drop in z (Parke units) per vertex.
+MOUTH_FROWN = {"lip.corner": 12.0, "lip.corner300": 12.0, "lip.corner287": 11.0}
+MOUTH_FROWN_COLUMNS = (0.0, 2.0, 6.0)
+
+
+def _mouth_expression(lay: Layout):
+    keys = []
+    for k, node in lay.nodes.items():
+        if not k.startswith("lip."):
+            continue
+        drop = MOUTH_FROWN.get(k)
+        if drop is None:
+            drop = MOUTH_FROWN_COLUMNS[int(k.rsplit(".", 1)[1])]
+        if drop:
+            node.closed = node.pos - np.array([0.0, 0.0, drop])
+            keys.append(k)
+    lay.regions["mouth_expression"] = keys
 
 
 def _lips(lay: Layout) -> dict:
@@ -650,7 +683,25 @@ def _eye(lay: Layout) -> dict:
             lay.poly(mat, (outer[k], inner[k], inner[k2], outer[k2]))
     lower = [orbit[0], orbit[1], orbit[2], orbit[3], orbit[4]]
     upper = [orbit[0], orbit[7], orbit[6], orbit[5], orbit[4]]
-    return {"lower": lower, "upper": upper, "ring_C": rings["C"]}
+    lay.regions["eyelid"] = rings["A"] + rings["B"]
+    lay.regions["eyelid_lip"] = list(rings["C"])
+    return {"lower": lower, "upper": upper, "ring_C": rings["C"], "orbit": orbit}
+
+
+#: Eyebrow arch (parameter 2): z offsets (Parke units) of the brow, inner end to outer end, at
+#: arch 1 ("upside-down V") relative to the neutral brow (arch 0.5); arch 0 is the opposite
+#: ("slopes down from the centre to the edge").
+BROW_ARCH = np.array([-5.0, 2.0, 7.0, 2.0, -6.0])
+
+
+def _brows(lay: Layout, brow: list[str], eye: dict):
+    """Brow vertices with their st1 (arch 1) and st2 (arch 0) extremes about the neutral."""
+    for k, d in zip(brow, BROW_ARCH):
+        node = lay.nodes[k]
+        neutral = node.pos.copy()
+        node.pos = neutral + np.array([0.0, 0.0, d])
+        node.closed = neutral - np.array([0.0, 0.0, d])
+    lay.regions["brow"] = list(brow)
 
 
 # --- teeth, tongue, palate --------------------------------------------------------------------

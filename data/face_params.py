@@ -142,58 +142,87 @@ def jaw_rotation(vertices: np.ndarray, degrees: float, *, zones=None,
     """Parke's jaw rotation (3.1.3): each zone of Table 3.2 rotated by its fraction of the angle
     about vertex 107 (x and z, or z only). float (V, 3) -> float (V, 3).
 
-    A positive angle opens the mouth: Equations 3.5-3.6 with theta = -degrees, so that the chin
-    (in front of and below the pivot) swings down.
+    A positive angle opens the mouth: with Equations 3.5-3.6 as written, a positive theta turns
+    a point in front of the pivot (x > x_107) downwards, so the chin swings down and back.
     """
     v = np.asarray(vertices, np.float64).copy()
     zones = N.PARKE_JAW_ZONES if zones is None else zones
     pv = v[pivot - 1][[0, 2]]
     for _, frac, verts, axes in zones:
         idx = np.asarray(verts, np.int64) - 1
-        v[idx] = _rotate_xz(v[idx], pv, -np.radians(degrees * frac), axes)
+        v[idx] = _rotate_xz(v[idx], pv, np.radians(degrees * frac), axes)
     return v
 
 
-def _eyelid_numbers(face) -> np.ndarray:
-    diff = np.any(np.abs(face.st2 - face.st1) > 1e-9, axis=1)
-    return np.flatnonzero(diff)
+def _region(face, name) -> np.ndarray:
+    return np.asarray(face.regions.get(name, ()), np.int64) - 1
+
+
+def _interpolate(v, face, idx, value):
+    """Parke's interpolation: st2 at 0, st1 at 1 (dissertation chapter 2)."""
+    if len(idx):
+        v[idx] = face.st2[idx] + (face.st1[idx] - face.st2[idx]) * value
 
 
 def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
                      gaze_target=None):
     """The face with Parke's parameters applied (start values for the ones not given).
 
-    Implemented here: 1 (eyelid interpolation st1 <-> st2), 4 (jaw rotation, Table 3.2 zones),
-    5-6 (eyelid scales), 7-9 (head scales about the origin), 10-11 (nose scales), 12 (mouth
-    width), 26-27 (nose tip offsets), 28-30 (eyeball offsets), 31-32 (chin offsets), 38-40
-    (eyelid + eyeball offsets), 41-45 (eyeball construction), 47-48 (teeth offsets, relative to
-    the start values).
+    Every parameter of Table 3.1 acts (50, smoothness, is recorded for the renderer):
+
+    * interpolation between st2 (0) and st1 (1): 1 eyelids, 2 brow arch, 13 mouth expression;
+    * scaling: 5-6 eyelid width/height (re-projected onto the lid sphere), 7-9 the head about
+      the origin, 10-11 the nose's tip and bridge widths, 12 the mouth width, 19 the jaw width
+      (tapered from the chin to zero at the back of the jaw, dissertation 3.4.2), 20 the cheeks,
+      35 chin-to-mouth, 36 chin-to-eye, 37 eye-to-forehead heights, 46 growth (cheeks, jaw);
+    * translation: 3 brow separation, 14 lips forward, 15 the inner corner 287 in y, 16-18 the
+      mouth corners, 21 the lower lip's f tuck, 22 upper lip raise (tapered to the corner,
+      relative to its start 15), 26-27 nose tip, 28-30 eyeballs (30 relative to its start -15),
+      31-32 chin, 38-40 eyelids with the eyeballs, 47-48 teeth (48 relative to its start 38);
+    * rotation: 4 jaw rotation about vertex 107 with Table 3.2's zones;
+    * eyes: 41-44 rebuild the eyeballs (pupil, fringe, iris fractions, radius), 45 the lid
+      sphere's radius; the eyes look at ``gaze_target`` (Appendix A).
+
+    Regions that a model lacks (Parke's own files carry no region names) are left alone.
     """
     from cassi.data import eyes as E
     from cassi.data.face_build import EYE_CENTRE
 
     vals = check_parameters(values, clamp=clamp)
-    st1, st2 = face.st1, face.st2
+    st1 = face.st1
     v = st1.copy()
     n_parke = min(len(v), N.EYES_FIRST - 1)
-
-    # 1: eyelid opening, linear interpolation between closed (st2, 0) and open (st1, 1)
-    o = vals[1]
-    lid = _eyelid_numbers(face)
-    v[lid] = st2[lid] + (st1[lid] - st2[lid]) * o
-    # 5, 6: eyelid Y / Z scale about the eye centre (in the lid's 2D frame), 38-40 offsets
+    start = {k: p.start for k, p in PARAMETERS.items()}
     centre = face.eye_centres[0] if len(face.eye_centres) else EYE_CENTRE
-    if len(lid):
-        off = v[lid] - centre
-        off[:, 1] *= vals[5]
-        off[:, 2] *= vals[6]
-        # keep the lid on its sphere after scaling
-        r0 = np.linalg.norm(v[lid] - centre, axis=1)
-        r1 = np.linalg.norm(off, axis=1)
-        off *= (r0 / np.maximum(r1, 1e-9))[:, None]
-        v[lid] = centre + off + np.array([vals[38], vals[39], vals[40]])
 
-    # 10, 11: nose scales (Y) about the centre line; 26, 27: nose tip offsets
+    # --- interpolation ---------------------------------------------------------------------
+    lid, lid_lip = _region(face, "eyelid"), _region(face, "eyelid_lip")
+    _interpolate(v, face, np.concatenate([lid, lid_lip]), vals[1])
+    brow = _region(face, "brow")
+    _interpolate(v, face, brow, vals[2])
+    _interpolate(v, face, _region(face, "mouth_expression"), vals[13])
+
+    # --- eyes region -----------------------------------------------------------------------
+    if len(lid) or len(lid_lip):
+        for idx, radius in ((lid, None), (lid_lip, None)):
+            if not len(idx):
+                continue
+            off = v[idx] - centre
+            r0 = np.linalg.norm(off, axis=1)
+            off[:, 1] *= vals[5]
+            off[:, 2] *= vals[6]
+            r1 = np.linalg.norm(off, axis=1)
+            # back onto the lid sphere, whose radius parameter 45 scales (the lid's lip stays
+            # on the eyeball, whose radius is parameter 44)
+            scale = vals[45] / start[45] if idx is lid else vals[44] / start[44]
+            off *= (r0 * scale / np.maximum(r1, 1e-9))[:, None]
+            v[idx] = centre + off + np.array([vals[38], vals[39], vals[40]])
+    if len(brow):
+        # 3: brow separation moves the inner end (tapered to the outer end) away from the nose
+        w = np.linspace(1.0, 0.0, len(brow))
+        v[brow, 1] += vals[3] * w
+
+    # --- nose ------------------------------------------------------------------------------
     nose = np.asarray(N.NOSE) - 1
     tipz = v[N.NOSE_TIP_CENTRE - 1, 2]
     lower = nose[v[nose, 2] <= tipz + 40.0]
@@ -204,45 +233,83 @@ def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
     v[tip, 0] += vals[26]
     v[tip, 2] += vals[27]
 
-    # 12: mouth width
-    mouth = np.asarray(N.UPPER_LIP + N.LOWER_LIP + (N.CORNER, N.INNER_CORNER,
-                                                    N.CORNER_MIDDLE)) - 1
+    # --- mouth -----------------------------------------------------------------------------
+    corners = np.asarray((N.CORNER, N.CORNER_MIDDLE, N.INNER_CORNER)) - 1
+    lips = np.asarray(N.UPPER_LIP + N.LOWER_LIP) - 1
+    mouth = np.concatenate([lips, corners])
     v[mouth, 1] *= vals[12]
+    v[mouth, 0] += vals[14]
+    v[N.INNER_CORNER - 1, 1] += vals[15]
+    v[corners] += np.array([vals[16], vals[17], vals[18]])
+    # 21: f tuck moves the lower lip down and forward (+) or up and back (-), tapered to the
+    # corner like Parke's jaw zones (centre 1, then 0.9, 0.75)
+    taper = {0: 1.0, 1: 0.9, 2: 0.75}
+    for row in N.LOWER_LIP_ROWS:
+        for j, n in enumerate(row):
+            v[n - 1, 0] += 0.5 * vals[21] * taper[j]
+            v[n - 1, 2] -= vals[21] * taper[j]
+    # 22: raise the upper lip; full effect at the centre, none at the corner (dissertation 3.3)
+    for row in N.UPPER_LIP_ROWS:
+        for j, n in enumerate(row):
+            v[n - 1, 2] += (vals[22] - start[22]) * (1.0 - j / 3.0)
 
-    # 31, 32: chin offsets (the 1st jaw zone)
-    chin = np.asarray(N.JAW) - 1
-    v[chin, 0] += vals[31]
-    v[chin, 2] += vals[32]
+    # --- chin, jaw, cheeks -----------------------------------------------------------------
+    jaw = np.asarray(N.JAW) - 1
+    v[jaw, 0] += vals[31]
+    v[jaw, 2] += vals[32]
+    x_back, x_front = v[jaw, 0].min(), v[jaw, 0].max()
+    w = (v[jaw, 0] - x_back) / max(x_front - x_back, 1e-9)
+    v[jaw, 1] *= 1.0 + (vals[19] - 1.0) * w
+    cheek = np.union1d(_region(face, "cheek"), np.asarray(N.LOWER_CHEEK) - 1)
+    y_c = v[N.CORNER - 1, 1]
+    v[cheek, 1] = y_c + (v[cheek, 1] - y_c) * vals[20]
+    grow = np.union1d(cheek, jaw)
+    v[grow, 1] *= 1.0 + vals[46]
+    v[grow, 0] += vals[46] * 0.25 * np.abs(v[grow, 1])
 
-    # 47, 48: teeth offsets relative to the start values (48 starts at 38)
+    # --- teeth -----------------------------------------------------------------------------
     teeth = np.asarray(N.TEETH) - 1
-    v[teeth, 0] += vals[47] - PARAMETERS[47].start
-    v[teeth, 2] += vals[48] - PARAMETERS[48].start
+    v[teeth, 0] += vals[47] - start[47]
+    v[teeth, 2] += vals[48] - start[48]
 
-    # 4: jaw rotation with Parke's zones
+    # --- vertical proportions (35-37), about the mouth and the eyes ----------------------------
+    face_only = np.arange(n_parke)
+    z_mouth = v[N.TEETH_TIP - 1, 2]
+    z_eye = centre[2]
+    below_m = face_only[v[face_only, 2] < z_mouth]
+    v[below_m, 2] = z_mouth + (v[below_m, 2] - z_mouth) * vals[35]
+    below_e = face_only[v[face_only, 2] < z_eye]
+    v[below_e, 2] = z_eye + (v[below_e, 2] - z_eye) * vals[36]
+    above_e = face_only[v[face_only, 2] > z_eye]
+    above_e = np.setdiff1d(above_e, np.concatenate([lid, lid_lip]))
+    v[above_e, 2] = z_eye + (v[above_e, 2] - z_eye) * vals[37]
+
+    # --- 4: jaw rotation with Parke's zones (last of the face's own deformations) ------------
     if vals[4] != 0.0 and n_parke >= N.PARKE_VERTEX_COUNT:
         v = jaw_rotation(v, vals[4])
 
-    # eyes: 28-30 and 38-40 move the eyeballs; 41-44 rebuild them
+    # --- eyeballs --------------------------------------------------------------------------
     centres = np.asarray(face.eye_centres, np.float64).copy()
     if face.eyes_first is not None and len(centres) == 2:
         shift = np.array([vals[28] + vals[38], vals[29] + vals[39],
-                          vals[30] - PARAMETERS[30].start + vals[40]])
+                          vals[30] - start[30] + vals[40]])
         params = E.EyeParams(pupil_fraction=vals[41], fringe_fraction=vals[42],
                              iris_fraction=vals[43], radius=vals[44])
         from cassi.data.face import default_gaze_target
-        target = default_gaze_target() if gaze_target is None else np.asarray(gaze_target)
+        target = default_gaze_target() if gaze_target is None else np.asarray(gaze_target, float)
         for k in range(2):
             c = centres[k] + shift * np.array([1.0, 1.0 if k == 0 else -1.0, 1.0])
+            c[2] = z_eye + (c[2] - z_eye) * 1.0
             first = face.eyes_first + k * E.VERTS_PER_EYE
             v[first - 1:first - 1 + E.VERTS_PER_EYE] = E.place_eye(c, target, params)
 
-    # 7-9: head scales about the origin (last, so they scale everything)
+    # --- 7-9: head scales about the origin (last, so they scale everything) -----------------
     v *= np.array([vals[7], vals[8], vals[9]])
     return replace(face, vertices=v, parameters=vals)
 
 
 def look_at(face, target):
-    """The face with both eyes turned to ``target`` (Parke units, face coordinates)."""
+    """The face with both eyes turned to ``target`` (Parke units, face coordinates); the other
+    parameters keep the values the face was built with."""
     return apply_parameters(face, {k: val for k, val in face.parameters.items()
                                    if val != PARAMETERS[k].start}, gaze_target=target)
