@@ -23,6 +23,7 @@ import multiprocessing
 import os
 import shutil
 import tempfile
+import threading
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -469,8 +470,10 @@ def make_corpus(out_dir: str | os.PathLike, *, subjects=None, seed: int = DEFAUL
         raise CassiInputError(f"workers must be a positive integer, not {workers!r}")
     n_workers = workers if workers is not None else min(len(names), os.cpu_count() or 1)
     if n_workers > 1 and len(names) > 1:
-        # spawn, not fork: callers may be multi-threaded (Ray workers, the farm)
-        ctx = multiprocessing.get_context("spawn")
+        # fork is cheap and needs no `if __name__ == "__main__"` guard in the caller's script,
+        # but is unsafe in a multi-threaded process (Ray workers, the farm): spawn there
+        ctx = multiprocessing.get_context(
+            "fork" if threading.active_count() == 1 and os.name == "posix" else "spawn")
         with ProcessPoolExecutor(max_workers=n_workers, mp_context=ctx) as pool:
             futs = [pool.submit(make_subject, out, n, int(seed), align) for n in names]
             summaries = [f.result() for f in futs]
