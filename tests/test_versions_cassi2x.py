@@ -9,6 +9,8 @@ import dataclasses
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from _versions_toy import ToyFace, toy_profile, toy_recording, toy_vertices
 from cassi.versions import lips_constants as LK
@@ -234,3 +236,29 @@ def test_real_face_no_jump_at_the_ellipse_switch(real_face, profile):
     data = max(np.linalg.norm(np.diff(anim.vertex(v), axis=0), axis=1).max() for v in (67, 49))
     assert step[switches].max() <= data
     assert step.max() <= 1.05 * data
+
+
+@settings(max_examples=25, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(lipthick=st.floats(0.2, 2.5), ul_dy=st.floats(-6.0, 4.0))
+def test_2_1_differs_from_2_0_exactly_for_low_lip_subjects(face, lipthick, ul_dy):
+    """Thesis 4.3.1: 2.1 changes a subject only when, with 2.0's equal thicknesses, the upper
+    lip's inside edge (61) starts more than 20 units below vertex 226; then only the lips (and
+    what follows them) change."""
+    prof = dataclasses.replace(toy_profile(), lipthick=lipthick)
+    rec = toy_recording(60)
+    xy = rec.xy_mm.copy()
+    xy[:, UL, 1] += ul_dy            # the upper lip starts higher or lower over the teeth
+    rec = dataclasses.replace(rec, xy_mm=xy)
+    a20 = Cassi20().animate(prof, face, rec)
+    a21 = Cassi21().animate(prof, face, rec)
+    z226 = face.vertices[225, 2]
+    low = z226 - a20.vertex(61)[0, 2] > LK.LOW_LIPS_THRESHOLD
+    assert a21.diagnostics["thickness_rule"].iloc[0] == ("low-lips" if low else "equal")
+    if not low:
+        np.testing.assert_array_equal(a21.positions, a20.positions)
+    else:
+        diff = np.abs(a21.positions - a20.positions).max(axis=(0, 2))
+        changed = {i + 1 for i in np.nonzero(diff > 1e-4)[0]}
+        assert 61 in changed
+        assert changed <= set(LIP_VERTICES) | set(NEIGHBOURS) | set(NOSE_TIP)
