@@ -60,6 +60,7 @@ PHONE_SPECS: dict[str, dict] = {}
 for _p, (_j, (_bx, _by), _pr) in _V.items():
     PHONE_SPECS[_p] = {"jaw": _j, "prot": _pr, "lips": "open", "body": ("own", _bx, _by),
                        "tip": ("own", 0.4 * _bx, 0.5 * _by + (3.0 if _p == "ER" else 0.0))}
+del _p, _j, _bx, _by, _pr
 #: Diphthongs: two targets, share of the duration of the first.
 DIPHTHONGS = {"AY": ("AA", "IY", 0.55), "AW": ("AA", "UW", 0.55), "OY": ("AO", "IY", 0.55),
               "EY": ("EH", "IY", 0.6)}
