@@ -26,8 +26,16 @@ from cassi.data.parke_io import (Polygon, PtsFile, TopFile, read_pts, read_top, 
                                  write_top)
 from cassi.data.topology import RenderTopology, render_topology  # noqa: F401  (re-export)
 
-__all__ = ["FaceModel", "Material", "build_face", "RenderTopology", "render_topology",
-           "default_gaze_target"]
+__all__ = ["FaceModel", "Material", "build_face", "parke_parameters", "RenderTopology",
+           "render_topology", "default_gaze_target"]
+
+
+def parke_parameters(face: "FaceModel", values: dict[int, float] | None = None, *,
+                     clamp: bool = False, gaze_target=None) -> "FaceModel":
+    """``face`` with Parke's parameters (thesis Table 3.1 numbers -> values) applied; see
+    :func:`cassi.data.face_params.apply_parameters`."""
+    from cassi.data.face_params import apply_parameters
+    return apply_parameters(face, values or {}, clamp=clamp, gaze_target=gaze_target)
 
 
 @dataclass(frozen=True)

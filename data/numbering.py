@@ -171,9 +171,10 @@ POGONION = 24
 CHIN = POGONION
 MENTON = 16
 CHIN_LOW = MENTON
-#: Gnathion (point of the chin) and gonion (angle of the jaw) of the neutral face, for CASSI's
-#: head-measure adjustment (4.1.1 "Chin and Jaw Adjustments").
-GNATHION = 17
+#: Gnathion (point of the chin, on the centre line between pogonion and menton) and gonion
+#: (angle of the jaw) of the neutral face, for CASSI's head-measure adjustment (4.1.1 "Chin and
+#: Jaw Adjustments").
+GNATHION = 26
 GONION = 22
 #: Lowest centre-line point of the nose (above the upper lip) and the nose tip.
 SUBNASALE = 80

@@ -133,6 +133,10 @@ def test_jaw_and_cheek_regions(face):
     nose = face.vertices[np.asarray(N.NOSE) - 1]
     assert v(face, N.NOSE_TIP_CENTRE)[0] == nose[:, 0].max()
     assert v(face, N.SUBNASALE)[2] > v(face, N.UL)[2]
+    # gnathion between pogonion and menton on the centre line; gonion at the jaw's angle
+    g = v(face, N.GNATHION)
+    assert g[1] == 0 and v(face, N.MENTON)[2] < g[2] < v(face, N.POGONION)[2]
+    assert N.GONION in N.JAW and v(face, N.GONION)[0] < v(face, N.MENTON)[0] - 200
 
 
 # --- the mesh ----------------------------------------------------------------------------------
