@@ -1,0 +1,137 @@
+"""The rubric on real animations of every version (the embedded synthetic corpus, subject JW11).
+
+Per version: every applicable check yields one whole-task row with a finite value; a face held
+still at its first frame is silent for the motion checks (jitter, jumps); and defects planted
+on top of the version's own animation fire (lips opened, palate lowered below the incisor tip,
+lower lip dropped below the lower teeth, tongue pushed 2 mm through the incisors, a one-frame
+jump at an ellipse switch). Results on the synthetic corpus describe the software only.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from cassi.harness import rubric as R
+from cassi.harness import rubric_geometry as G
+
+VERSIONS = ("parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1")
+
+
+@pytest.fixture(scope="module")
+def subject():
+    from cassi.data.corpus import Corpus
+    from cassi.data.face import build_face
+    from cassi.data.profile import preprocess
+    from cassi.data.synth import default_corpus
+
+    corpus = Corpus(default_corpus())
+    prof = preprocess(corpus, ["JW11"])["JW11"]
+    face = build_face(palate_mm=prof.palate_mm, head_measures=prof.head_measures)
+    return corpus, prof, face
+
+
+def _animate(subject, version, task):
+    from cassi.versions.registry import get_version
+
+    corpus, prof, face = subject
+    rec = corpus.subject("JW11").load(task, 1)
+    return get_version(version).animate(prof, face, rec)
+
+
+def _with(anim, positions):
+    return dataclasses.replace(anim, positions=positions.astype(np.float32))
+
+
+def _run(subject, anim, task, checks=None):
+    _, prof, face = subject
+    df = R.run_geometry_checks(anim, face, prof, task=task, subject="JW11", checks=checks)
+    return df[df["frame"] == -1].set_index("check")
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+def test_every_check_measures_every_version(subject, version):
+    for task in (5, 106, 118):
+        anim = _animate(subject, version, task)
+        res = _run(subject, anim, task)
+        assert set(res.index) == {c.name for c in R.checks_for(kind="geometry", task=task)}
+        assert (res["version"] == version).all()
+        measurable = res.drop(index=[c for c in ("lips_too_large_moving",) if c in res.index])
+        assert np.isfinite(measurable["value"]).all(), measurable[~np.isfinite(measurable["value"])]
+        assert res["negatives"].between(0, 3).all()
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+def test_a_still_face_does_not_jitter(subject, version):
+    anim = _animate(subject, version, 106)
+    still = np.repeat(anim.positions[:1], anim.n_frames, axis=0)
+    res = _run(subject, _with(anim, still), 106, checks=["corner_jump_switch", "lip_jitter"])
+    assert res.loc["corner_jump_switch", "negatives"] == 0
+    anim = _animate(subject, version, 118)
+    still = np.repeat(anim.positions[:1], anim.n_frames, axis=0)
+    res = _run(subject, _with(anim, still), 118, checks=["lip_jitter"])
+    assert res.loc["lip_jitter", "negatives"] == 0
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+def test_planted_defects_fire_on_every_version(subject, version):
+    _, prof, face = subject
+    parts = G.mouth_parts(face)
+    mm = G.mm_per_unit(face.vertices, prof.jaw_length_mm, mani=parts.jaw_point)
+    anim = _animate(subject, version, 5)
+    pos = anim.positions.astype(np.float64)
+    F = pos.shape[0]
+
+    # lips opened so they are at least 10 mm apart in every frame: never touching, two negatives
+    p = pos.copy()
+    lower = [v - 1 for v in range(49, 61)]
+    gap = p[:, parts.ul_inner, 2] - p[:, parts.ll_inner, 2]
+    p[:, lower, 2] -= 10.0 / mm - gap.min()
+    assert _run(subject, _with(anim, p), 5, ["lips_never_touch"]).loc[
+        "lips_never_touch", "negatives"] == 2
+
+    # palate lowered 3 mm below the incisor tip: very noticeable, two negatives
+    p = pos.copy()
+    p[:, parts.palate, 2] = np.minimum(p[:, parts.palate, 2],
+                                       p[:1, parts.upper_incisor_tip, 2] - 3.0 / mm)
+    assert _run(subject, _with(anim, p), 5, ["palate_below_incisor"]).loc[
+        "palate_below_incisor", "negatives"] == 2
+
+    # the lower lip dropped 5 mm below the lower gum line in 60 % of the frames: usual state
+    p = pos.copy()
+    n = int(0.6 * F)
+    drop = p[:n, parts.ll_inner, 2] - (p[:n, parts.lower_gum, 2] - 5.0 / mm)
+    p[:n, lower, 2] -= drop[:, None]
+    assert _run(subject, _with(anim, p), 5, ["lips_centered_low"]).loc[
+        "lips_centered_low", "negatives"] == 2
+
+    # the tongue tip 2 mm through the back of the upper incisors (at the tooth's middle height)
+    p = pos.copy()
+    tris = G.front_triangles(face.vertices, parts.upper_teeth_tris)
+    tip = parts.tongue[0]
+    probe = p[:, tris].mean(axis=(1, 2))                         # (F, 3) inside the front teeth
+    probe[:, 1] = 0.0
+    lo, _ = G.surface_hits(probe[:, None, :], p[:, tris], axis=0)
+    p[:, tip] = probe
+    p[:, tip, 0] = lo[:, 0] + 2.0 / mm
+    r = _run(subject, _with(anim, p), 5, ["tongue_through_teeth"]).loc["tongue_through_teeth"]
+    upper = float(r["detail"].split("upper ")[1].split(" mm")[0])
+    assert r["negatives"] >= 1 and upper >= 1.95, r["detail"]
+
+
+@pytest.mark.parametrize("version", ("cassi-2.0", "cassi-2.1"))
+def test_one_frame_jump_at_the_ellipse_switch_fires(subject, version):
+    anim = _animate(subject, version, 106)
+    before = _run(subject, anim, 106, ["corner_jump_switch"]).loc["corner_jump_switch"]
+    b = anim.diagnostics["outer_abc_branch"].to_numpy()
+    switches = np.flatnonzero(b[1:] != b[:-1]) + 1
+    assert switches.size, "the version reports no ellipse switch on this task"
+    _, prof, face = subject
+    parts = G.mouth_parts(face)
+    mm = G.mm_per_unit(face.vertices, prof.jaw_length_mm, mani=parts.jaw_point)
+    p = anim.positions.astype(np.float64)
+    s = int(switches[len(switches) // 2])
+    p[s:, parts.corner, 1] += 3.0 / mm        # the corner steps 3 mm out at the switch and stays
+    r = _run(subject, _with(anim, p), 106, ["corner_jump_switch"]).loc["corner_jump_switch"]
+    assert r["negatives"] == 1 and r["value"] >= max(2.5, before["value"]), r["detail"]
