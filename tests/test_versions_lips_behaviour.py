@@ -316,6 +316,8 @@ def test_lip_subject_maps_maxprotru_and_lipthick_into_parke_space():
     assert (s.x_rest, s.x_max, s.x_min, s.thick) == pytest.approx((110.0, 150.0, 30.0, 60.0))
     with pytest.raises(CassiInputError, match="lipthick"):
         lip_subject(SimpleNamespace(**{**vars(prof), "lipthick": float("nan")}), 200.0, 10.0)
+    with pytest.raises(CassiInputError, match="max_ul"):
+        lip_subject(SimpleNamespace(**{**vars(prof), "max_ul": None}), 200.0, 10.0)
 
 
 def test_corners_keep_the_face_depth_behind_their_track():

@@ -128,10 +128,15 @@ def lip_subject(profile, parke_jaw_distance: float, x_origin: float) -> LipSubje
         Parke x of vertex 226.
     """
     p = float(parke_jaw_distance)
-    vals = {k: float(getattr(profile, k)) for k in ("rest_ul", "max_ul", "min_ul", "lipthick")}
-    for k, v in vals.items():
-        if not np.isfinite(v):
-            raise CassiInputError(f"subject {getattr(profile, 'subject', '?')}: {k} is {v!r}")
+    who = getattr(profile, "subject", "?")
+    vals = {}
+    for k in ("rest_ul", "max_ul", "min_ul", "lipthick"):
+        try:
+            vals[k] = float(getattr(profile, k))
+        except (AttributeError, TypeError, ValueError):
+            raise CassiInputError(f"subject {who}: no usable {k} (maxprotru.txt / lipthick.txt)")
+        if not np.isfinite(vals[k]):
+            raise CassiInputError(f"subject {who}: {k} is {vals[k]!r}")
     return LipSubject(
         x_rest=vals["rest_ul"] * p + x_origin,
         x_max=vals["max_ul"] * p + x_origin,
