@@ -407,6 +407,12 @@ def make_subject(out_dir: Path, name: str, seed: int = DEFAULT_SEED,
                             time_us=time_us, xy_mm=xy, valid=valid)
         stem = f"tp{plan.task:03d}" if plan.rep == 1 else f"tp{plan.task:03d}_{plan.rep}"
         _write_task(sdir / f"{stem}.txy", rec)
+    # a previous run with another seed may have left other repetitions: remove them
+    written = {f"tp{p.task:03d}.txy" if p.rep == 1 else f"tp{p.task:03d}_{p.rep}.txy"
+               for p in plans}
+    for old in sdir.glob("tp*.txy"):
+        if old.name not in written:
+            old.unlink()
     mis.sort(key=lambda e: (e.task, e.pellet, e.onset_ms))
     write_mis(sdir / "Mis.dat", mis)
     write_pal(sdir / "PAL.DAT", fig.palate_outline())
@@ -465,6 +471,10 @@ def make_corpus(out_dir: str | os.PathLike, *, subjects=None, seed: int = DEFAUL
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise CassiInputError("output exists and is not a directory", path=out)
+    if out.is_dir() and any(out.iterdir()) and not _is_synthetic(out):
+        # never mix generated files into (or delete from) a directory we did not make
+        raise CassiInputError("output directory is not empty and holds no synthetic corpus "
+                              "(corpus.json with \"synthetic\": true)", path=out)
     out.mkdir(parents=True, exist_ok=True)
     if workers is not None and (not isinstance(workers, (int, np.integer)) or workers < 1):
         raise CassiInputError(f"workers must be a positive integer, not {workers!r}")
@@ -498,6 +508,13 @@ def make_corpus(out_dir: str | os.PathLike, *, subjects=None, seed: int = DEFAUL
     }
     atomic_write_text(out / "corpus.json", json.dumps(meta, indent=1, sort_keys=True) + "\n")
     return out
+
+
+def _is_synthetic(path: Path) -> bool:
+    try:
+        return json.loads((path / "corpus.json").read_text()).get("synthetic") is True
+    except (OSError, ValueError, AttributeError):
+        return False
 
 
 def cache_root() -> Path:

@@ -98,6 +98,9 @@ def test_same_seed_same_bytes_independent_of_the_subject_set(small, tmp_path):
     other = make_corpus(tmp_path / "other", subjects=["JW45"], seed=1, workers=1)
     da, do = _digest(one / "JW45"), _digest(other / "JW45")
     assert sum(da[k] != do.get(k) for k in da) > 100
+    # regenerating over a corpus made with another seed leaves no stale file behind
+    make_corpus(other, subjects=["JW45"], seed=0, workers=1)
+    assert _digest(other / "JW45") == da
 
 
 # ----------------------------------------------------------------------------- calibration
@@ -269,6 +272,10 @@ def test_bad_arguments_are_input_errors(tmp_path):
         make_corpus(tmp_path / "x", subjects=["JW45"], seed=-1)
     with pytest.raises(CassiInputError, match="alignments"):
         make_corpus(tmp_path / "x", subjects=["JW45"], alignments=tmp_path / "none")
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("keep me")
+    with pytest.raises(CassiInputError, match="not empty"):
+        make_corpus(tmp_path / "mine", subjects=["JW45"])
     (tmp_path / "file").write_text("")
     with pytest.raises(CassiInputError, match="not a directory"):
         make_corpus(tmp_path / "file", subjects=["JW45"])
