@@ -297,6 +297,10 @@ def _base_face(palate_xz) -> FaceModel:
         raise AssertionError(f"face generator left vertices undefined: {missing.tolist()}")
     regions = {name: tuple(sorted(numbers[k] for k in keys))
                for name, keys in lay.regions.items()}
+    # the cached base is shared by every build_face() call: never let a caller write into it
+    st1.setflags(write=False)
+    st2.setflags(write=False)
+    centres.setflags(write=False)
     face = FaceModel(st1.copy(), tuple(polys), st1=st1, st2=st2, eye_centres=centres,
                      eyes_first=N.EYES_FIRST, regions=regions,
                      description="cassi-farm generated face (Parke's structure)")
