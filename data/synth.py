@@ -115,7 +115,7 @@ class TaskPlan:
 
 
 def _rng(seed: int, *keys: int) -> np.random.Generator:
-    return np.random.default_rng(np.random.SeedSequence([int(seed) & 0xFFFFFFFF, *keys]))
+    return np.random.default_rng(np.random.SeedSequence([int(seed), *keys]))
 
 
 def _subject_key(name: str) -> int:
