@@ -285,8 +285,8 @@ def p_switch_jump(a, d):
 CASES = {
     "teeth_front_overlap": (5, p_front_overlap, [1.0, 3.5, 6.0], [0, 1, 1]),
     "teeth_back_overlap": (5, p_back_overlap, [0.5, 2.5], [0, 1]),
-    "teeth_slope_up": (5, p_slope_up, [4.0, 12.0, 30.0], [0, 1, 3]),
-    "teeth_slope_down": (5, p_slope_down, [4.0, 12.0], [0, 1]),
+    "teeth_slope_up": (5, p_slope_up, [3.0, 8.0, 30.0], [0, 1, 3]),
+    "teeth_slope_down": (5, p_slope_down, [3.0, 8.0], [0, 1]),
     "teeth_too_far_apart": (5, p_teeth_apart, [2.0, 7.0], [0, 1]),
     "lips_never_touch": (5, p_open_lips, [0.5, 2.5, 6.0], [0, 1, 2]),
     "lips_apart_at_start": (5, p_open_at_start, [0.5, 2.5], [0, 1]),
@@ -460,3 +460,10 @@ def test_bad_positions_raise_input_error():
     a.positions[3, 0, 0] = np.nan
     with pytest.raises(CassiInputError):
         run(a, 5)
+
+
+def test_back_teeth_apart_count_as_teeth_too_far_apart():
+    a = S.copy(BASE[5])
+    a.positions[:, P.lower_molar, 2] -= 6.0    # back teeth 6 mm apart, the incisors still overlap
+    r = run(a, 5, checks=["teeth_too_far_apart"]).loc["teeth_too_far_apart"]
+    assert r["negatives"] == 1 and r["value"] == pytest.approx(6.0, abs=0.2)
