@@ -156,8 +156,8 @@ def _profile_radius(phi_deg):
 def _profile_width(phi_deg):
     """Angular half-width (degrees) over which the profile's relief fades to the base head."""
     table = np.array([  # elevation, width
-        (-90, 60), (-62, 45), (-48, 26), (-38, 20), (-30, 17), (-22, 16), (-17, 12),
-        (-12, 9.5), (-5, 8.5), (5, 7.5), (13, 9), (20, 22), (30, 40), (90, 60)])
+        (-90, 60), (-62, 45), (-48, 26), (-38, 20), (-30, 17), (-22, 16), (-17, 11),
+        (-12, 8.0), (-5, 7.0), (5, 6.5), (13, 8), (20, 22), (30, 40), (90, 60)])
     return np.interp(phi_deg, table[:, 0], table[:, 1])
 
 
@@ -319,15 +319,11 @@ def _surface_row(lay: Layout, name: str, thetas, phis, wants) -> list[str]:
 BACK_THETAS = [125.0, 150.0, 180.0]
 
 
-def merge(own: list[str], base: list[str], from_theta: float, lay: "Layout | None" = None):
+def _merge(lay: "Layout", own: list[str], base: list[str], from_theta: float) -> list[str]:
     """A row that joins ``base`` at the side: its own nodes, then base's nodes from azimuth
     ``from_theta`` on (saves vertices behind the face, where the head is smooth)."""
-    lay = lay or _CURRENT[0]
     tail = [k for k in base if angles_of(lay.nodes[k].pos)[0] >= from_theta - 1e-6]
     return own + tail
-
-
-_CURRENT: list = [None]
 
 
 def surface_at_z(theta_deg, z) -> np.ndarray:
@@ -346,8 +342,7 @@ def surface_at_z(theta_deg, z) -> np.ndarray:
     return surface_point(th, 0.5 * (lo + hi))
 
 
-def _fixed_row(lay, name, numbers, phi_back, extra_thetas, extra_wants, knee=90.0, *,
-               zs=None):
+def _fixed_row(lay, name, numbers, phi_back, extra_thetas, extra_wants, *, zs=None):
     """A row starting with some of Parke's excerpt vertices, continuing on the surface (at
     elevations blending to ``phi_back``, or at heights ``zs``)."""
     keys = [lay.add(f"{name}.p{n}", PARKE_EXCERPT[n], n) for n in numbers]
@@ -368,7 +363,10 @@ def _fixed_row(lay, name, numbers, phi_back, extra_thetas, extra_wants, knee=90.
 def build_layout(*, palate_xz: np.ndarray | None = None) -> Layout:
     """Generate the nodes and polygons (before numbering). See :func:`build_geometry`."""
     lay = Layout()
-    _CURRENT[0] = lay
+
+    def merge(own, base, from_theta):
+        return _merge(lay, own, base, from_theta)
+
     rows: list[tuple[list[str], list[str]]] = []  # (lower path, upper path) per row
 
     def plain(keys):
@@ -466,7 +464,7 @@ def build_layout(*, palate_xz: np.ndarray | None = None) -> Layout:
     # --- brows, forehead, crown ----------------------------------------------------------------
     r13 = plain(srow("r13", 22.0, 40.0, [0, 7, 14, 22, 31, 41, 53, 68, 90, 118, 148, 180],
                      ["nose", "nose"] + [F] * 10))
-    _brows(lay, r13[2:7], eye)
+    _brows(lay, r13[2:7])
     plain(srow("r14", 34.0, 51.0, [0, 12, 25, 38, 53, 72, 95, 122, 150, 180], [F] * 10))
     plain(srow("r15", 48.0, 62.0, [0, 15, 31, 48, 68, 92, 120, 150, 180], [F] * 9))
     plain(srow("r16", 63.0, 72.0, [0, 20, 44, 72, 104, 140, 180], [F] * 7))
@@ -694,7 +692,7 @@ def _eye(lay: Layout) -> dict:
 BROW_ARCH = np.array([-5.0, 2.0, 7.0, 2.0, -6.0])
 
 
-def _brows(lay: Layout, brow: list[str], eye: dict):
+def _brows(lay: Layout, brow: list[str]):
     """Brow vertices with their st1 (arch 1) and st2 (arch 0) extremes about the neutral."""
     for k, d in zip(brow, BROW_ARCH):
         node = lay.nodes[k]
