@@ -10,7 +10,7 @@ Figures (all on this machine's variant, one process):
   load hits both alike; per view at the preview preset, and the front view's value as the headline
   (goal >= 0.7);
 - ``render_rss_growth_mb``: resident memory growth over 2,000 consecutive pipeline frames (quick:
-  300) after a warm-up, with the samples so flatness can be seen (goal < 50 MB).
+  150) after a warm-up, with the samples so flatness can be seen (goal < 50 MB).
 """
 from __future__ import annotations
 
@@ -56,6 +56,14 @@ def _neutral():
     return (lambda half: render_topology(face, half=half)), base
 
 
+def _loadavg() -> float | None:
+    # Timings on a shared machine mean little without the load they were taken under.
+    try:
+        return round(os.getloadavg()[0], 2)
+    except OSError:
+        return None
+
+
 def _time_loop(fn, n: int) -> float:
     t = time.perf_counter()
     for k in range(n):
@@ -82,7 +90,7 @@ def bench_render(quick: bool = False, *, topology_for=None, positions=None,
         topology_for, positions = _neutral()
     variant = choose_variant(variant)
     out: dict = {"variant": variant, "quick": quick, "render_per_s": {}, "efficiency_by_view": {},
-                 "ms_per_image": {}}
+                 "ms_per_image": {}, "load_average_before": _loadavg()}
     n_preview = 12 if quick else 40
     renderers = {}
     for preset in PRESET_NAMES:
@@ -123,7 +131,7 @@ def bench_render(quick: bool = False, *, topology_for=None, positions=None,
         out["render_pipeline_efficiency"] = out["efficiency_by_view"]["front"]
 
         # --- memory: many consecutive pipeline frames of one renderer --------------------------
-        n_frames = 300 if quick else 2000
+        n_frames = 150 if quick else 2000
         r = renderers[("front", "preview")]
         samples = []
         with FrameWriter() as writer:
@@ -137,6 +145,7 @@ def bench_render(quick: bool = False, *, topology_for=None, positions=None,
         out["rss_samples_mb"] = samples
         out["rss_frames"] = n_frames
         out["scene_loads"] = {f"{v}/{p}": r.loads for (v, p), r in renderers.items()}
+        out["load_average_after"] = _loadavg()
     finally:
         for f in tmp.glob("*"):
             f.unlink(missing_ok=True)

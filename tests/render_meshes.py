@@ -54,7 +54,8 @@ def ellipsoid(center, radii, n_u=24, n_v=16, y_min=None):
 def toy_head(half: bool = False) -> tuple[SimpleTopology, np.ndarray]:
     """A toy head: skin (ellipsoid), lips, teeth, tongue, palate, two eyes (one when ``half``).
 
-    Returns the topology and the positions (V, 3) of all its vertices.
+    Returns the topology and the positions (V, 3) of all its vertices (the same V for the full
+    and the half head, like RenderTopology).
     """
     y_min = 0.0 if half else None
     blocks: list[tuple[str, np.ndarray, np.ndarray]] = []
@@ -63,13 +64,15 @@ def toy_head(half: bool = False) -> tuple[SimpleTopology, np.ndarray]:
     blocks.append(("teeth", *ellipsoid((330, 0, -285), (35, 95, 40), 12, 6, y_min)))
     blocks.append(("tongue", *ellipsoid((230, 0, -320), (110, 80, 25), 12, 6, y_min)))
     blocks.append(("palate", *ellipsoid((240, 0, -235), (120, 90, 20), 12, 6, y_min)))
-    eyes = [(300, 110, 60)] + ([] if half else [(300, -110, 60)])
-    for k, c in enumerate(eyes):
+    for k, c in enumerate([(300, 110, 60), (300, -110, 60)]):
         blocks.append((f"eye_white{k}", *ellipsoid(c, (40, 40, 40), 12, 8)))
         blocks.append((f"iris{k}", *ellipsoid((c[0] + 36, c[1], c[2]), (8, 18, 18), 10, 6)))
     positions, parts, offset = [], {}, 0
     for name, pts, tris in blocks:
         positions.append(pts)
+        if half and name.endswith("1"):  # the right eye is not in the half head
+            offset += len(pts)
+            continue
         gather = np.arange(offset, offset + len(pts))
         if name in parts:  # same part name twice: merge
             g0, t0 = parts[name]

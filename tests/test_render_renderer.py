@@ -127,3 +127,22 @@ def test_background_writer_matches_synchronous_writes(front, head, tmp_path):
     for ext in (".exr", ".png", ".mask.png"):
         assert np.array_equal(read_image(tmp_path / f"bg4{ext}"), read_image(tmp_path / f"sync{ext}"))
     assert not list(tmp_path.glob(".*tmp*"))  # atomic writes leave no temporaries
+
+
+@pytest.mark.slow
+def test_bench_render_quick_on_toy_head():
+    """The benchmark runs end to end and reports the figures cassi bench expects."""
+    from cassi.renderer.bench import bench_render
+
+    topo_full, pos = toy_head()
+    topo_half, pos_half = toy_head(half=True)
+    assert np.array_equal(pos, pos_half)
+    out = bench_render(True, topology_for=lambda half: topo_half if half else topo_full,
+                       positions=pos)
+    assert out["variant"] in ("cuda_ad_rgb", "llvm_ad_rgb", "scalar_rgb")
+    assert set(out["render_per_s"]) >= {"front/preview", "side/preview", "half/preview",
+                                        "top/preview", "front/final"}
+    assert all(v > 0 for v in out["render_per_s"].values())
+    assert 0 < out["render_pipeline_efficiency"] <= 1.5
+    assert out["render_rss_growth_mb"] < 50
+    assert all(n == 1 for n in out["scene_loads"].values())
