@@ -346,3 +346,41 @@ def assign_numbers(lay) -> dict[str, int]:
             raise AssertionError(f"pool {pool!r}: {len(nums) - taken[pool]} numbers unused "
                                  f"({nums[taken[pool]:][:8]}...)")
     return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m cassi.data.face OUT_DIR [--palate PAL.DAT] [--jaw-length MM] [--preview PNG]``
+
+    Generate the face and write its ``st1.pts``, ``st2.pts`` and ``stt.top`` into OUT_DIR
+    (optionally with a subject's palate and a wireframe preview).
+    """
+    import argparse
+    import sys
+
+    ap = argparse.ArgumentParser(prog="python -m cassi.data.face",
+                                 description="write the generated face in Parke's formats")
+    ap.add_argument("out_dir", help="folder for st1.pts, st2.pts and stt.top")
+    ap.add_argument("--palate", help="a subject's PAL.DAT (XRMB micrometres)")
+    ap.add_argument("--jaw-length", type=float, help="the subject's jaw length d in mm (p/d)")
+    ap.add_argument("--preview", help="also write a PNG preview here")
+    args = ap.parse_args(argv)
+    try:
+        palate = None
+        if args.palate:
+            from cassi.data.xrmb import read_pal
+            palate = read_pal(args.palate)
+        face = build_face(palate_mm=palate, jaw_length_mm=args.jaw_length)
+        paths = face.write(args.out_dir)
+        if args.preview:
+            from cassi.data.preview import preview_png
+            preview_png(face, args.preview)
+    except CassiInputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    for p in paths.values():
+        print(p)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

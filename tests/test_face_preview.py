@@ -1,0 +1,29 @@
+"""The face generator's command line and the matplotlib preview."""
+from __future__ import annotations
+
+import numpy as np
+
+from cassi.data.face import FaceModel, build_face, main
+from cassi.data.preview import preview_png
+
+
+def test_generator_writes_parke_files_with_a_subject_palate(tmp_path, capsys):
+    pal = tmp_path / "PAL.DAT"
+    pal.write_text("-5000 8500\n-20000 19000\n-45000 22000\n")
+    out = tmp_path / "face"
+    assert main([str(out), "--palate", str(pal), "--jaw-length", "34",
+                 "--preview", str(tmp_path / "p.png")]) == 0
+    face = FaceModel.read(out / "st1.pts", out / "stt.top", out / "st2.pts")
+    want = build_face(palate_mm=np.array([(-5, 8.5), (-20, 19), (-45, 22)]), jaw_length_mm=34)
+    np.testing.assert_array_equal(face.st1, want.st1)
+    png = (tmp_path / "p.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
+    assert main([str(out), "--palate", str(tmp_path / "missing.dat")]) == 2
+
+
+def test_preview_of_a_moved_face(tmp_path):
+    face = build_face()
+    moved = face.vertices.copy()
+    moved[:, 2] += 5.0
+    preview_png(face, tmp_path / "moved.png", positions=moved, dpi=40)
+    assert (tmp_path / "moved.png").stat().st_size > 5_000
