@@ -16,7 +16,7 @@ from cassi.data.errors import CassiInputError
 from .images import to_srgb8
 from .views import VIEW_NAMES
 
-__all__ = ["side_by_side", "animation_frames", "write_animation", "animate_positions",
+__all__ = ["side_by_side", "animation_frames", "write_animation", "animate_positions", "views_sheet",
            "realtime_fps"]
 
 NOMINAL_PERIOD_US = 6866  # XRMB frame period (cassi.data.xrmb.NOMINAL_PERIOD_US)
@@ -123,3 +123,23 @@ def animate_positions(face, positions: np.ndarray, out: str | os.PathLike, *,
     path = write_animation(out, animation_frames(renderers, picked), fps=fps)
     return {"path": str(path), "frames": int(len(picked)), "views": list(views), "fps": fps,
             "stride": stride, "preset": preset, "variant": renderers[0].variant}
+
+
+def views_sheet(face, positions: np.ndarray, *, views: Sequence[str] = VIEW_NAMES,
+                preset: str = "preview", variant: str | None = None,
+                out: str | os.PathLike | None = None) -> np.ndarray:
+    """All ``views`` of one frame (positions (V, 3)) side by side as a uint8 contact sheet; also
+    written as PNG to ``out`` when given (metadata: views, preset, variant)."""
+    from cassi.data.face import render_topology
+
+    from .images import write_contact_sheet
+    from .render import FaceRenderer
+
+    results = [FaceRenderer(render_topology(face, half=(v == "half")), v, preset, variant)
+               .render(positions) for v in views]
+    sheet = side_by_side([r.rgb for r in results], gap=4)
+    if out is not None:
+        write_contact_sheet(out, [sheet], columns=1,
+                            metadata={"views": list(views), "preset": preset,
+                                      "variant": results[0].variant})
+    return sheet

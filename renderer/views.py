@@ -108,7 +108,7 @@ class Preset:
 # Where the neutral face sits (Parke units): used only to place the fixed cameras.
 _FACE_CENTER = (40.0, 0.0, -50.0)
 _MOUTH = (300.0, 0.0, -290.0)
-_PALATE = (240.0, 0.0, -230.0)
+_PALATE = (230.0, 0.0, -230.0)
 
 
 def _camera(target: Vec3, direction: Vec3, up: Vec3, frame: float, fov: float = 22.0,
@@ -135,7 +135,7 @@ VIEWS: dict[str, View] = {
     "half": View("half", _camera(_MOUTH, (0, -1, 0), (0, 0, 1), frame=700.0), half=True,
                  lights=_STUDIO, ambient=0.30,
                  description="left half cut at y = 0, seen from the cut side, framed on the mouth"),
-    "top": View("top", _camera(_PALATE, (0, 0, 1), (1, 0, 0), frame=700.0),
+    "top": View("top", _camera(_PALATE, (0, 0, 1), (1, 0, 0), frame=540.0),
                 clip_above_palate=25.0, lights=_STUDIO, ambient=0.30,
                 description="looking down onto the palate, skull above the palate hidden"),
 }
