@@ -197,26 +197,29 @@ def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
 
     # --- interpolation ---------------------------------------------------------------------
     lid, lid_lip = _region(face, "eyelid"), _region(face, "eyelid_lip")
-    _interpolate(v, face, np.concatenate([lid, lid_lip]), vals[1])
     brow = _region(face, "brow")
     _interpolate(v, face, brow, vals[2])
     _interpolate(v, face, _region(face, "mouth_expression"), vals[13])
 
     # --- eyes region -----------------------------------------------------------------------
-    if len(lid) or len(lid_lip):
-        for idx, radius in ((lid, None), (lid_lip, None)):
-            if not len(idx):
-                continue
-            off = v[idx] - centre
-            r0 = np.linalg.norm(off, axis=1)
-            off[:, 1] *= vals[5]
-            off[:, 2] *= vals[6]
-            r1 = np.linalg.norm(off, axis=1)
-            # back onto the lid sphere, whose radius parameter 45 scales (the lid's lip stays
-            # on the eyeball, whose radius is parameter 44)
-            scale = vals[45] / start[45] if idx is lid else vals[44] / start[44]
-            off *= (r0 * scale / np.maximum(r1, 1e-9))[:, None]
-            v[idx] = centre + off + np.array([vals[38], vals[39], vals[40]])
+    # Eyelids (dissertation 3.1.2): the lid vertices' two dimensions (width y, height z about
+    # the eyeball's centre) are interpolated between closed (st2) and open (st1), scaled by
+    # parameters 5 and 6, and projected back onto the sphere that carries each ring: the lid
+    # sphere (radius parameter 45) for the lid and its margin, the eyeball (parameter 44) for
+    # the lid's inner lip. Parameters 38-40 move the lids with the eyeballs.
+    for idx, radius_param in ((lid, 45), (lid_lip, 44)):
+        if not len(idx):
+            continue
+        rel1 = face.st1[idx] - centre
+        rel2 = face.st2[idx] - centre
+        radius = np.linalg.norm(rel1, axis=1) * vals[radius_param] / start[radius_param]
+        yz = rel2[:, 1:] + (rel1[:, 1:] - rel2[:, 1:]) * vals[1]
+        yz = yz * np.array([vals[5], vals[6]])
+        rr = np.linalg.norm(yz, axis=1)
+        lim = 0.98 * radius
+        yz *= np.where(rr > lim, lim / np.maximum(rr, 1e-9), 1.0)[:, None]
+        x = np.sqrt(np.maximum(radius ** 2 - np.sum(yz ** 2, axis=1), 0.0))
+        v[idx] = centre + np.column_stack([x, yz]) + np.array([vals[38], vals[39], vals[40]])
     if len(brow):
         # 3: brow separation moves the inner end (tapered to the outer end) away from the nose
         w = np.linspace(1.0, 0.0, len(brow))

@@ -105,11 +105,29 @@ def test_eyelid_opening(face):
     assert gap(closed) < gap(face) < gap(opened)
     np.testing.assert_allclose(opened.vertices[lid], face.st1[lid])
     np.testing.assert_allclose(closed.vertices[lid], face.st2[lid])
-    # the lids stay on their spheres about the eyeball (projected, dissertation 3.1.2)
+    # at every opening the lids lie on their spheres about the eyeball (interpolated in 2D,
+    # projected, dissertation 3.1.2): the lid's lip just outside the eyeball
     c = face.eye_centres[0]
-    for f in (closed, face, opened):
-        r = np.linalg.norm(f.vertices[np.asarray(face.regions["eyelid_lip"]) - 1] - c, axis=1)
+    lip = np.asarray(face.regions["eyelid_lip"]) - 1
+    r_open = np.linalg.norm(face.st1[lip] - c, axis=1)
+    for o in np.linspace(0, 1, 7):
+        f = apply_parameters(face, {1: o})
+        r = np.linalg.norm(f.vertices[lip] - c, axis=1)
+        np.testing.assert_allclose(r, r_open)
         assert np.all(r > E.EyeParams().radius)
+
+
+def test_eyelid_scales_and_radius(face):
+    c = face.eye_centres[0]
+    lid = np.asarray(face.regions["eyelid"]) - 1
+    lip = np.asarray(face.regions["eyelid_lip"]) - 1
+    wide = apply_parameters(face, {5: 1.1})
+    assert np.ptp(wide.vertices[lip, 1]) == pytest.approx(np.ptp(face.vertices[lip, 1]) * 1.1)
+    tall = apply_parameters(face, {6: 1.3})
+    assert np.ptp(tall.vertices[lip, 2]) == pytest.approx(np.ptp(face.vertices[lip, 2]) * 1.3)
+    far = apply_parameters(face, {45: 90.0})
+    r0 = np.linalg.norm(face.vertices[lid] - c, axis=1)
+    np.testing.assert_allclose(np.linalg.norm(far.vertices[lid] - c, axis=1), r0 * 90 / 80)
 
 
 def test_brow_arch_and_mouth_expression(face):
