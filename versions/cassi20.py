@@ -27,6 +27,7 @@ class Cassi20(Cassi10):
     name = "cassi-2.0"
 
     def __init__(self, *, params: OuterAbcParams | None = None):
+        super().__init__()
         self.params = params or OuterAbcParams()
 
     def thickness_policy(self) -> ThicknessPolicy:
