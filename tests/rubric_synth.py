@@ -188,7 +188,7 @@ def protrude(m: Mouth, anim: Anim, *, forward: float = 5.0, round_to: float = 0.
     pos[:, lips, 1] *= (1 - (1 - round_to) * w)[:, None]
     # CASSI moves the points above and below the lips by part of the lips' motion (4.2.2)
     near = np.concatenate([m.parts.above_lip, m.parts.below_lip])
-    pos[:, near, 0] += 0.8 * forward * w[:, None]
+    pos[:, near, 0] += forward * w[:, None]
     return Anim(pos.astype(np.float32), anim.diagnostics, anim.frames)
 
 

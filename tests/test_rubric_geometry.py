@@ -308,7 +308,7 @@ CASES = {
     "lips_too_big": (118, p_too_big, [0.5, 1.5], [0, 1]),
     "lower_lip_protrudes_start": (118, p_lower_protrudes_start, [1.0, 3.0], [0, 1]),
     "upper_protrudes_more": (118, p_upper_more, [2.0, 6.0], [0, 1]),
-    "upper_lip_sharp": (118, p_sharp, [1.0, 12.0], [0, 1]),
+    "upper_lip_sharp": (118, p_sharp, [0.3, 4.0], [0, 1]),
     "lip_jitter": (118, p_jitter, [0.05, 1.0], [0, 1]),
     "lip_shape_triangular": (106, p_diamond, [0.2, 1.0], [0, 1]),
     "lower_lip_through_teeth": (106, p_lower_lip_through_lower, [-1.0, 2.0], [0, 1]),
