@@ -143,13 +143,24 @@ class FaceModel:
     # --- files ------------------------------------------------------------------------------
     def write(self, directory: str | PathLike, *, st1_name="st1.pts", st2_name="st2.pts",
               top_name="stt.top") -> dict[str, Path]:
-        """Write ``st1.pts``, ``st2.pts`` and ``stt.top`` into ``directory`` (atomically)."""
+        """Write ``st1.pts``, ``st2.pts`` and ``stt.top`` into ``directory`` (atomically), plus
+        ``cassi-face.json`` with what Parke's formats cannot hold (the named regions the
+        parameters act on, the eyes); :meth:`read` picks it up when it sits beside stt.top."""
+        import json
+
+        from cassi.data.atomic import atomic_write_text
+
         d = Path(directory)
         d.mkdir(parents=True, exist_ok=True)
-        paths = {"st1": d / st1_name, "st2": d / st2_name, "top": d / top_name}
+        paths = {"st1": d / st1_name, "st2": d / st2_name, "top": d / top_name,
+                 "meta": d / SIDECAR}
         write_pts(paths["st1"], PtsFile(f"st1.pts - {self.description}", self.st1))
         write_pts(paths["st2"], PtsFile(f"st2.pts - {self.description}", self.st2))
         write_top(paths["top"], TopFile(f"stt.top - {self.description}", self.polygons))
+        meta = {"format": 1, "regions": {k: list(map(int, v)) for k, v in self.regions.items()},
+                "eyes_first": self.eyes_first,
+                "eye_centres": np.asarray(self.eye_centres).tolist()}
+        atomic_write_text(paths["meta"], json.dumps(meta, indent=1) + "\n")
         return paths
 
     @classmethod
@@ -194,8 +205,33 @@ class FaceModel:
                 cs.append(0.5 * (verts[base] + verts[base + back]))
             centres = np.array(cs)
         desc = p1.description
+        regions = {}
+        side = Path(top).parent / SIDECAR
+        if side.is_file():
+            regions, eyes_first, centres = _read_sidecar(side, p1.count, eyes_first, centres)
         return cls(verts, t.polygons, st1=p1.vertices, st2=v2, eye_centres=centres,
-                   eyes_first=eyes_first, description=desc)
+                   eyes_first=eyes_first, description=desc, regions=regions)
+
+
+#: Beside stt.top: what Parke's formats cannot hold (regions, eyes).
+SIDECAR = "cassi-face.json"
+
+
+def _read_sidecar(path: Path, count: int, eyes_first, centres):
+    import json
+
+    try:
+        meta = json.loads(path.read_text())
+        regions = {str(k): tuple(int(n) for n in v) for k, v in meta.get("regions", {}).items()}
+        ef = meta.get("eyes_first", eyes_first)
+        ef = None if ef is None else int(ef)
+        ec = np.asarray(meta.get("eye_centres", centres), np.float64).reshape(-1, 3)
+    except (ValueError, TypeError, AttributeError) as exc:
+        raise CassiInputError(f"malformed face sidecar: {exc}", path=path) from None
+    bad = [n for v in regions.values() for n in v if not 1 <= n <= count]
+    if bad:
+        raise CassiInputError(f"region vertex numbers outside 1..{count}: {bad[:5]}", path=path)
+    return regions, ef, ec
 
 
 def _verts_per_eye() -> int:

@@ -272,6 +272,13 @@ def test_face_files_round_trip(face, tmp_path):
     np.testing.assert_array_equal(back.st2, face.st2)
     assert back.polygons == face.polygons
     np.testing.assert_allclose(back.eye_centres, face.eye_centres, atol=1e-6)
+    assert back.regions == face.regions
+    from cassi.data.face_params import apply_parameters
+    np.testing.assert_array_equal(apply_parameters(back, {1: 0.3, 4: 10}).vertices,
+                                  apply_parameters(face, {1: 0.3, 4: 10}).vertices)
+    paths["meta"].write_text("{not json")
+    with pytest.raises(CassiInputError):
+        FaceModel.read(paths["st1"], paths["top"], paths["st2"])
 
 
 def test_parke_sized_files_load(tmp_path):
