@@ -37,7 +37,7 @@ from . import rubric_geometry as G
 
 __all__ = [
     "Check", "Measurement", "CHECKS", "TABLES", "RATINGS", "VERSION_ORDER", "MIN_FRAMES",
-    "rate", "get_check", "checks_for", "GeometryContext", "run_geometry_checks",
+    "rate", "get_check", "checks_for", "registry_table", "summary_counts", "GeometryContext", "run_geometry_checks",
     "run_image_checks", "tabulate", "negatives_text",
 ]
 
@@ -865,6 +865,17 @@ def get_check(name: str) -> Check:
         close = difflib.get_close_matches(name, CHECKS, n=3)
         hint = f"; did you mean {', '.join(close)}?" if close else ""
         raise CassiInputError(f"unknown rubric check {name!r}{hint}") from None
+
+
+def registry_table() -> pd.DataFrame:
+    """The registry as a table (one row per check): what reports and docs print."""
+    return pd.DataFrame([dict(check=c.name, table=c.table, thesis_table=c.thesis_table,
+                              component=c.component, view=c.view, kind=c.kind, unit=c.unit,
+                              frames=c.frames, thresholds=list(c.thresholds),
+                              negatives=list(c.negatives), direction=c.direction,
+                              counted=c.counted, tasks=None if c.tasks is None else list(c.tasks),
+                              text=c.text, description=c.description, reason=c.reason)
+                         for c in CHECKS.values()])
 
 
 def checks_for(*, kind: str | None = None, table: str | None = None,

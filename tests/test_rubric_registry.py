@@ -142,3 +142,9 @@ def test_tabulate_sums_negatives_rates_and_lists_text():
 
 def test_tabulate_empty():
     assert R.tabulate(pd.DataFrame()).empty
+
+
+def test_registry_table_lists_every_check_once():
+    t = R.registry_table()
+    assert t["check"].tolist() == list(R.CHECKS)
+    assert (t["thesis_table"] == t["table"].map(lambda x: R.TABLES[x][0])).all()
