@@ -113,3 +113,14 @@ def test_extreme_frames_prefer_checks_that_fired():
         dict(frame=-1, check="c", negatives=1), dict(frame=10, check="c", negatives=0)])
     assert P.extreme_frames(rows, limit=2) == [10, 70]
     assert P.extreme_frames(rows) == [10, 40, 70]
+
+
+def test_bench_reports_missing_packages_as_errors_and_times_the_farm():
+    from cassi.harness.bench import _registered, bench_farm
+
+    entry = _registered("cassi.no_such_package.bench", "bench_x", True)
+    assert "error" in entry and "not available" in entry["error"]
+    farm = bench_farm(True, workload="cpu", ray=False)
+    assert farm["local_1"]["jobs"] == farm["local_2"]["jobs"] == 8
+    assert farm["local_1"]["failed"] == farm["local_2"]["failed"] == 0
+    assert farm["speedup_2_workers"] > 0 and "cpu-bound" in farm["workload"]
