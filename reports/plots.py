@@ -37,7 +37,7 @@ def rating_distribution(counts: pd.DataFrame, path: str | os.PathLike, *, title:
     ax.invert_yaxis()
     ax.set_xlabel("subject x component cells")
     ax.set_title(title + (" (synthetic corpus)" if synthetic else ""), fontsize=10)
-    ax.legend(ncol=4, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.25), frameon=False)
+    ax.legend(ncol=1, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     return _save(fig, Path(path))
 
 

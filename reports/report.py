@@ -57,27 +57,30 @@ def _table_sections(run: Run, out: Path) -> list[dict]:
         counts_csv, counts_md = _write_table(counts, out, f"rating_counts_{tid}")
         plot = plots.rating_distribution(counts, out / "plots" / f"ratings_{tid}.png",
                                          title=table_title(table), synthetic=run.synthetic)
-        versions = []
         sub = cr[cr["table"] == table]
-        for version in order_versions(sub["version"].unique()):
+        components = sorted(sub["component"].unique())
+        versions = order_versions(sub["version"].unique())
+        files = []
+        for version in versions:
             cells = sub[sub["version"] == version]
-            components = sorted(cells["component"].unique())
-            flat = cells.pivot(index="subject", columns="component", values="rating")
             csv, md = _write_table(
                 cells.set_index(["subject", "component"])[["negatives", "rating", "text"]],
                 out, f"table_{tid}_{slug(version)}")
-            rows = []
-            for subject in flat.index:
-                row = cells[cells["subject"] == subject].set_index("component")
-                rows.append({"subject": subject, "href": f"subjects/{slug(subject)}.html",
-                             "cells": [None if c not in row.index else {
-                                 "rating": row.at[c, "rating"], "text": row.at[c, "text"],
-                                 "level": RATINGS.index(row.at[c, "rating"])}
-                                 for c in components]})
-            versions.append({"version": version, "components": components, "rows": rows,
-                             "csv": csv, "md": md})
+            files.append({"version": version, "csv": csv, "md": md})
+        lookup = sub.set_index(["subject", "version", "component"])
+        rows = []
+        for subject in sorted(sub["subject"].unique()):
+            cells = []
+            for version in versions:
+                for c in components:
+                    key = (subject, version, c)
+                    cells.append(None if key not in lookup.index else {
+                        "rating": lookup.at[key, "rating"], "text": lookup.at[key, "text"],
+                        "level": RATINGS.index(lookup.at[key, "rating"])})
+            rows.append({"subject": subject, "href": f"subjects/{slug(subject)}.html", "cells": cells})
+        grid = {"versions": versions, "components": components, "rows": rows, "files": files}
         sections.append({"id": tid, "title": table_title(table), "plot": plot.relative_to(out).as_posix(),
-                         "counts_csv": counts_csv, "counts_md": counts_md, "versions": versions})
+                         "counts_csv": counts_csv, "counts_md": counts_md, "grid": grid})
     return sections
 
 
