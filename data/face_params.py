@@ -193,6 +193,14 @@ def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
     v = st1.copy()
     n_parke = min(len(v), N.EYES_FIRST - 1)
     start = {k: p.start for k, p in PARAMETERS.items()}
+
+    def ix(numbers):
+        """0-based rows of vertex numbers this model has (Parke's own files stop at 287)."""
+        a = np.asarray(numbers, np.int64).reshape(-1) - 1
+        return a[a < len(v)]
+
+    def changed(*numbers):
+        return any(vals[k] != start[k] for k in numbers)
     centre = face.eye_centres[0] if len(face.eye_centres) else EYE_CENTRE
 
     # --- interpolation ---------------------------------------------------------------------
@@ -226,19 +234,20 @@ def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
         v[brow, 1] += vals[3] * w
 
     # --- nose ------------------------------------------------------------------------------
-    nose = np.asarray(N.NOSE) - 1
-    tipz = v[N.NOSE_TIP_CENTRE - 1, 2]
-    lower = nose[v[nose, 2] <= tipz + 40.0]
-    upper = np.setdiff1d(nose, lower)
-    v[lower, 1] *= vals[10]
-    v[upper, 1] *= vals[11]
-    tip = np.asarray(N.NOSE_TIP) - 1
+    if changed(10, 11):
+        nose = ix(N.NOSE)
+        tipz = v[N.NOSE_TIP_CENTRE - 1, 2]
+        lower = nose[v[nose, 2] <= tipz + 40.0]
+        upper = np.setdiff1d(nose, lower)
+        v[lower, 1] *= vals[10]
+        v[upper, 1] *= vals[11]
+    tip = ix(N.NOSE_TIP)
     v[tip, 0] += vals[26]
     v[tip, 2] += vals[27]
 
     # --- mouth -----------------------------------------------------------------------------
-    corners = np.asarray((N.CORNER, N.CORNER_MIDDLE, N.INNER_CORNER)) - 1
-    lips = np.asarray(N.UPPER_LIP + N.LOWER_LIP) - 1
+    corners = ix((N.CORNER, N.CORNER_MIDDLE, N.INNER_CORNER))
+    lips = ix(N.UPPER_LIP + N.LOWER_LIP)
     mouth = np.concatenate([lips, corners])
     v[mouth, 1] *= vals[12]
     v[mouth, 0] += vals[14]
@@ -257,21 +266,24 @@ def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
             v[n - 1, 2] += (vals[22] - start[22]) * (1.0 - j / 3.0)
 
     # --- chin, jaw, cheeks -----------------------------------------------------------------
-    jaw = np.asarray(N.JAW) - 1
+    jaw = ix(N.JAW)
     v[jaw, 0] += vals[31]
     v[jaw, 2] += vals[32]
-    x_back, x_front = v[jaw, 0].min(), v[jaw, 0].max()
-    w = (v[jaw, 0] - x_back) / max(x_front - x_back, 1e-9)
-    v[jaw, 1] *= 1.0 + (vals[19] - 1.0) * w
-    cheek = np.union1d(_region(face, "cheek"), np.asarray(N.LOWER_CHEEK) - 1)
-    y_c = v[N.CORNER - 1, 1]
-    v[cheek, 1] = y_c + (v[cheek, 1] - y_c) * vals[20]
-    grow = np.union1d(cheek, jaw)
-    v[grow, 1] *= 1.0 + vals[46]
-    v[grow, 0] += vals[46] * 0.25 * np.abs(v[grow, 1])
+    if changed(19):
+        x_back, x_front = np.nanmin(v[jaw, 0]), np.nanmax(v[jaw, 0])
+        w = (v[jaw, 0] - x_back) / max(x_front - x_back, 1e-9)
+        v[jaw, 1] *= 1.0 + (vals[19] - 1.0) * w
+    cheek = np.union1d(_region(face, "cheek"), ix(N.LOWER_CHEEK))
+    if changed(20):
+        y_c = v[N.CORNER - 1, 1]
+        v[cheek, 1] = y_c + (v[cheek, 1] - y_c) * vals[20]
+    if changed(46):
+        grow = np.union1d(cheek, jaw)
+        v[grow, 1] *= 1.0 + vals[46]
+        v[grow, 0] += vals[46] * 0.25 * np.abs(v[grow, 1])
 
     # --- teeth -----------------------------------------------------------------------------
-    teeth = np.asarray(N.TEETH) - 1
+    teeth = ix(N.TEETH)
     v[teeth, 0] += vals[47] - start[47]
     v[teeth, 2] += vals[48] - start[48]
 
@@ -279,13 +291,16 @@ def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
     face_only = np.arange(n_parke)
     z_mouth = v[N.TEETH_TIP - 1, 2]
     z_eye = centre[2]
-    below_m = face_only[v[face_only, 2] < z_mouth]
-    v[below_m, 2] = z_mouth + (v[below_m, 2] - z_mouth) * vals[35]
-    below_e = face_only[v[face_only, 2] < z_eye]
-    v[below_e, 2] = z_eye + (v[below_e, 2] - z_eye) * vals[36]
-    above_e = face_only[v[face_only, 2] > z_eye]
-    above_e = np.setdiff1d(above_e, np.concatenate([lid, lid_lip]))
-    v[above_e, 2] = z_eye + (v[above_e, 2] - z_eye) * vals[37]
+    if changed(35):
+        below_m = face_only[v[face_only, 2] < z_mouth]
+        v[below_m, 2] = z_mouth + (v[below_m, 2] - z_mouth) * vals[35]
+    if changed(36):
+        below_e = face_only[v[face_only, 2] < z_eye]
+        v[below_e, 2] = z_eye + (v[below_e, 2] - z_eye) * vals[36]
+    if changed(37):
+        above_e = face_only[v[face_only, 2] > z_eye]
+        above_e = np.setdiff1d(above_e, np.concatenate([lid, lid_lip]))
+        v[above_e, 2] = z_eye + (v[above_e, 2] - z_eye) * vals[37]
 
     # --- 4: jaw rotation with Parke's zones (last of the face's own deformations) ------------
     if vals[4] != 0.0 and n_parke >= N.PARKE_VERTEX_COUNT:

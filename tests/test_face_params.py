@@ -229,3 +229,17 @@ def test_eye_parameters_rebuild_the_eyeball(face):
     np.testing.assert_allclose(np.linalg.norm(ball - big.eye_centres[0], axis=1), 80.0)
     moved = apply_parameters(face, {28: 10.0})
     assert v(moved, first)[0] == pytest.approx(v(face, first)[0] + 10.0)
+
+
+def test_parameters_on_a_parke_sized_model(face):
+    """Parke's own files: 287 vertices, some undefined, no eyes, no region names."""
+    from cassi.data.face import FaceModel
+    st1 = face.st1[:287].copy()
+    st1[[101, 102, 103, 104, 105]] = np.nan          # vertices 102-106 undefined
+    parke = FaceModel(st1, (), st1=st1, st2=st1.copy())
+    out = apply_parameters(parke, {4: 12.0, 19: 1.2, 20: 1.1, 35: 1.1, 36: 0.9, 37: 1.2,
+                                   10: 1.2, 12: 1.1, 14: 5, 16: 3, 22: 20, 47: 5, 46: 0.05})
+    defined = ~np.isnan(st1).any(axis=1)
+    assert np.isfinite(out.vertices[defined]).all()
+    assert np.isnan(out.vertices[~defined]).all()
+    assert v(out, N.LL)[2] < v(parke, N.LL)[2]      # the jaw still opens
