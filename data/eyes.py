@@ -186,6 +186,7 @@ def eyelid_positions(opening: float, centre, *, lid_radius: float = 80.0,
     Returns a dict ring -> float (8, 3) in face coordinates (left eye).
     """
     o = float(np.clip(opening, 0.0, 1.0))
-    radii = {"A": lid_radius + 6.0, "B": lid_radius, "C": eyeball_radius + 1.5}
+    from cassi.data.face_build import LID_LIP_GAP
+    radii = {"A": lid_radius + 6.0, "B": lid_radius, "C": eyeball_radius + LID_LIP_GAP}
     return {r: project_to_sphere(eyelid_ring_2d(o, r, y_scale=y_scale, z_scale=z_scale),
                                  centre, rad) for r, rad in radii.items()}

@@ -303,6 +303,9 @@ def _lips(lay: Layout) -> dict:
 #: Parke's start values: eyeball radius (parameter 44) and eyelid sphere radius (45).
 EYEBALL_RADIUS = 70.0
 EYELID_RADIUS = 80.0
+#: The lid's lip (ring C) rides this far outside the eyeball, so that the chords between its
+#: vertices clear the ball (a 32-unit chord on a 73-unit sphere sags 1.8 units).
+LID_LIP_GAP = 3.5
 #: Radius of the sphere (about the eyeball centre) that carries the skin ring round the lids.
 ORBIT_RADIUS = 94.0
 #: Eyelid rings in 2D (width along y, height along z) about the eye centre, open and closed:
@@ -375,7 +378,7 @@ def _eye(lay: Layout) -> dict:
         orbit.append(lay.add(f"eye.o{k}", pt, "free"))
     rings = {}
     for ring, radius in (("A", EYELID_RADIUS + 6.0), ("B", EYELID_RADIUS),
-                         ("C", EYEBALL_RADIUS + 1.5)):
+                         ("C", EYEBALL_RADIUS + LID_LIP_GAP)):
         op = project_to_sphere(eyelid_ring_2d(0.9, ring), c, radius)
         cl = project_to_sphere(eyelid_ring_2d(0.0, ring), c, radius)
         # st1 holds the fully open lid (opening 1); st2 the closed lid

@@ -243,3 +243,19 @@ def test_parameters_on_a_parke_sized_model(face):
     assert np.isfinite(out.vertices[defined]).all()
     assert np.isnan(out.vertices[~defined]).all()
     assert v(out, N.LL)[2] < v(parke, N.LL)[2]      # the jaw still opens
+
+
+@pytest.mark.parametrize("opening", [0.0, 0.5, 0.9, 1.0])
+def test_skin_clears_the_eyeball(face, opening):
+    """No skin (lids included) dips into the eyeball at any eyelid opening."""
+    from cassi.data.topology import render_topology
+    f = apply_parameters(face, {1: opening})
+    topo = render_topology(f, half=True)
+    verts, tri, part = topo.mesh(f.vertices)
+    names = list(topo.parts)
+    shell = tri[np.isin(part, [names.index(n) for n in ("skin", "eyelash", "eyebrow")])]
+    w = np.array([(a, b, 1 - a - b) for a in np.linspace(0, 1, 7) for b in np.linspace(0, 1, 7)
+                  if a + b <= 1])
+    samples = np.einsum("kj,tjd->tkd", w, verts[shell])
+    d = np.linalg.norm(samples - f.eye_centres[0], axis=2)
+    assert d.min() >= E.EyeParams().radius
