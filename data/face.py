@@ -54,7 +54,7 @@ def default_materials() -> dict[int, Material]:
             for n, name in MATERIAL_NAMES.items()}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class FaceModel:
     """A face in Parke's structure.
 
@@ -278,6 +278,10 @@ def build_face(*, palate_mm: np.ndarray | None = None, head_measures=None,
         pal = np.asarray(palate_mm, dtype=np.float64)
         if pal.ndim != 2 or pal.shape[1] != 2 or len(pal) < 2 or not np.isfinite(pal).all():
             raise CassiInputError("palate_mm must be a finite (P >= 2, 2) array of x, y mm")
+        if np.hypot(*np.diff(pal, axis=0).T).sum() < 5.0:
+            raise CassiInputError("the palate outline is shorter than 5 mm")
+        if pal[0, 0] < pal[-1, 0]:
+            pal = pal[::-1].copy()  # given back to front: PAL.DAT runs front to back
         if jaw_length_mm is not None:
             if not (np.isfinite(jaw_length_mm) and jaw_length_mm > 0):
                 raise CassiInputError(f"jaw_length_mm must be positive, got {jaw_length_mm}")

@@ -56,7 +56,7 @@ class Polygon:
             raise ValueError("crease flags must match the vertices")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PtsFile:
     """Contents of a ``.pts`` file.
 

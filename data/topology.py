@@ -27,7 +27,7 @@ PARTS = ("skin", "lips", "eyelash", "eyebrow", "teeth", "tongue", "palate", "eye
 MIDLINE_EPS = 1e-6
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Part:
     """One render part.
 
@@ -46,7 +46,7 @@ class Part:
     triangles: np.ndarray
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class RenderTopology:
     """Per part triangles of the mirrored (or half) head and their gathers."""
 

@@ -256,7 +256,15 @@ def test_palate_scale_from_jaw_length():
     np.testing.assert_allclose(pal[[0, 2]], f.vertex(N.TEETH_TIP)[[0, 2]] + outline[0] * scale)
 
 
-@pytest.mark.parametrize("bad", [np.zeros((1, 2)), np.full((3, 2), np.nan), np.zeros((3, 3))])
+def test_palate_given_back_to_front():
+    outline = np.array([(-5.0, 8.0), (-25.0, 21.0), (-50.0, 20.0)])
+    a = build_face(palate_mm=outline).vertices[np.asarray(N.PALATE) - 1]
+    b = build_face(palate_mm=outline[::-1]).vertices[np.asarray(N.PALATE) - 1]
+    np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("bad", [np.zeros((1, 2)), np.full((3, 2), np.nan), np.zeros((3, 3)),
+                                 np.zeros((4, 2))])
 def test_bad_palate(bad):
     with pytest.raises(CassiInputError):
         build_face(palate_mm=bad)
