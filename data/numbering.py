@@ -131,7 +131,7 @@ def lower_tooth(k: int) -> tuple[int, int, int, int]:
     """Vertices of lower tooth quad ``k``: tip-mesial, tip-distal, gum-distal, gum-mesial.
 
     So 258 (MANi) is the central incisor's gum line at the centre line, and 281 / 286 are the gum
-    line where quads 6 and 7 meet (the first and second molars: CASSI's MANm site).
+    line where quads 6 and 7 (0-based) meet (the first and second molars: CASSI's MANm site).
     """
     if not 0 <= k < TEETH_PER_SET:
         raise IndexError(k)

@@ -189,8 +189,19 @@ def test_closed_parts(face, topo):
     eye = np.isin(part, [names.index(p) for p in ("eye_white", "iris", "fringe", "pupil")])
     assert len(boundary_loops(tri[eye])) == 0               # eyeballs are closed
     assert signed_volume(verts, tri[eye]) > 0
-    for name in ("teeth", "tongue", "palate"):
-        assert name in names
+    parts = topo.expand(face.vertices)
+
+    def normals(name):
+        p = parts[name][topo.parts[name].triangles].astype(float)
+        n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+        return p.mean(axis=1), n / np.linalg.norm(n, axis=1, keepdims=True)
+
+    # teeth face out of the dental arch (labial/buccal faces), the tongue up, the palate down
+    c, n = normals("teeth")
+    arch_centre = np.array([v(face, N.TEETH_TIP)[0] - 150.0, 0.0])
+    assert (np.einsum("ij,ij->i", n[:, :2], c[:, :2] - arch_centre) > 0).all()
+    assert (normals("tongue")[1][:, 2] > 0.99).all()
+    assert (normals("palate")[1][:, 2] < 0).all()
 
 
 def test_expand_mirrors(face, topo):
