@@ -46,9 +46,6 @@ PARKE_EXCERPT = {
 # building
 # ---------------------------------------------------------------------------------------------
 
-BACK_THETAS = [125.0, 150.0, 180.0]
-
-
 def _merge(lay: "Layout", own: list[str], base: list[str], from_theta: float) -> list[str]:
     """A row that joins ``base`` at the side: its own nodes, then base's nodes from azimuth
     ``from_theta`` on (saves vertices behind the face, where the head is smooth)."""
@@ -316,6 +313,18 @@ _LID_OPEN = {"upper": 21.0, "lower": -15.0}
 _LID_CLOSED = {"upper": -10.0, "lower": -12.0}
 
 
+#: Per eyelid ring: width factor; lower lid (gain, offset); upper lid (gain, offset, floor).
+#: Ring A, the lid's skin beyond the margin, sits further from the opening, and the upper lid's
+#: fold stays at least 6 units above the eye's centre however far the lid closes.
+_RINGS = {
+    "C": {"grow": 0.92, "low": (1.0, 0.0), "up": (1.0, 0.0, None)},
+    "B": {"grow": 1.0, "low": (1.0, 0.0), "up": (1.0, 0.0, None)},
+    "A": {"grow": 1.3, "low": (1.6, -2.0), "up": (1.0, 22.0, 6.0)},
+}
+#: Height profile across the lid (inner corner to the middle to the outer side).
+_LID_SHAPE = (0.82, 1.0, 0.82)
+
+
 def eyelid_ring_2d(opening: float, ring: str = "B", *, y_scale: float = 1.0,
                    z_scale: float = 1.0) -> np.ndarray:
     """2D (y, z) offsets from the eye centre of an eyelid ring, interpolated between the
@@ -327,17 +336,19 @@ def eyelid_ring_2d(opening: float, ring: str = "B", *, y_scale: float = 1.0,
     o = float(opening)
     up = _LID_CLOSED["upper"] + (_LID_OPEN["upper"] - _LID_CLOSED["upper"]) * o
     lo = _LID_CLOSED["lower"] + (_LID_OPEN["lower"] - _LID_CLOSED["lower"]) * o
+    spec = _RINGS[ring]
+    g = spec["grow"]
+    lo_gain, lo_off = spec["low"]
+    up_gain, up_off, up_floor = spec["up"]
+    if up_floor is not None:
+        up = max(up, up_floor)
     w = _EYE_W
-    grow = {"C": 0.92, "B": 1.0, "A": 1.3}[ring]
-    shape = np.array([0.0, 0.82, 1.0, 0.82])  # height profile across the lid
-    ys = np.array([-w, -w / 2, 0.0, w / 2, w * 1.05])
-    pts = [(ys[0] * grow, 2.0)]
-    for k, y in enumerate(ys[1:4]):
-        pts.append((y * grow, lo * shape[k + 1] * (1.0 if ring != "A" else 1.6) - (2 if ring == "A" else 0)))
-    pts.append((ys[4] * grow, 5.0))
-    for k, y in enumerate(ys[3:0:-1]):
-        hz = up * shape[3 - k] if ring != "A" else max(up, 6.0) * shape[3 - k] + 22.0
-        pts.append((y * grow, hz))
+    ys = (-w / 2, 0.0, w / 2)
+    pts = [(-w * g, 2.0)]                                                   # inner corner
+    pts += [(y * g, lo * lo_gain * h + lo_off) for y, h in zip(ys, _LID_SHAPE)]
+    pts.append((1.05 * w * g, 5.0))                                         # outer corner
+    pts += [(y * g, up * up_gain * h + up_off)
+            for y, h in zip(ys[::-1], _LID_SHAPE[::-1])]
     out = np.array(pts, float)
     out[:, 0] *= y_scale
     out[:, 1] *= z_scale
