@@ -165,7 +165,7 @@ def _interpolate(v, face, idx, value):
 
 
 def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
-                     gaze_target=None):
+                     gaze_target=None, light=None, viewer=None):
     """The face with Parke's parameters applied (start values for the ones not given).
 
     Every parameter of Table 3.1 acts (50, smoothness, is recorded for the renderer):
@@ -181,7 +181,9 @@ def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
       31-32 chin, 38-40 eyelids with the eyeballs, 47-48 teeth (48 relative to its start 38);
     * rotation: 4 jaw rotation about vertex 107 with Table 3.2's zones;
     * eyes: 41-44 rebuild the eyeballs (pupil, fringe, iris fractions, radius), 45 the lid
-      sphere's radius; the eyes look at ``gaze_target`` (Appendix A).
+      sphere's radius; the eyes look at ``gaze_target`` (Appendix A), with the reflection spot
+      placed for the ``light`` and ``viewer`` directions (face coordinates; default a light
+      above-left of a viewer straight ahead).
 
     Regions that a model lacks (Parke's own files carry no region names) are left alone.
     """
@@ -319,15 +321,17 @@ def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
             c = centres[k] + shift * np.array([1.0, 1.0 if k == 0 else -1.0, 1.0])
             c[2] = z_eye + (c[2] - z_eye) * 1.0
             first = face.eyes_first + k * E.VERTS_PER_EYE
-            v[first - 1:first - 1 + E.VERTS_PER_EYE] = E.place_eye(c, target, params)
+            v[first - 1:first - 1 + E.VERTS_PER_EYE] = E.place_eye(c, target, params,
+                                                                    light=light, viewer=viewer)
 
     # --- 7-9: head scales about the origin (last, so they scale everything) -----------------
     v *= np.array([vals[7], vals[8], vals[9]])
     return replace(face, vertices=v, parameters=vals)
 
 
-def look_at(face, target):
+def look_at(face, target, *, light=None, viewer=None):
     """The face with both eyes turned to ``target`` (Parke units, face coordinates); the other
     parameters keep the values the face was built with."""
     return apply_parameters(face, {k: val for k, val in face.parameters.items()
-                                   if val != PARAMETERS[k].start}, gaze_target=target)
+                                   if val != PARAMETERS[k].start}, gaze_target=target,
+                            light=light, viewer=viewer)

@@ -259,3 +259,13 @@ def test_skin_clears_the_eyeball(face, opening):
     samples = np.einsum("kj,tjd->tkd", w, verts[shell])
     d = np.linalg.norm(samples - f.eye_centres[0], axis=2)
     assert d.min() >= E.EyeParams().radius
+
+
+def test_reflection_spot_follows_light_and_viewer(face):
+    """Appendix A: the spot sits where the half-way direction of light and viewer meets the
+    lens, so it moves toward the light."""
+    first = face.eyes_first
+    spot = slice(first - 1 + E.VERTS_PER_EYE - E.SPOT_SIDES, first - 1 + E.VERTS_PER_EYE)
+    up = look_at(face, [6000, 0, 22], light=[1, 0, 1], viewer=[1, 0, 0])
+    down = look_at(face, [6000, 0, 22], light=[1, 0, -1], viewer=[1, 0, 0])
+    assert up.vertices[spot, 2].mean() > down.vertices[spot, 2].mean() + 5
