@@ -2,7 +2,8 @@
 
 ``preview_png(face, path)`` draws the mirrored head from the front, the side, three-quarters and
 the half-face cut, flat-shaded with the polygon edges on top, plus the mouth parts (teeth,
-tongue, palate) from the side. ``python -m cassi.data.preview OUT.png`` writes the neutral face.
+tongue, palate) from the side and from below. Faces seen from behind are drawn dark (a wrong
+winding stands out), except in the half view, which looks into the head and is two-sided. ``python -m cassi.data.preview OUT.png`` writes the neutral face.
 """
 from __future__ import annotations
 
@@ -27,7 +28,7 @@ VIEWS = {"front": (5, 0), "side": (5, 90), "three-quarter": (15, 40), "half": (5
 
 
 def _draw(ax, topo, positions, *, parts=None, title="", view=(5, 0), edges=True,
-          centre=None, span=None):
+          centre=None, span=None, two_sided=False):
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
     v, tri, part = topo.mesh(positions)
@@ -42,12 +43,14 @@ def _draw(ax, topo, positions, *, parts=None, title="", view=(5, 0), edges=True,
     eye = np.array([np.cos(elev) * np.cos(azim), np.cos(elev) * np.sin(azim), np.sin(elev)])
     light = eye + np.array([0.0, 0.3, 0.6])
     light /= np.linalg.norm(light)
-    shade = 0.35 + 0.65 * np.clip(n @ light, 0.0, 1.0)
+    back = (n @ eye) < 0
+    lit = np.where(back, -1.0, 1.0) * (n @ light) if two_sided else n @ light
+    shade = 0.35 + 0.65 * np.clip(lit, 0.0, 1.0)
     base = np.array([_COLOURS.get(names[i], (0.6, 0.6, 0.6)) for i in part])
     col = base * shade[:, None]
-    # back faces (pointing away from the viewer) drawn dark so wrong windings stand out
-    back = (n @ eye) < 0
-    col[back] = col[back] * 0.25
+    if not two_sided:
+        # back faces (pointing away from the viewer) drawn dark so wrong windings stand out
+        col[back] = col[back] * 0.25
     pc = Poly3DCollection(p, facecolors=col, edgecolors=(0, 0, 0, 0.25) if edges else col,
                           linewidths=0.2)
     ax.add_collection3d(pc)
@@ -86,7 +89,8 @@ def preview_png(face, path: str | PathLike, *, positions=None, dpi: int = 110,
     ]
     for k, (topo, parts, title, view) in enumerate(panels):
         ax = fig.add_subplot(2, 3, k + 1, projection="3d")
-        _draw(ax, topo, pos, parts=parts, title=title, view=view)
+        # the cut shows the inside of the head: shade it two-sided like the renderer
+        _draw(ax, topo, pos, parts=parts, title=title, view=view, two_sided=topo.half)
     fig.tight_layout()
     tmp = atomic_tmp_path(path)
     try:
