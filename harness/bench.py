@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .executors import LocalExecutor, RayExecutor
+from .executors import LocalExecutor, RayExecutor, thread_env
 from .jobs import Job, StageContext, StageOutput
 from .runner import Pipeline, TaskSpec, run_batch
 
@@ -147,7 +147,7 @@ def bench_farm(quick: bool = False, *, workload: str = "auto", ray: bool = True)
     init, initargs = work["warm"]
     try:
         for n in (1, 2):
-            with LocalExecutor(n, initializer=init, initargs=initargs) as ex:
+            with LocalExecutor(n, initializer=init, initargs=initargs, env=thread_env(1)) as ex:
                 out[f"local_{n}"] = _time_batch(work, ex, n, tmp, f"local{n}")
         a, b = out["local_1"]["jobs_per_s"], out["local_2"]["jobs_per_s"]
         out["speedup_2_workers"] = round(b / a, 3) if a and b else None

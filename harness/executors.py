@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import collections
 import multiprocessing as mp
+import os
 from dataclasses import dataclass
 from multiprocessing.connection import wait as mp_wait
 from typing import Any, Callable
@@ -89,13 +90,15 @@ class LocalExecutor:
     name = "local"
 
     def __init__(self, workers: int = 1, *, retries: int = 1, start_method: str = "spawn",
-                 initializer: Callable | None = None, initargs: tuple = ()):
+                 initializer: Callable | None = None, initargs: tuple = (),
+                 env: dict[str, str] | None = None):
         if int(workers) < 1:
             raise CassiInputError(f"--workers must be at least 1, not {workers}")
         self.workers = int(workers)
         self.retries = int(retries)
         self._ctx = mp.get_context(start_method)
         self._init = (initializer, initargs)
+        self._env = dict(env or {})
         self._procs: list[tuple[Any, Any]] = []     # (process, conn)
         self._busy: dict[int, _Item] = {}            # worker index -> item
         self._queue: collections.deque[_Item] = collections.deque()
@@ -112,7 +115,18 @@ class LocalExecutor:
         parent, child = self._ctx.Pipe(duplex=True)
         proc = self._ctx.Process(target=_worker_main, args=(child, *self._init), daemon=True,
                                  name="cassi-worker")
-        proc.start()
+        # Environment for the worker from its first instruction (thread pools of native
+        # libraries are sized when they are imported, before any initializer could run).
+        saved = {k: os.environ.get(k) for k in self._env}
+        os.environ.update(self._env)
+        try:
+            proc.start()
+        finally:
+            for k, v in saved.items():
+                if v is None:
+                    os.environ.pop(k, None)
+                else:
+                    os.environ[k] = v
         child.close()
         return proc, parent
 
@@ -309,15 +323,24 @@ class RayExecutor:
             self._owns_cluster = False
 
 
+def thread_env(threads: int) -> dict[str, str]:
+    """Environment that limits a worker's native thread pools (BLAS, OpenMP) to ``threads``."""
+    n = str(max(1, int(threads)))
+    return {v: n for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                           "NUMEXPR_NUM_THREADS", "VECLIB_MAXIMUM_THREADS")}
+
+
 def make_executor(kind: str, *, workers: int = 1, address: str | None = None,
-                  retries: int = 1, initializer: Callable | None = None, initargs: tuple = ()):
+                  retries: int = 1, initializer: Callable | None = None, initargs: tuple = (),
+                  threads: int = 1):
     """``"local"`` -> :class:`LocalExecutor`, ``"ray"`` -> :class:`RayExecutor`.
 
     ``initializer(*initargs)`` runs in each local worker process before its first item (and
     before every Ray task: it must be idempotent).
     """
     if kind == "local":
-        return LocalExecutor(workers, retries=retries, initializer=initializer, initargs=initargs)
+        return LocalExecutor(workers, retries=retries, initializer=initializer, initargs=initargs,
+                             env=thread_env(threads))
     if kind == "ray":
         # The brief's local cluster: 2 CPUs, or more when more workers were asked for.
         return RayExecutor(address, retries=retries, num_cpus=max(2, int(workers)),

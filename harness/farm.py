@@ -71,7 +71,7 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
         atomic_write_text(store.root / "run.json", json.dumps(meta, indent=1, default=str))
         executor = make_executor(cfg.executor, workers=cfg.workers, address=cfg.address,
                                  retries=cfg.retries, initializer=worker_env,
-                                 initargs=(cfg.threads,))
+                                 initargs=(cfg.threads,), threads=cfg.threads)
         with executor:
             result = run_batch(tasks, versions, views, pipeline, ctx, executor,
                                progress=progress, extra_meta={"synthetic": synthetic})
