@@ -1,8 +1,8 @@
 """Golden images of the neutral face (cassi.data.face.build_face()) in all four views, preview preset.
 
-References live in tests/golden/: ``neutral_<view>.<variant>.png`` (colour, per Mitsuba variant,
-because the sample streams differ between variants) and ``neutral_<view>.mask.png`` (part ids,
-the same for every variant). They are regenerated only on purpose:
+References live in tests/golden/: ``neutral_<view>.png`` (sRGB colour) and
+``neutral_<view>.mask.png`` (part ids). They are regenerated only on purpose, after looking at
+them:
 
     CASSI_REGEN_GOLDEN=1 python -m pytest tests/test_render_golden.py
 
@@ -10,9 +10,18 @@ the same for every variant). They are regenerated only on purpose:
 writes the rendered, reference and difference images and names the folder (``CASSI_GOLDEN_OUT``
 or pytest's tmp_path).
 
-Thresholds: the same variant renders the same image up to float noise (SSIM ~ 1.0); lowering the
-jaw by 15 Parke units gives SSIM 0.985 (front) / 0.94 (half) and a mask agreement of 0.996 /
-0.986, so SSIM >= 0.99 and mask agreement >= 0.999 catch a change of that size.
+What is compared, and why:
+
+- the mask, exactly (agreement >= 0.999): it is one ray per pixel centre, the same in every
+  variant, and catches geometry and camera changes (lowering the jaw by 15 Parke units leaves an
+  agreement of 0.996 in the front view and 0.986 in the half view);
+- the colour, in two ways that see through the render noise (at 4 spp the noise itself differs
+  between variants, scalar_rgb even between runs as its samplers follow thread scheduling, and
+  with any change of the scene's shapes, so a plain SSIM says more about the noise than the look):
+  SSIM after a Gaussian blur of 3 px >= 0.99 (shading: a mirrored light set gives 0.983 / 0.982
+  in the front / half view, scalar against llvm noise 0.998 / 0.996), and the mean sRGB colour of
+  every part covering >= 200 pixels (in the reference mask) within 5 levels of 255 (materials and
+  brightness: skin 20% darker gives 10.8 / 12.6, lights 15% dimmer 7.1 / 8.3, noise <= 3.8).
 """
 from __future__ import annotations
 
@@ -27,11 +36,7 @@ from cassi.renderer.images import read_image, to_srgb8, write_mask_png, write_pn
 pytestmark = pytest.mark.render
 
 GOLDEN = Path(__file__).resolve().parent / "golden"
-SSIM_MIN = 0.99
-# scalar_rgb hands samplers to threads in scheduling order, so its noise differs run to run:
-# there the colour is compared after a Gaussian blur (sigma 1.5 px), which leaves SSIM >= 0.97
-# between two scalar runs; geometry is still checked exactly by the mask.
-SCALAR_BLUR, SCALAR_SSIM_MIN = 1.5, 0.95
+BLUR_PX, SSIM_MIN, PART_MEAN_MAX, PART_MIN_PX = 3.0, 0.99, 5.0, 200
 MASK_AGREEMENT_MIN = 0.999
 REGEN = os.environ.get("CASSI_REGEN_GOLDEN", "") not in ("", "0")
 
@@ -43,6 +48,23 @@ def neutral():
     return face, np.asarray(face.vertices)
 
 
+def colour_metrics(ref: np.ndarray, img: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
+    """(SSIM after a Gaussian blur of BLUR_PX pixels, largest difference of a part's mean sRGB
+    colour in 8-bit levels) of two uint8 (H, W, 3) images; ``mask`` (H, W) the reference parts."""
+    from scipy.ndimage import gaussian_filter
+    from skimage.metrics import structural_similarity
+
+    a, b = (gaussian_filter(x.astype(float), (BLUR_PX, BLUR_PX, 0)) for x in (ref, img))
+    ssim = float(structural_similarity(a, b, channel_axis=2, data_range=255))
+    worst = 0.0
+    for part in np.unique(mask):
+        sel = mask == part
+        if sel.sum() >= PART_MIN_PX:
+            d = np.abs(ref[sel].astype(float).mean(0) - img[sel].astype(float).mean(0)).max()
+            worst = max(worst, float(d))
+    return ssim, worst
+
+
 def _failure_dir(tmp_path: Path) -> Path:
     out = Path(os.environ.get("CASSI_GOLDEN_OUT", tmp_path))
     out.mkdir(parents=True, exist_ok=True)
@@ -51,8 +73,6 @@ def _failure_dir(tmp_path: Path) -> Path:
 
 @pytest.mark.parametrize("view", ["front", "side", "half", "top"])
 def test_neutral_face_matches_golden(neutral, view, tmp_path):
-    from skimage.metrics import structural_similarity
-
     from cassi.data.face import render_topology
     from cassi.renderer.render import FaceRenderer
 
@@ -60,7 +80,7 @@ def test_neutral_face_matches_golden(neutral, view, tmp_path):
     r = FaceRenderer(render_topology(face, half=(view == "half")), view, "preview")
     res = r.render(pos)
     img = to_srgb8(res.rgb)
-    colour_ref = GOLDEN / f"neutral_{view}.{r.variant}.png"
+    colour_ref = GOLDEN / f"neutral_{view}.png"
     mask_ref = GOLDEN / f"neutral_{view}.mask.png"
     if REGEN:
         write_png(colour_ref, img, linear=False, metadata=res.metadata())
@@ -69,8 +89,8 @@ def test_neutral_face_matches_golden(neutral, view, tmp_path):
 
     problems = []
     out = None
+    ref_mask = read_image(mask_ref)[..., 0].astype(int) if mask_ref.exists() else res.mask
     if mask_ref.exists():
-        ref_mask = read_image(mask_ref)[..., 0].astype(int)
         agree = float(np.mean(ref_mask == res.mask))
         if agree < MASK_AGREEMENT_MIN:
             problems.append(f"mask agreement {agree:.5f} < {MASK_AGREEMENT_MIN}")
@@ -81,14 +101,12 @@ def test_neutral_face_matches_golden(neutral, view, tmp_path):
                       linear=False)
     if colour_ref.exists():
         ref = read_image(colour_ref)[..., :3]
-        a, b, limit = ref.astype(float), img.astype(float), SSIM_MIN
-        if r.variant.startswith("scalar"):
-            from scipy.ndimage import gaussian_filter
-            a, b = (gaussian_filter(x, (SCALAR_BLUR, SCALAR_BLUR, 0)) for x in (a, b))
-            limit = SCALAR_SSIM_MIN
-        ssim = structural_similarity(a, b, channel_axis=2, data_range=255)
-        if ssim < limit:
-            problems.append(f"SSIM {ssim:.4f} < {limit}")
+        ssim, part_diff = colour_metrics(ref, img, ref_mask)
+        if ssim < SSIM_MIN:
+            problems.append(f"SSIM {ssim:.4f} < {SSIM_MIN} (blurred {BLUR_PX} px)")
+        if part_diff > PART_MEAN_MAX:
+            problems.append(f"a part's mean colour differs by {part_diff:.2f} > {PART_MEAN_MAX} levels")
+        if ssim < SSIM_MIN or part_diff > PART_MEAN_MAX:
             out = _failure_dir(tmp_path)
             write_png(out / f"{view}.rendered.png", img, linear=False)
             write_png(out / f"{view}.reference.png", ref, linear=False)
@@ -102,20 +120,22 @@ def test_neutral_face_matches_golden(neutral, view, tmp_path):
 
 
 def test_render_is_reproducible(neutral):
-    """Fixed seeds: the same frame renders to the same image in a new renderer (up to the float
-    rounding of the film's parallel sample accumulation, ~1e-7 relative). JIT variants only:
-    scalar_rgb's per-thread samplers make its noise depend on thread scheduling."""
+    """Fixed seeds: a new renderer gives the same mask and depth exactly and the same look.
+
+    Colour is compared with the golden metrics, not bit for bit: two llvm renders in one process
+    usually agree to 1e-7 but now and then differ at the level of the render noise (seen with both
+    the multijitter and the independent sampler; the cause lies inside Dr.Jit/Mitsuba), and
+    scalar_rgb's samplers follow thread scheduling."""
     from cassi.data.face import render_topology
     from cassi.renderer.render import FaceRenderer
 
     face, pos = neutral
     topo = render_topology(face)
-    if FaceRenderer(topo, "front", "preview").variant.startswith("scalar"):
-        pytest.skip("scalar_rgb noise depends on thread scheduling")
     a = FaceRenderer(topo, "front", "preview").render(pos)
     b = FaceRenderer(topo, "front", "preview").render(pos)
-    np.testing.assert_allclose(a.rgb, b.rgb, rtol=1e-4, atol=1e-5)
     assert np.array_equal(a.mask, b.mask) and np.array_equal(a.depth, b.depth)
+    ssim, part_diff = colour_metrics(to_srgb8(a.rgb), to_srgb8(b.rgb), a.mask)
+    assert ssim >= SSIM_MIN and part_diff <= PART_MEAN_MAX, (ssim, part_diff)
 
 
 def test_neutral_views_show_what_they_should(neutral):
@@ -138,3 +158,37 @@ def test_neutral_views_show_what_they_should(neutral):
         if view in ("front", "side"):
             assert (res.mask[:, 0] == 0).all() and (res.mask[:, -1] == 0).all()
             assert (res.mask[0] == 0).all()
+
+
+def test_colour_comparison_fires_on_a_planted_defect(neutral, monkeypatch):
+    """Two variants' noise passes; a skin 20% darker, or the lights mirrored, does not."""
+    import dataclasses
+
+    from cassi.data.face import render_topology
+    from cassi.renderer import views
+    from cassi.renderer.render import FaceRenderer
+
+    face, pos = neutral
+    topo = render_topology(face)
+    res = FaceRenderer(topo, "front", "preview").render(pos)
+    base, mask = to_srgb8(res.rgb), res.mask
+    other = to_srgb8(FaceRenderer(topo, "front", "preview", "scalar").render(pos).rgb)
+    ssim, diff = colour_metrics(base, other, mask)
+    assert ssim >= SSIM_MIN and diff <= PART_MEAN_MAX, (ssim, diff)
+
+    skin = views.MATERIALS["skin"]
+    dark = {**skin, "material": {**skin["material"], "diffuse_reflectance": {
+        "type": "rgb", "value": [0.8 * c for c in skin["material"]["diffuse_reflectance"]["value"]]}}}
+    monkeypatch.setitem(views.MATERIALS, "skin", dark)
+    darker = to_srgb8(FaceRenderer(topo, "front", "preview").render(pos).rgb)
+    monkeypatch.setitem(views.MATERIALS, "skin", skin)
+    ssim, diff = colour_metrics(base, darker, mask)
+    assert ssim < SSIM_MIN or diff > PART_MEAN_MAX, (ssim, diff)
+
+    front = views.VIEWS["front"]
+    lights = tuple(dataclasses.replace(l, offset=(-l.offset[0], l.offset[1], l.offset[2]))
+                   for l in front.lights)
+    mirrored = dataclasses.replace(front, lights=lights)
+    relit = to_srgb8(FaceRenderer(topo, mirrored, "preview").render(pos).rgb)
+    ssim, diff = colour_metrics(base, relit, mask)
+    assert ssim < SSIM_MIN or diff > PART_MEAN_MAX, (ssim, diff)
