@@ -18,10 +18,15 @@ from . import results as R
 from .jobs import GEOMETRY_VIEW, Job, Outcome, StageContext, StageFn, State, call_job, chunk_frames
 from .progress import JobRecord, Progress, Summary, write_job_log
 from .store import OutputStore
+from cassi.data.atomic import atomic_write_text
 
 #: Outputs named ``render-<frame>`` are images; they are listed in ``renders.parquet``.
 RENDER_PREFIX = "render-"
 RENDER_COLUMNS = ("subject", "task", "rep", "version", "view", "frame", "path")
+
+
+class OutputWriteError(OSError):
+    """The run's tables could not be written (full disk, read-only directory)."""
 
 
 @dataclass(frozen=True)
@@ -211,15 +216,21 @@ def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterabl
     if pipeline.aggregate is not None and len(table):
         table = R.combine([table, pipeline.aggregate(table)])
     rated = R.ratings(table, pipeline.rate)
-    R.write_table(table, store.root / "results.parquet")
-    R.write_table(rated, store.root / "ratings.parquet")
-    R.write_table(pd.DataFrame(renders, columns=list(RENDER_COLUMNS)).sort_values(
-        ["subject", "task", "rep", "version", "view", "frame"], kind="mergesort"),
-        store.root / "renders.parquet")
     summary = Summary(records, time.perf_counter() - t0,
                       worker_crashes=getattr(executor, "crashes", 0))
-    from cassi.data.atomic import atomic_write_text  # noqa: PLC0415
-    atomic_write_text(store.root / "summary.json",
-                      json.dumps({**summary.to_dict(), **(extra_meta or {})}, indent=1,
-                                 sort_keys=True, default=str))
+    try:
+        R.write_table(table, store.root / "results.parquet")
+        R.write_table(rated, store.root / "ratings.parquet")
+        R.write_table(pd.DataFrame(renders, columns=list(RENDER_COLUMNS)).sort_values(
+            ["subject", "task", "rep", "version", "view", "frame"], kind="mergesort"),
+            store.root / "renders.parquet")
+        atomic_write_text(store.root / "summary.json",
+                          json.dumps({**summary.to_dict(), **(extra_meta or {})}, indent=1,
+                                     sort_keys=True, default=str))
+    except OSError as err:
+        # A full disk or a directory gone read-only: every finished job's outputs are intact
+        # (atomic writes), so the same command finishes the tables once the cause is fixed.
+        raise OutputWriteError(err.errno, f"cannot write the run's tables in {store.root}: "
+                               f"{err.strerror or err}; finished job outputs are kept, rerun "
+                               f"the same command to finish") from err
     return RunResult(summary, table, rated, records)

@@ -259,3 +259,14 @@ def test_results_normalize_folds_extra_columns_into_detail():
     assert df.loc[0, "detail"] == "where=UL"
     assert df.loc[0, "frame"] == -1 and df.loc[0, "negatives"] == 0
     assert list(df.columns) == list(R.COLUMNS)
+
+
+def test_tables_that_cannot_be_written_keep_finished_outputs(tmp_path):
+    from cassi.harness.runner import OutputWriteError
+
+    (tmp_path / "results.parquet").mkdir()  # the table's name is taken: its write must fail
+    with pytest.raises(OutputWriteError, match="finished job outputs are kept"):
+        _run(tmp_path, tasks=TASKS[:1], versions=("v1",), views=())
+    (tmp_path / "results.parquet").rmdir()
+    res = _run(tmp_path, tasks=TASKS[:1], versions=("v1",), views=())
+    assert res.summary.counts()["cached"] == 1 and (tmp_path / "results.parquet").is_file()
