@@ -290,7 +290,7 @@ CASES = {
     "teeth_too_far_apart": (5, p_teeth_apart, [2.0, 7.0], [0, 1]),
     "lips_never_touch": (5, p_open_lips, [0.5, 2.5, 6.0], [0, 1, 2]),
     "lips_apart_at_start": (5, p_open_at_start, [0.5, 2.5], [0, 1]),
-    "lips_pressed": (5, p_pressed, [0.3, 1.5], [0, 1]),
+    "lips_pressed": (5, p_pressed, [1.0, 3.0], [0, 1]),
     "lips_centered_low": (5, p_centered_low, [0.05, 0.3, 0.7], [0, 1, 2]),
     "lips_through_teeth": (5, p_lip_through_teeth, [0.2, 1.5], [0, 1]),
     "lower_lip_protrudes": (5, p_lower_protrudes, [1.0, 2.5, 5.0], [0, 1, 2]),
@@ -402,16 +402,17 @@ def test_switch_jump_is_found_through_the_diagnostics():
     a = p_switch_jump(S.copy(BASE[106]), 2.0)
     r = run(a, 106, checks=["corner_jump_switch"]).loc["corner_jump_switch"]
     assert r["negatives"] == 1 and "ellipse switches" in r["detail"]
-    assert r["value"] == pytest.approx(2.0, abs=0.2)  # less the jaw's own step
+    assert r["value"] == pytest.approx(2.0, abs=0.35)  # less the jaw's own step (~0.3 mm)
     # a small pop away from any switch, within the data's noise, stays silent
     b = S.copy(BASE[106])
     b.positions[20, P.corner, 1] += 0.2
     assert run(b, 106, checks=["corner_jump_switch"]).loc["corner_jump_switch", "negatives"] == 0
-    # without diagnostics no switch is known; the pop still shows as corner jitter
+    # without diagnostics no switch is known: only sustained corner jitter could count, and a
+    # single pop is not sustained
     c = p_switch_jump(S.copy(BASE[106]), 2.0)
     c.diagnostics = c.diagnostics.drop(columns=["outer_abc_branch"])
     r = run(c, 106, checks=["corner_jump_switch"]).loc["corner_jump_switch"]
-    assert r["negatives"] == 1 and r["detail"].startswith("corner jitter")
+    assert r["negatives"] == 0 and "(0 ellipse switches" in r["detail"]
 
 
 def test_jaw_jitter_alone_is_not_lip_jitter():
