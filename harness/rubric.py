@@ -1037,7 +1037,9 @@ def negatives_text(rows: pd.DataFrame) -> str:
 def tabulate(results: pd.DataFrame, *, version_order: Sequence[str] = VERSION_ORDER) -> pd.DataFrame:
     """Per rubric table, subject, version and component: negatives, rating, negatives as text.
 
-    Only whole-task rows (``frame == -1``) count. Table C is built from the lip rows of Table A
+    Only whole-task rows (``frame == -1``) count, and each check once per subject and version
+    (the most negatives any of the subject's task files earned). Table C is built from the lip
+    rows of Table A
     plus Table C's own checks, per subject and version; a version whose lip negatives exceed the
     previous version's (in ``version_order``) earns one more negative ("looks worse"), as the
     thesis compared versions (rubric.md Table C).
@@ -1058,6 +1060,10 @@ def tabulate(results: pd.DataFrame, *, version_order: Sequence[str] = VERSION_OR
     lip_a = df[(df["table"] == "A") & (df["component"] == "lips")].copy()
     lip_a["table"] = "C"
     df = pd.concat([df, lip_a], ignore_index=True)
+    # a fault is noted once per subject and version, however many of its task files show it
+    # (the thesis judged each subject from its files together): the most negatives any file earned
+    df = (df.groupby(["table", "subject", "version", "component", "check"], sort=True)
+            ["negatives"].max().reset_index())
     out = []
     for (table, subject, version), g in df.groupby(["table", "subject", "version"], sort=True):
         for comp, gc in g.groupby("component", sort=True):

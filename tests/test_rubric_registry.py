@@ -148,3 +148,12 @@ def test_registry_table_lists_every_check_once():
     t = R.registry_table()
     assert t["check"].tolist() == list(R.CHECKS)
     assert (t["thesis_table"] == t["table"].map(lambda x: R.TABLES[x][0])).all()
+
+
+def test_tabulate_counts_a_fault_once_per_subject():
+    a = _rows("JW11", "cassi-1.0", [("lips_never_touch", 1), ("tongue_through_teeth", 1)])
+    b = _rows("JW11", "cassi-1.0", [("lips_never_touch", 2)]).assign(task=21)
+    tab = R.tabulate(pd.concat([a, b]))
+    row = tab[(tab["table"] == "A") & (tab["component"] == "all")].iloc[0]
+    assert row["negatives"] == 3 and row["rating"] == "FAIR"
+    assert row["text"] == "-- lips too far apart, never touching; - tongue pokes through the front teeth"
