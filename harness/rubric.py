@@ -417,6 +417,17 @@ def m_tongue_palate(ctx):
     return _m_sustained(d, detail="tongue above the palatal surface (not counted by the thesis)")
 
 
+def m_tongue_back_v(ctx):
+    t = ctx.parts.tongue
+    if len(t) < 6:
+        return Measurement(float("nan"), -1, "no tongue centre line")
+    # centre line tip, T1-T4, back (numbering.TONGUE_CENTRE): the angle at T4 between T3 and
+    # the anchored back vertex
+    ang = G.profile_angle(ctx.pos, t[3], t[4], t[5])
+    return _m_sustained(ang, worst="min", detail="side-view angle T3-T4-back of the tongue "
+                                                 "(not counted by the thesis)")
+
+
 def m_palate_below_incisor(ctx):
     d = G.palate_below_incisor(ctx.pos[0], ctx.parts) * ctx.mm
     return Measurement(d, 0, "lowest palate vertex below vertex 226 at initialization", frame_value=d)
@@ -720,6 +731,12 @@ _ALL: list[Check] = [
           "height of tongue vertices and edges above the palatal surface", (0.5,), (1,), "higher",
           "measured but, as in the thesis, not counted (most subjects pass the alveolar ridge)",
           "tongue passes through the palatal outline", "geometry", m_tongue_palate, counted=False),
+    Check("tongue_back_v", "A", "tongue", "half", "deg", "all frames (sustained 3)",
+          "angle at T4 between T3 and the anchored back of the tongue (the V at the back)",
+          (120.0,), (1,), "lower",
+          "measured but, as in the thesis, not counted; a bend sharper than 120 deg reads as a V",
+          "V shape at the back of the tongue (anchored back points)", "geometry", m_tongue_back_v,
+          counted=False),
     # ---------------- Table B (thesis 5.4) ----------------
     Check("palate_below_incisor", "B", "palate", "half", "mm", "initialization",
           "how far the palatal outline reaches below the tip of the upper front teeth (226)",

@@ -468,3 +468,12 @@ def test_back_teeth_apart_count_as_teeth_too_far_apart():
     a.positions[:, P.lower_molar, 2] -= 6.0    # back teeth 6 mm apart, the incisors still overlap
     r = run(a, 5, checks=["teeth_too_far_apart"]).loc["teeth_too_far_apart"]
     assert r["negatives"] == 1 and r["value"] == pytest.approx(6.0, abs=0.2)
+
+
+def test_tongue_back_v_is_measured_not_counted():
+    clean = run(S.copy(BASE[5]), 5, checks=["tongue_back_v"]).loc["tongue_back_v"]
+    assert clean["value"] > 150 and not clean["detail"].startswith("fired")
+    a = S.copy(BASE[5])
+    a.positions[:, P.tongue[4], 2] += 8.0       # T4 raised 8 mm, the back stays anchored
+    r = run(a, 5, checks=["tongue_back_v"]).loc["tongue_back_v"]
+    assert r["value"] < 120 and r["negatives"] == 0 and r["detail"].startswith("fired")
