@@ -17,9 +17,32 @@ Sources of the columns
   Figure 3.9 (JW45_013.TXY, first valid row: MNI (-0.699, -7.452), MNM (-34.792, -9.862) mm).
 - JW12's palate parameters are a least-squares fit (max error 0.42 mm) to thesis Figure 3.11
   (JW12 PAL.DAT).
-- Everything else (jaw length, pellet placement, condyle, palate shape, pharynx, gonion, gnathion,
-  lip height, tongue size) is this generator's choice: drawn once around typical adult values
-  (larger for the male speakers) and frozen here. They are plausible, not measured.
+- ``gonion_mm``, ``gnathion_mm`` (the head measures written to ``Headmeasures.txt``): not printed
+  in the thesis; derived once per subject by the rule below from the subject's own jaw pellets,
+  jaw length and sex, rounded to 0.1 mm and frozen here (plausible, not measured). The XRMB
+  frame's x axis is the maxillary occlusal plane, so the angle that matters is the occlusal-to-
+  mandibular-plane angle, cephalometric norm about 13-18 deg (SN-MP 32 minus SN-OP 14; Downs's
+  FH-MP 21.9 minus his FH-OP 9.3), steeper for long faces.
+
+  * gnathion y = MNI y - S, S (MNI pellet on the lower incisor -> lowest point of the chin,
+    i.e. crown below the pellet, root and symphysis) drawn around 35.5 mm (male) / 33 mm
+    (female), sd 1.6: gnathion 38-46 mm below the upper incisor tip (lower anterior face height
+    incisor tip -> menton about 40-45 mm). Gnathion x: the chin 7 mm behind to 3 mm in front of
+    the incisors (retruded to prominent chins), unchanged from the first table.
+  * mandibular plane (gnathion -> gonion) rising backward at 17 deg + 2 deg per mm that S
+    exceeds the sex mean (long faces steeper) + sd 1.5 deg, clipped to 13-24 deg: 13.4-21.3.
+  * gonion x = gnathion x - (79 mm + 1.3 x (jaw length - 34.5 mm) + sd 1.2 mm): the body of
+    the mandible scales with the MNI-MNM spacing of the subject's own teeth; gonion 78-89 mm
+    behind the incisors, 73-84 mm behind the gnathion (Go-Gn 76-88 mm).
+  * Checks against the rest of the table (tests/test_synth_model.py): MNI 32-37 mm and MNM
+    20-25 mm above the mandibular plane (teeth on the body of the jaw); the gonion 33-42 mm
+    below the jaw's centre of rotation (``condyle_mm`` of :mod:`cassi.data.synth_motion`) and
+    within 12 mm of it front to back (the ramus hangs below the joint). That centre sits lower
+    than the anatomical condyle (it also stands for the condyle's glide), so the distance is
+    shorter than a condylion-gonion ramus height (about 50-55 mm).
+- Everything else (jaw length, pellet placement, condyle, palate shape, pharynx, lip height,
+  tongue size) is this generator's choice: drawn once around typical adult values (larger for
+  the male speakers) and frozen here. They are plausible, not measured.
 
 The ``min_ul``/``min_ll`` values near 0.01 in Figure 4.16 (lips 0.3 mm in front of the incisors)
 are not physiological resting or spread-lip positions; the generator does not try to reproduce
@@ -57,7 +80,8 @@ class SubjectFigures:
     pharynx_x_mm : (float, float)
         x of the posterior pharyngeal wall at y = +10 and y = -40 mm.
     gonion_mm, gnathion_mm : (float, float)
-        Head measures (angle of the jaw, point of the chin).
+        Head measures (angle of the jaw, point of the chin) with the jaw at rest (as MNI, MNM);
+        the gonion behind and above the gnathion (see the module docstring).
     lip_mid_y_mm : float
         Height of the midpoint between the resting UL and LL pellets.
     tongue_scale : float
@@ -91,6 +115,14 @@ class SubjectFigures:
         a = np.radians(self.jaw_slope_deg)
         return (self.mni_mm[0] - self.jaw_length_mm * np.cos(a),
                 self.mni_mm[1] - self.jaw_length_mm * np.sin(a))
+
+    @property
+    def mandibular_plane_deg(self) -> float:
+        """Angle (degrees) at which the mandibular plane, gnathion -> gonion, rises backward
+        above the XRMB x axis (the maxillary occlusal plane)."""
+        dx = self.gnathion_mm[0] - self.gonion_mm[0]
+        dy = self.gonion_mm[1] - self.gnathion_mm[1]
+        return float(np.degrees(np.arctan2(dy, dx)))
 
     @property
     def ul_rest_mm(self) -> tuple[float, float]:
@@ -153,63 +185,63 @@ SUBJECTS: dict[str, SubjectFigures] = {s.name: s for s in (
     _S("JW11", "M", 0.345274, 0.228690, 0.519758, 0.439836, 0.009925, 0.003348, 0.975998,
        jaw_length_mm=37.9, mni_mm=(-1.7, -7.6), jaw_slope_deg=2.7, condyle_mm=(-77.5, 15.6),
        palate=(-4.3, 8.1, 23.1, 12.9, 1.47, 0.09, -53.6, 12), pharynx_x_mm=(-89.8, -90.9),
-       gonion_mm=(-87.7, -54.7), gnathion_mm=(-5.3, -45.9), lip_mid_y_mm=1.9, tongue_scale=0.99),
+       gonion_mm=(-89.0, -17.1), gnathion_mm=(-5.3, -44.2), lip_mid_y_mm=1.9, tongue_scale=0.99),
     _S("JW12", "M", 0.541010, 0.390205, 0.730061, 0.485915, 0.011575, -0.102688, 0.629742,
        jaw_length_mm=37.4, mni_mm=(-0.6, -7.8), jaw_slope_deg=5.2, condyle_mm=(-81.4, 16.5),
        palate=(-5.0, 8.5, 19.73, 13.19, 1.55, 0.14, -53.1, 12), pharynx_x_mm=(-82.6, -93.1),
-       gonion_mm=(-83.8, -50.8), gnathion_mm=(-3.6, -37.1), lip_mid_y_mm=1.9, tongue_scale=1.05),
+       gonion_mm=(-84.7, -19.3), gnathion_mm=(-3.6, -43.0), lip_mid_y_mm=1.9, tongue_scale=1.05),
     _S("JW15", "M", 0.452623, 0.426632, 0.606981, 0.524212, 0.008840, 0.007371, 0.579452,
        jaw_length_mm=34.0, mni_mm=(0.5, -8.6), jaw_slope_deg=3.6, condyle_mm=(-78.1, 15.3),
        palate=(-4.4, 7.2, 20.4, 14.8, 1.5, 0.12, -54.2, 12), pharynx_x_mm=(-86.6, -85.1),
-       gonion_mm=(-84.5, -54.0), gnathion_mm=(-3.7, -44.2), lip_mid_y_mm=0.7, tongue_scale=1.01),
+       gonion_mm=(-82.9, -18.0), gnathion_mm=(-3.7, -45.4), lip_mid_y_mm=0.7, tongue_scale=1.01),
     _S("JW16", "F", 0.431169, 0.399125, 0.600965, 0.572621, 0.008847, 0.008228, 0.823341,
        jaw_length_mm=31.5, mni_mm=(1.3, -7.2), jaw_slope_deg=4.2, condyle_mm=(-80.6, 18.7),
        palate=(-5.0, 9.3, 23.8, 15.5, 1.69, 0.09, -50.9, 14), pharynx_x_mm=(-79.7, -78.6),
-       gonion_mm=(-80.7, -41.9), gnathion_mm=(-5.8, -42.1), lip_mid_y_mm=-0.2, tongue_scale=0.92),
+       gonion_mm=(-79.1, -15.2), gnathion_mm=(-5.8, -41.1), lip_mid_y_mm=-0.2, tongue_scale=0.92),
     _S("JW18", "M", 0.536166, 0.490561, 0.834940, 0.896159, 0.427359, 0.244083, 0.534753,
        jaw_length_mm=33.6, mni_mm=(-0.6, -7.4), jaw_slope_deg=3.7, condyle_mm=(-81.1, 16.0),
        palate=(-5.9, 10.5, 20.3, 12.9, 1.51, 0.19, -51.6, 13), pharynx_x_mm=(-80.7, -92.2),
-       gonion_mm=(-86.6, -51.5), gnathion_mm=(2.2, -42.1), lip_mid_y_mm=-0.3, tongue_scale=1.05),
+       gonion_mm=(-78.1, -16.9), gnathion_mm=(2.2, -42.5), lip_mid_y_mm=-0.3, tongue_scale=1.05),
     _S("JW19", "M", 0.492486, 0.471077, 0.684463, 0.774152, 0.371975, 0.172287, 0.785441,
        jaw_length_mm=34.6, mni_mm=(-1.4, -8.4), jaw_slope_deg=3.7, condyle_mm=(-81.0, 16.6),
        palate=(-4.3, 8.0, 23.0, 14.9, 1.26, 0.15, -51.8, 16), pharynx_x_mm=(-83.5, -88.9),
-       gonion_mm=(-84.1, -55.7), gnathion_mm=(-1.8, -45.2), lip_mid_y_mm=0.9, tongue_scale=0.99),
+       gonion_mm=(-80.1, -24.6), gnathion_mm=(-1.8, -43.3), lip_mid_y_mm=0.9, tongue_scale=0.99),
     _S("JW21", "F", 0.335453, 0.278352, 0.502530, 0.440367, 0.008934, 0.007164, 0.517419,
        jaw_length_mm=33.9, mni_mm=(-1.5, -7.4), jaw_slope_deg=3.1, condyle_mm=(-77.4, 16.6),
        palate=(-5.2, 9.0, 18.9, 15.1, 1.44, 0.17, -47.6, 10), pharynx_x_mm=(-82.0, -80.2),
-       gonion_mm=(-74.9, -43.3), gnathion_mm=(-5.3, -41.6), lip_mid_y_mm=1.1, tongue_scale=0.95),
+       gonion_mm=(-82.7, -16.5), gnathion_mm=(-5.3, -39.8), lip_mid_y_mm=1.1, tongue_scale=0.95),
     _S("JW24", "M", 0.365504, 0.409801, 0.621404, 0.600709, 0.007542, 0.008639, 0.604045,
        jaw_length_mm=34.9, mni_mm=(-1.0, -8.7), jaw_slope_deg=2.3, condyle_mm=(-84.8, 18.4),
        palate=(-4.3, 9.2, 17.7, 12.6, 1.66, 0.18, -54.0, 11), pharynx_x_mm=(-84.0, -89.2),
-       gonion_mm=(-84.7, -55.0), gnathion_mm=(-6.9, -39.3), lip_mid_y_mm=-0.6, tongue_scale=0.99),
+       gonion_mm=(-86.1, -21.5), gnathion_mm=(-6.9, -44.0), lip_mid_y_mm=-0.6, tongue_scale=0.99),
     _S("JW25", "F", 0.363746, 0.404857, 0.668489, 0.787208, 0.007766, 0.008383, 0.414120,
        jaw_length_mm=32.0, mni_mm=(-1.5, -6.8), jaw_slope_deg=4.1, condyle_mm=(-79.9, 21.5),
        palate=(-4.4, 10.2, 19.5, 13.1, 1.64, 0.09, -46.3, 10), pharynx_x_mm=(-74.2, -81.4),
-       gonion_mm=(-77.5, -48.8), gnathion_mm=(-5.1, -38.8), lip_mid_y_mm=1.4, tongue_scale=0.88),
+       gonion_mm=(-78.4, -20.2), gnathion_mm=(-5.1, -39.8), lip_mid_y_mm=1.4, tongue_scale=0.88),
     _S("JW27", "F", 0.349867, 0.342236, 0.639942, 0.535901, 0.007401, 0.005606, 0.442891,
        jaw_length_mm=31.1, mni_mm=(-0.2, -6.5), jaw_slope_deg=6.0, condyle_mm=(-76.0, 16.9),
        palate=(-4.8, 8.7, 16.7, 13.7, 1.44, 0.17, -50.2, 14), pharynx_x_mm=(-80.0, -79.5),
-       gonion_mm=(-76.8, -51.6), gnathion_mm=(-6.8, -38.1), lip_mid_y_mm=1.4, tongue_scale=0.89),
+       gonion_mm=(-80.6, -17.2), gnathion_mm=(-6.8, -38.4), lip_mid_y_mm=1.4, tongue_scale=0.89),
     _S("JW32", "M", 0.445339, 0.441625, 0.621980, 0.609274, 0.284189, 0.259924, 0.503228,
        jaw_length_mm=38.2, mni_mm=(-0.5, -8.8), jaw_slope_deg=5.1, condyle_mm=(-81.5, 16.2),
        palate=(-4.6, 8.1, 21.0, 16.6, 1.42, 0.16, -56.3, 14), pharynx_x_mm=(-86.2, -90.9),
-       gonion_mm=(-86.7, -48.3), gnathion_mm=(-3.4, -37.0), lip_mid_y_mm=2.2, tongue_scale=1.03),
+       gonion_mm=(-85.9, -17.5), gnathion_mm=(-3.4, -45.1), lip_mid_y_mm=2.2, tongue_scale=1.03),
     _S("JW40", "M", 0.528038, 0.384745, 0.767303, 0.524264, 0.011705, 0.007449, 0.752903,
        jaw_length_mm=35.5, mni_mm=(-1.5, -6.4), jaw_slope_deg=6.8, condyle_mm=(-83.9, 17.6),
        palate=(-5.4, 8.6, 16.6, 14.3, 1.71, 0.11, -55.7, 13), pharynx_x_mm=(-86.0, -91.8),
-       gonion_mm=(-84.7, -50.0), gnathion_mm=(-1.0, -44.5), lip_mid_y_mm=2.2, tongue_scale=0.95),
+       gonion_mm=(-80.7, -19.0), gnathion_mm=(-1.0, -42.2), lip_mid_y_mm=2.2, tongue_scale=0.95),
     _S("JW41", "M", 0.477164, 0.465303, 0.821385, 0.649093, 0.406428, 0.212140, 0.719188,
        jaw_length_mm=35.7, mni_mm=(-0.1, -8.5), jaw_slope_deg=1.2, condyle_mm=(-81.5, 19.8),
        palate=(-4.5, 8.3, 18.5, 15.0, 1.51, 0.05, -54.5, 13), pharynx_x_mm=(-86.6, -89.8),
-       gonion_mm=(-89.7, -50.6), gnathion_mm=(-2.5, -43.4), lip_mid_y_mm=-0.2, tongue_scale=1.0),
+       gonion_mm=(-83.4, -21.4), gnathion_mm=(-2.5, -45.4), lip_mid_y_mm=-0.2, tongue_scale=1.0),
     _S("JW45", "M", 0.462957, 0.355955, 0.692150, 0.564495, 0.010773, 0.008101, 0.619474,
        jaw_length_mm=34.18, mni_mm=(-0.7, -7.45), jaw_slope_deg=4.04, condyle_mm=(-84.6, 17.0),
        palate=(-4.3, 8.8, 18.3, 14.3, 1.39, 0.12, -55.0, 16), pharynx_x_mm=(-85.6, -87.1),
-       gonion_mm=(-86.4, -54.1), gnathion_mm=(-6.9, -42.1), lip_mid_y_mm=0.9, tongue_scale=1.0),
+       gonion_mm=(-85.1, -18.0), gnathion_mm=(-6.9, -44.4), lip_mid_y_mm=0.9, tongue_scale=1.0),
     _S("JW502", "F", 0.319526, 0.268207, 0.582271, 0.563677, 0.264849, -0.037349, 0.491017,
        jaw_length_mm=34.1, mni_mm=(-0.3, -7.4), jaw_slope_deg=2.6, condyle_mm=(-82.2, 20.8),
        palate=(-5.1, 7.3, 19.4, 13.4, 1.38, 0.08, -51.1, 13), pharynx_x_mm=(-81.4, -80.8),
-       gonion_mm=(-80.8, -48.3), gnathion_mm=(-5.7, -39.6), lip_mid_y_mm=-1.6, tongue_scale=0.91),
+       gonion_mm=(-82.7, -12.6), gnathion_mm=(-5.7, -42.6), lip_mid_y_mm=-1.6, tongue_scale=0.91),
 )}
 del _S
 

