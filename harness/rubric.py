@@ -64,6 +64,10 @@ MIN_FRAMES = 3
 #: Lips are "open" for the image measures when the mouth opening covers at least this many pixels
 #: in the front view (a sliver between touching lips is not an opening to judge centering in).
 OPEN_MIN_PIXELS = 30
+#: ... and is at least this many pixels tall somewhere. Added after the renders: Parke's neutral
+#: lips part by 1.35 mm, a 1-pixel slit of ~40 pixels at the preview front view that passed the
+#: area rule and had its glint of upper teeth judged as "centered high" (synthetic JW11 task 118).
+OPEN_MIN_HEIGHT = 3
 #: The tongue "shows" when a connected patch of at least this many pixels of it lies inside the
 #: lip opening. Tuned on renders: at the preview front view (1.3 mm per pixel) the tongue shows
 #: through the 1-pixel gaps between the teeth as vertical slivers of 1-4 pixels, which the eye

@@ -22,7 +22,7 @@ import numpy as np
 from scipy import ndimage
 from skimage import measure
 
-from .rubric import OPEN_MIN_PIXELS, TONGUE_MIN_PIXELS, Measurement
+from .rubric import OPEN_MIN_HEIGHT, OPEN_MIN_PIXELS, TONGUE_MIN_PIXELS, Measurement
 
 __all__ = ["FrameMasks", "ImageContext", "mouth_opening", "teeth_split", "opening_extent",
            "m_centered_high", "m_centering_offset", "m_tongue_visible", "m_tongue_in_front",
@@ -159,7 +159,8 @@ class ImageContext:
     def __init__(self, frames: Iterable[FrameMasks]):
         self.frames = sorted(frames, key=lambda f: f.frame)
         self.openings = [mouth_opening(f.lips) for f in self.frames]
-        self.open = [int(o.sum()) >= OPEN_MIN_PIXELS for o in self.openings]
+        self.open = [int(o.sum()) >= OPEN_MIN_PIXELS and int(o.sum(axis=0).max()) >= OPEN_MIN_HEIGHT
+                     for o in self.openings]
 
     @classmethod
     def of(cls, frames: Mapping[int, Any] | Iterable[tuple[int, Any]]) -> "ImageContext":

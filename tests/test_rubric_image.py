@@ -165,3 +165,13 @@ def test_touching_teeth_are_split_at_the_depth_step():
     up_rows = np.flatnonzero(fm.upper_teeth.any(axis=1))
     lo_rows = np.flatnonzero(fm.lower_teeth.any(axis=1))
     assert up_rows.max() == 64 and lo_rows.min() == 65
+
+
+def test_a_slit_between_the_lips_is_not_an_open_mouth():
+    slit = frame(open_h=16, upper=0, lower=0, tongue=False)
+    yy, xx = np.mgrid[0:H, 0:W]
+    ring = (slit.mask == LIPS) | (slit.mask == 0) | (slit.mask == TEETH)
+    slit.mask[ring] = LIPS
+    slit.mask[(yy == 60) & (np.abs(xx - 80) < 25)] = TEETH   # a 1-pixel line of teeth glint
+    ctx = I.ImageContext.of({0: slit})
+    assert ctx.openings[0].sum() >= R.OPEN_MIN_PIXELS and not ctx.open[0]
