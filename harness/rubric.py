@@ -236,6 +236,11 @@ class GeometryContext:
             raise CassiInputError(f"positions must be (F, V, 3), got {self.pos.shape}")
         if not np.all(np.isfinite(self.pos)):
             raise CassiInputError("positions contain NaN or infinite values")
+        need = max(int(np.max(np.atleast_1d(v))) for v in vars(parts).values()
+                   if isinstance(v, (int, np.integer, np.ndarray)) and np.size(v))
+        if need >= self.pos.shape[1]:
+            raise CassiInputError(f"positions have {self.pos.shape[1]} vertices; the mouth parts "
+                                  f"use vertex row {need}")
         self.parts = parts
         self.rest = self.pos[0] if rest is None else np.asarray(rest, dtype=np.float64)
         self.mm = float(mm_per_unit)
@@ -276,9 +281,6 @@ class GeometryContext:
         n = max(MIN_FRAMES, int(round(0.05 * self.F)))
         return np.arange(max(0, self.F - n), self.F)
 
-    @functools.cached_property
-    def rest_ctx(self) -> np.ndarray:
-        return self.rest[None]
 
 
 def sustained(series: np.ndarray, *, worst: str = "max", k: int = MIN_FRAMES) -> tuple[float, int]:

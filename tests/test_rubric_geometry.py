@@ -477,3 +477,12 @@ def test_tongue_back_v_is_measured_not_counted():
     a.positions[:, P.tongue[4], 2] += 8.0       # T4 raised 8 mm, the back stays anchored
     r = run(a, 5, checks=["tongue_back_v"]).loc["tongue_back_v"]
     assert r["value"] < 120 and r["negatives"] == 0 and r["detail"].startswith("fired")
+
+
+def test_too_few_vertices_raise_input_error():
+    from cassi.data.errors import CassiInputError
+
+    a = S.copy(BASE[5])
+    a.positions = a.positions[:, :10]
+    with pytest.raises(CassiInputError, match="vertices"):
+        run(a, 5)
