@@ -12,6 +12,7 @@ import numpy as np
 
 from cassi.data.atomic import atomic_tmp_path
 from cassi.data.errors import CassiInputError
+from cassi.data.xrmb import NOMINAL_PERIOD_US  # the XRMB frame period, us
 
 from .images import to_srgb8
 from .views import VIEW_NAMES
@@ -19,7 +20,6 @@ from .views import VIEW_NAMES
 __all__ = ["side_by_side", "animation_frames", "write_animation", "animate_positions", "views_sheet",
            "realtime_fps"]
 
-NOMINAL_PERIOD_US = 6866  # XRMB frame period (cassi.data.xrmb.NOMINAL_PERIOD_US)
 
 
 def realtime_fps(stride: int, *, period_us: float = NOMINAL_PERIOD_US, cap: float = 50.0) -> float:

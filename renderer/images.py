@@ -51,7 +51,7 @@ def _meta_attrs(spec, metadata: dict | None) -> None:
         spec.attribute(METADATA_PREFIX + str(key), value)
 
 
-def _write(path: Path, pixels: np.ndarray, spec, *, fmt) -> None:
+def _write(path: Path, pixels: np.ndarray, spec) -> None:
     import OpenImageIO as oiio
 
     path = Path(path)
@@ -100,7 +100,7 @@ def write_exr(path: str | os.PathLike, rgb: np.ndarray, *, depth: np.ndarray | N
     spec.attribute("compression", compression)
     spec.attribute("oiio:ColorSpace", "lin_rec709")
     _meta_attrs(spec, metadata)
-    _write(Path(path), pixels, spec, fmt=oiio.FLOAT)
+    _write(Path(path), pixels, spec)
     return Path(path)
 
 
@@ -117,7 +117,7 @@ def write_png(path: str | os.PathLike, rgb: np.ndarray, *, metadata: dict | None
     spec.attribute("png:compressionLevel", PNG_COMPRESSION)
     spec.attribute("oiio:ColorSpace", "sRGB")
     _meta_attrs(spec, metadata)
-    _write(Path(path), pixels, spec, fmt=oiio.UINT8)
+    _write(Path(path), pixels, spec)
     return Path(path)
 
 
@@ -134,7 +134,7 @@ def write_mask_png(path: str | os.PathLike, mask: np.ndarray, *, metadata: dict 
     spec.attribute("png:compressionLevel", PNG_COMPRESSION)
     _meta_attrs(spec, metadata)
     # (H, W, 1): OpenImageIO misreads a 2-D array's layout for one-channel images
-    _write(Path(path), mask.astype(np.uint8)[..., None], spec, fmt=oiio.UINT8)
+    _write(Path(path), mask.astype(np.uint8)[..., None], spec)
     return Path(path)
 
 

@@ -20,7 +20,7 @@ right, a rim light from behind, and a dim constant environment for the shadows.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
