@@ -92,7 +92,7 @@ def build_layout(*, palate_xz: np.ndarray | None = None) -> Layout:
     plain(_fixed_row(lay, "r1", [6, 7, 8, 9, 10], 0, [140.0, 180.0], [F] * 2,
                      zs=[-400.0, -395.0]))
     r2 = plain(_fixed_row(lay, "r2", [11, 12, 13], 0, [58.0, 84.0, 128.0, 180.0], [F] * 4,
-                          zs=[-392.0, -312.0, -320.0, -325.0]))
+                          zs=[-392.0, -320.0, -322.0, -325.0]))
     def mixed(name, numbers, spec):
         """Excerpt vertices, then nodes at (azimuth, ("phi", elevation) | ("z", height))."""
         keys = [lay.add(f"{name}.p{n}", PARKE_EXCERPT[n], n) for n in numbers]
@@ -109,11 +109,15 @@ def build_layout(*, palate_xz: np.ndarray | None = None) -> Layout:
 
     plain(merge(mixed("r3", [14, 15], [(30.0, ("phi", -57.5), "jaw"),
                                        (46.0, ("z", -380.0), "jaw")]), r2, 84.0))
-    # the jaw line: from the chin (16) back to the angle of the jaw (22), then round the nape
+    # the jaw line: from the chin (16) back to the angle of the jaw (22), then round the nape.
+    # The gonion (22) sits ~85 mm behind the upper incisor tip (226) and ~27 mm above the
+    # gnathion (26), so the mandibular plane 26 -> 22 rises ~18 degrees backward, as a real
+    # jaw's does (15-25 degrees); CASSI 1.0 turns the chin from here onto the head measures.
     r4 = plain(mixed("r4", [16, 17], [
-        (22.0, ("phi", -50.5), "jaw"), (32.0, ("phi", -52.5), "jaw"),
-        (44.0, ("phi", -55.0), "jaw"), (58.0, ("z", -352.0), "jaw"), (74.0, ("z", -318.0), 22),
-        (100.0, ("z", -280.0), F), (140.0, ("z", -270.0), F), (180.0, ("z", -265.0), F)]))
+        (23.0, ("z", -394.0), "jaw"), (34.0, ("z", -376.0), "jaw"),
+        (47.0, ("z", -357.0), "jaw"), (63.0, ("z", -332.0), "jaw"),
+        (GONION_THETA, ("z", GONION_Z), N.GONION),
+        (110.0, ("z", -285.0), F), (140.0, ("z", -275.0), F), (180.0, ("z", -270.0), F)]))
 
     # --- chin and jaw: rows given by height at the side (the jaw line rises to the ear) -------
     def srow(name, phi_f, phi_b, thetas, wants, knee=90.0):
@@ -129,8 +133,10 @@ def build_layout(*, palate_xz: np.ndarray | None = None) -> Layout:
             keys.append(lay.add(f"{name}.{k}", p, w))
         return keys
 
-    r5 = plain(zrow("r5", [0, 7, 15, 24, 34, 46, 60, 74, 100, 130, 155, 180],
-                    [-395, -393, -388, -378, -358, -336, -318, -295, -245, -230, -225, -222],
+    # 30 above the gonion on the back of the ramus (the pair CASSI 1.0 moves to the 3rd zone)
+    r5 = plain(zrow("r5", [0, 7, 15, 24, 35, 49, 66, GONION_THETA, 108, 132, 156, 180],
+                    [GNATHION_Z, -411, -401, -381, -357, -332, -306, -262, -240, -228, -223,
+                     -220],
                     ["jaw"] * 7 + [30, F, F, F, F]))
     plain(merge(zrow("r6", [0, 7, 14, 22, 31, 42, 56],
                      [-358, -357, -355, -350, -340, -325, -302],
@@ -201,6 +207,15 @@ def build_layout(*, palate_xz: np.ndarray | None = None) -> Layout:
     lay.add("pivot", JAW_PIVOT_POS, N.JAW_PIVOT)
     return lay
 
+
+#: The gonion (vertex 22, the angle of the jaw): azimuth (degrees) and height (Parke units) on
+#: the skin: about 85 mm behind 226 and 27 mm above the gnathion (26), so the mandibular plane
+#: rises ~18 degrees backward. The gnathion (26, the point of the chin on the centre line) sits
+#: low on the chin, ~39 mm below 226 and just above the menton (16): near where the head
+#: measures put a subject's gnathion, so CASSI 1.0's initialisation moves the jaw little.
+GONION_THETA = 88.0
+GONION_Z = -308.0
+GNATHION_Z = -415.0
 
 #: Parke's jaw pivot (vertex 107): about the temporomandibular joint, in front of the ear.
 JAW_PIVOT_POS = np.array([12.0, 190.0, -95.0])

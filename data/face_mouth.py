@@ -24,6 +24,12 @@ TOOTH_GAP = 0.8
 UPPER_TOOTH_HEIGHT = 42.0
 LOWER_TIP = np.array([338.0, 0.0, -250.0])     # lower incisor tip (overbite 8, overjet 7)
 LOWER_TOOTH_HEIGHT = 38.0
+#: The lower teeth's gum line (where the MANi and MANm sites lie) falls this much (Parke units
+#: per unit behind the central incisor) toward the molars, so that the MANm site (281/286) sits
+#: ~2.5 mm below the MANi site (258), as the XRMB pellets do (MNM 2-3 mm below MNI, JW45
+#: Figure 3.9: -7.5 and -9.9 mm); the lower biting edges stay level (the occlusal plane is the
+#: XRMB x axis), under the upper teeth's tips.
+LOWER_GUM_SLOPE = 0.0712
 
 
 def _arch(front_x, widths_mm, half_width_back, depth):
@@ -74,9 +80,11 @@ def _teeth(lay: Layout):
                     quad[0] = (x0, 0.0, gum[0])
                     quad[3] = tuple(UPPER_TIP)
             else:
-                tip = LOWER_TIP[2] + 0.02 * (LOWER_TIP[0] - np.array([x0, x1]))
-                h = LOWER_TOOTH_HEIGHT * (1.0 if k < 3 else 0.8)
-                gum = tip - h
+                # level biting edges; the gum line from MANi's height falling toward the molars
+                tip = np.full(2, LOWER_TIP[2])
+                front = pts[0, 0]
+                gum = LOWER_TIP[2] - LOWER_TOOTH_HEIGHT \
+                    - LOWER_GUM_SLOPE * (front - np.array([x0, x1]))
                 v = N.lower_tooth(k)  # tip-mesial, tip-distal, gum-distal, gum-mesial
                 quad = [(x0, y0, tip[0]), (x1, y1, tip[1]), (x1, y1, gum[1]), (x0, y0, gum[0])]
             keys = [lay.add(f"tooth.{which}.{k}.{j}", quad[j], v[j]) for j in range(4)]

@@ -139,6 +139,31 @@ def test_jaw_and_cheek_regions(face):
     assert N.GONION in N.JAW and v(face, N.GONION)[0] < v(face, N.MENTON)[0] - 200
 
 
+def test_jaw_angle_and_occlusal_plane_anatomical(face):
+    """The neutral jaw is a real jaw's shape, so CASSI 1.0's initialisation turns the chin and
+    the teeth only a few degrees onto a subject's head measures and jaw pellets: the gonion
+    ~80-90 mm behind the upper incisor tip and above the gnathion (mandibular plane rising
+    15-25 degrees backward), the gnathion low on the chin, and the MANm site 2-3 mm below MANi
+    (the XRMB pellets' MNM below MNI) with the upper teeth over the lower ones front and back."""
+    tip = v(face, N.TEETH_TIP)
+    go, gn = v(face, N.GONION), v(face, N.GNATHION)
+    assert 320 <= tip[0] - go[0] <= 360
+    plane = np.degrees(np.arctan2(go[2] - gn[2], gn[0] - go[0]))
+    assert 15 <= plane <= 25, plane
+    assert 36 <= (tip[2] - gn[2]) * N.MM_PER_UNIT <= 45
+    # the jaw angle's neighbours on the jaw line sit back there too (the ramus pair 22 / 30)
+    assert abs(v(face, 30)[0] - go[0]) < 20 and v(face, 30)[2] > go[2]
+    mani = v(face, N.MANI)
+    manm = 0.5 * (v(face, N.MANM_PAIR[0]) + v(face, N.MANM_PAIR[1]))
+    assert 2.0 <= (mani[2] - manm[2]) * N.MM_PER_UNIT <= 3.0
+    slope = np.degrees(np.arctan2(mani[2] - manm[2], mani[0] - manm[0]))
+    assert 2 <= slope <= 6, slope
+    for k in (0, N.TEETH_PER_SET - 1):   # front and back: the upper tips below the lower tips
+        up = face.vertices[np.asarray(N.upper_tooth(k)[2:]) - 1, 2]
+        lo = face.vertices[np.asarray(N.lower_tooth(k)[:2]) - 1, 2]
+        assert 0 < lo.min() - up.max() <= 12, k
+
+
 # --- the mesh ----------------------------------------------------------------------------------
 
 def _shell(topo, face):
