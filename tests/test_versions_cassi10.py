@@ -8,6 +8,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+from cassi.data import numbering as N
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -299,7 +301,7 @@ def test_lip_corners_take_half_of_each_lip(anim10):
 
 
 def test_head_measures_equal_to_the_model_change_nothing(face, rec):
-    # Head measures placed exactly where the model's gnathion (17) and gonion (22) already are
+    # Head measures placed exactly where the model's gnathion and gonion already are
     # (mapped back to XRMB mm) give theta = 0: the chin and jaw keep Parke's placement.
     from cassi.data.headmeasures import HeadMeasures
     from cassi.data.profile import SubjectProfile
@@ -307,8 +309,8 @@ def test_head_measures_equal_to_the_model_change_nothing(face, rec):
 
     prof = toy_profile()
     m = XrmbToParke.from_face(face.vertices, prof.jaw_length_mm)
-    hm = HeadMeasures(gnathion_mm=m.to_xrmb(face.vertices[16, [0, 2]]),
-                      gonion_mm=m.to_xrmb(face.vertices[21, [0, 2]]))
+    hm = HeadMeasures(gnathion_mm=m.to_xrmb(face.vertices[N.GNATHION - 1, [0, 2]]),
+                      gonion_mm=m.to_xrmb(face.vertices[N.GONION - 1, [0, 2]]))
     anim = Cassi10().animate(replace(prof, head_measures=hm), face, rec)
     jaw = np.asarray(K.CASSI10_ZONES[0].vertices) - 1
     np.testing.assert_allclose(anim.positions[0, jaw], face.vertices[jaw], atol=1e-3)
