@@ -68,6 +68,11 @@ OPEN_MIN_PIXELS = 30
 #: lips part by 1.35 mm, a 1-pixel slit of ~40 pixels at the preview front view that passed the
 #: area rule and had its glint of upper teeth judged as "centered high" (synthetic JW11 task 118).
 OPEN_MIN_HEIGHT = 3
+#: Centering (upper vs lower teeth inside the opening) is judged on frames open at least this
+#: share of the task's widest opening. Added after the renders: Parke's face on synthetic JW11
+#: task 118 showed the lower teeth more than the upper when open (share 0.32) but the median over
+#: every open frame was 0.85 "centered high", carried by 3-pixel slits showing an upper edge only.
+CENTERING_OPEN_SHARE = 0.5
 #: The tongue "shows" when a connected patch of at least this many pixels of it lies inside the
 #: lip opening. Tuned on renders: at the preview front view (1.3 mm per pixel) the tongue shows
 #: through the 1-pixel gaps between the teeth as vertical slivers of 1-4 pixels, which the eye

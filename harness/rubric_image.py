@@ -22,7 +22,8 @@ import numpy as np
 from scipy import ndimage
 from skimage import measure
 
-from .rubric import OPEN_MIN_HEIGHT, OPEN_MIN_PIXELS, TONGUE_MIN_PIXELS, Measurement
+from .rubric import (CENTERING_OPEN_SHARE, OPEN_MIN_HEIGHT, OPEN_MIN_PIXELS, TONGUE_MIN_PIXELS,
+                     Measurement)
 
 __all__ = ["FrameMasks", "ImageContext", "mouth_opening", "teeth_split", "opening_extent",
            "m_centered_high", "m_centering_offset", "m_tongue_visible", "m_tongue_in_front",
@@ -171,9 +172,19 @@ class ImageContext:
         return [(f, o) for f, o, ok in zip(self.frames, self.openings, self.open) if ok]
 
     def upper_shares(self) -> tuple[np.ndarray, np.ndarray]:
-        """Per open frame with teeth showing: share of upper teeth among the teeth in the opening."""
+        """Per open frame with teeth showing: share of upper teeth among the teeth in the opening.
+
+        Only frames open at least CENTERING_OPEN_SHARE of the widest opening of the task count:
+        centering is judged with the lips open, and a slit shows just the upper teeth's edge.
+        """
+        of = self.open_frames()
+        if not of:
+            return np.zeros(0), np.zeros(0, int)
+        widest = max(int(o.sum()) for _, o in of)
         shares, frames = [], []
-        for f, o in self.open_frames():
+        for f, o in of:
+            if o.sum() < CENTERING_OPEN_SHARE * widest:
+                continue
             u = int((f.upper_teeth & o).sum())
             lo = int((f.lower_teeth & o).sum())
             if u + lo >= OPEN_MIN_PIXELS // 3:

@@ -175,3 +175,11 @@ def test_a_slit_between_the_lips_is_not_an_open_mouth():
     slit.mask[(yy == 60) & (np.abs(xx - 80) < 25)] = TEETH   # a 1-pixel line of teeth glint
     ctx = I.ImageContext.of({0: slit})
     assert ctx.openings[0].sum() >= R.OPEN_MIN_PIXELS and not ctx.open[0]
+
+
+def test_centering_is_judged_on_the_wide_open_frames():
+    # many slits showing only the upper teeth's edge, two wide-open frames evenly centered
+    slits = [frame(open_h=3.5, upper=2, lower=0, tongue=False) for _ in range(6)]
+    wide = [frame(open_h=16, upper=6, lower=6) for _ in range(2)]
+    r = run(slits + wide, checks=["lips_centered_high"]).loc["lips_centered_high"]
+    assert r["negatives"] == 0 and r["value"] == pytest.approx(0.5, abs=0.1), r["detail"]
