@@ -40,8 +40,9 @@ def parke_parameters(face: "FaceModel", values: dict[int, float] | None = None, 
 
 @dataclass(frozen=True)
 class Material:
-    """A material number's meaning: ``name`` is the render part (skin, lips, teeth, ...),
-    ``parke_name`` Parke's word for it where he had one."""
+    """A material number's meaning: ``name`` is the render part (skin, lips, ...; the ``teeth``
+    material renders as two parts, ``teeth_upper`` and ``teeth_lower``, see
+    :mod:`cassi.data.topology`), ``parke_name`` Parke's word for it where he had one."""
 
     number: int
     name: str

@@ -17,10 +17,14 @@ from cassi.data.atomic import atomic_tmp_path
 
 _COLOURS = {
     "skin": (0.86, 0.68, 0.58), "lips": (0.75, 0.35, 0.35), "eyelash": (0.15, 0.1, 0.1),
-    "eyebrow": (0.3, 0.2, 0.15), "teeth": (0.95, 0.94, 0.85), "tongue": (0.85, 0.35, 0.4),
+    "eyebrow": (0.3, 0.2, 0.15), "teeth_upper": (0.95, 0.94, 0.85),
+    "teeth_lower": (0.90, 0.89, 0.80), "tongue": (0.85, 0.35, 0.4),
     "palate": (0.9, 0.55, 0.55), "eye_white": (0.95, 0.95, 0.93), "iris": (0.25, 0.4, 0.6),
     "fringe": (0.1, 0.15, 0.2), "pupil": (0.02, 0.02, 0.02), "reflection": (1.0, 1.0, 1.0),
 }
+
+#: The render parts of the teeth (cassi.data.topology splits the face's teeth in two).
+_TEETH = ("teeth_upper", "teeth_lower")
 
 #: name -> (elevation, azimuth) for matplotlib's view_init, Parke axes (X forward, Z up).
 VIEWS = {"front": (5, 0), "side": (5, 90), "three-quarter": (15, 40), "half": (5, -90),
@@ -84,8 +88,8 @@ def preview_png(face, path: str | PathLike, *, positions=None, dpi: int = 110,
         (full, None, "front", VIEWS["front"]), (full, None, "side (left)", VIEWS["side"]),
         (full, None, "three-quarter", VIEWS["three-quarter"]),
         (half, None, "half (from the cut)", VIEWS["half"]),
-        (full, ["teeth", "tongue", "palate", "lips"], "mouth parts, side", (5, 80)),
-        (full, ["teeth", "tongue", "palate"], "mouth parts, from below", (-70, 10)),
+        (full, [*_TEETH, "tongue", "palate", "lips"], "mouth parts, side", (5, 80)),
+        (full, [*_TEETH, "tongue", "palate"], "mouth parts, from below", (-70, 10)),
     ]
     for k, (topo, parts, title, view) in enumerate(panels):
         ax = fig.add_subplot(2, 3, k + 1, projection="3d")

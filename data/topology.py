@@ -12,6 +12,11 @@ the mirrored copies included.
 
 ``half=True`` keeps the left half only (y >= 0): the head cut at the midsagittal plane, open at
 y = 0, so that teeth, tongue and palate show in the half-face view.
+
+The face's one ``teeth`` material becomes two render parts: ``teeth_upper`` (Parke's upper teeth,
+vertices 223-254, 226 the upper incisor tip) and ``teeth_lower`` (255-286, moved by the jaw), so
+that the masks tell the upper from the lower teeth exactly (lip centering in the front view);
+the renderer gives both the ``teeth`` material (longest material name the part starts with).
 """
 from __future__ import annotations
 
@@ -19,9 +24,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-#: Render parts, in a fixed order (materials map to these names).
-PARTS = ("skin", "lips", "eyelash", "eyebrow", "teeth", "tongue", "palate", "eye_white",
-         "iris", "fringe", "pupil", "reflection")
+from cassi.data import numbering as N
+
+#: Render parts, in a fixed order (materials map to these names). ``teeth_upper`` takes the
+#: place the single ``teeth`` part had and ``teeth_lower`` comes last, so that every other part
+#: keeps the mask id it had before the split (golden masks, masks of earlier runs).
+PARTS = ("skin", "lips", "eyelash", "eyebrow", "teeth_upper", "tongue", "palate", "eye_white",
+         "iris", "fringe", "pupil", "reflection", "teeth_lower")
+
+#: The face material split into two render parts, and the parts.
+TEETH_MATERIAL = "teeth"
+TEETH_UPPER, TEETH_LOWER = "teeth_upper", "teeth_lower"
 
 #: |y| below which a vertex counts as on the centre line (shared by both halves), Parke units.
 MIDLINE_EPS = 1e-6
@@ -111,6 +124,13 @@ def _triangulate(vs: tuple[int, ...], pos: np.ndarray) -> list[tuple[int, int, i
     return [(vs[0], vs[k], vs[k + 1]) for k in range(1, len(vs) - 1)]
 
 
+def _teeth_part(vertex_numbers) -> str:
+    """``teeth_lower`` for a teeth polygon whose vertices are all lower teeth (Parke's 255-286,
+    the ones the jaw moves), else ``teeth_upper``."""
+    lower = all(N.LOWER_TEETH_FIRST <= int(v) <= N.LOWER_TEETH_LAST for v in vertex_numbers)
+    return TEETH_LOWER if lower else TEETH_UPPER
+
+
 def render_topology(face, *, half: bool = False) -> RenderTopology:
     """Build the render topology of a :class:`cassi.data.face.FaceModel`.
 
@@ -129,6 +149,8 @@ def render_topology(face, *, half: bool = False) -> RenderTopology:
     for poly in face.polygons:
         mat = face.materials.get(poly.material)
         name = mat.name if mat is not None else f"material{poly.material}"
+        if name == TEETH_MATERIAL:
+            name = _teeth_part(poly.vertices)
         mirrored = True if mat is None else bool(mat.mirrored)
         vs = tuple(int(v) - 1 for v in poly.vertices)
         if not mirrored and half and pos[list(vs), 1].mean() < 0:

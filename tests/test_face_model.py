@@ -222,9 +222,10 @@ def test_closed_parts(face, topo):
         return p.mean(axis=1), n / np.linalg.norm(n, axis=1, keepdims=True)
 
     # teeth face out of the dental arch (labial/buccal faces), the tongue up, the palate down
-    c, n = normals("teeth")
     arch_centre = np.array([v(face, N.TEETH_TIP)[0] - 150.0, 0.0])
-    assert (np.einsum("ij,ij->i", n[:, :2], c[:, :2] - arch_centre) > 0).all()
+    for name in ("teeth_upper", "teeth_lower"):
+        c, n = normals(name)
+        assert (np.einsum("ij,ij->i", n[:, :2], c[:, :2] - arch_centre) > 0).all(), name
     assert (normals("tongue")[1][:, 2] > 0.99).all()
     assert (normals("palate")[1][:, 2] < 0).all()
 
@@ -262,6 +263,50 @@ def test_half_topology(face):
     loops = boundary_loops(skin)
     on_cut = np.abs(verts[np.unique(np.concatenate(loops)), 1]) < 1e-6
     assert on_cut.sum() > 20
+
+
+@pytest.mark.parametrize("half", [False, True])
+def test_teeth_split_into_upper_and_lower(face, half):
+    """The face's one teeth material renders as two parts: every teeth triangle lies in exactly
+    one of ``teeth_upper`` (Parke's 223-254, with the incisor tip 226) and ``teeth_lower``
+    (255-286, with MANi 258 and the MANm pair 281/286), and only the lower part follows the jaw."""
+    from cassi.data.topology import PARTS
+    t = render_topology(face, half=half)
+    assert "teeth" not in t.parts
+    assert {"teeth_upper", "teeth_lower"} <= set(t.parts)
+    assert list(t.parts) == [p for p in PARTS if p in t.parts]
+
+    def face_triangles(name):
+        """The part's triangles as sets of (face vertex number, side)."""
+        part = t.parts[name]
+        key = [(int(g) + 1, float(s)) for g, s in zip(part.gather, part.sign)]
+        return [frozenset(key[i] for i in tri) for tri in part.triangles.tolist()]
+
+    upper, lower = face_triangles("teeth_upper"), face_triangles("teeth_lower")
+    up_vs = {n for tri in upper for n, _ in tri}
+    lo_vs = {n for tri in lower for n, _ in tri}
+    assert up_vs == set(N.UPPER_TEETH) and lo_vs == set(N.LOWER_TEETH)
+    assert N.UPPER_INCISOR_TIP in up_vs and N.UPPER_INCISOR_TIP not in lo_vs
+    assert {N.MANI, *N.MANM_PAIR} <= lo_vs and not {N.MANI, *N.MANM_PAIR} & up_vs
+    # every teeth triangle in exactly one part: the two parts together are the triangulated
+    # teeth polygons (each side once), with no triangle in both
+    assert not set(upper) & set(lower)
+    teeth_polys = [p for p in face.polygons if face.material_name(p.material) == "teeth"]
+    sides = (1.0,) if half else (1.0, -1.0)
+    assert len(upper) + len(lower) == 2 * len(teeth_polys) * len(sides)
+    assert len(set(upper) | set(lower)) == len(upper) + len(lower)
+    for p in teeth_polys:
+        mine, other = (upper, lower) if max(p.vertices) <= N.UPPER_TEETH_LAST else (lower, upper)
+        inside = lambda tris: sum({n for n, _ in tri} <= set(p.vertices) for tri in tris)  # noqa: E731
+        assert (inside(mine), inside(other)) == (2 * len(sides), 0), p.vertices
+    # the jaw moves only the lower part
+    moved = face.vertices.copy()
+    moved[np.asarray(N.LOWER_TEETH) - 1, 2] -= 20.0
+    a, b = t.expand(face.vertices), t.expand(moved)
+    np.testing.assert_array_equal(a["teeth_upper"], b["teeth_upper"])
+    assert (b["teeth_lower"][:, 2] < a["teeth_lower"][:, 2]).all()
+    if half:
+        assert all((arr[:, 1] >= -1e-6).all() for arr in b.values())
 
 
 # --- palate ------------------------------------------------------------------------------------
