@@ -207,21 +207,66 @@ def test_head_measures_adjust_the_chin(face, rec):
     np.testing.assert_allclose(with_hm.vertex(258)[0], without.vertex(258)[0], atol=1e-5)
 
 
-def test_tongue_on_pellets_tip_follows_back_anchored(anim10, face, rec):
+def test_tongue_on_pellets_tip_ahead_of_t1_back_anchored(anim10, face, rec):
     m = XrmbToParke.from_face(face.vertices, toy_profile().jaw_length_mm)
     for n, p in zip(K.V_TONGUE_PELLETS, (T1, T2, T3, T4)):
         np.testing.assert_allclose(anim10.vertex(n)[:, [0, 2]], m.to_parke(rec.xy_mm[3:, p]),
                                    atol=1e-3)
         assert np.all(anim10.vertex(n)[:, 1] == 0)
     follow = tongue_followers(face.vertices)
-    assert follow[288] == 289 and follow[293] is None        # tip follows T1, back anchored
-    np.testing.assert_allclose(anim10.vertex(288) - anim10.vertex(289),
-                               np.broadcast_to(anim10.vertex(288)[0] - anim10.vertex(289)[0],
-                                               (anim10.n_frames, 3)), atol=1e-3)
+    assert follow[288] == 289 and follow[293] is None        # tip from T1, back anchored
+    # The tip lies in front of T1 on the line T2 -> T1 (4.1.1 "T1 ... behind the tip"), at most
+    # TONGUE_TIP_AHEAD_MM and at least TONGUE_TIP_MIN_AHEAD_MM (subject mm).
+    t1, t2, tip = (anim10.vertex(n)[:, [0, 2]].astype(float) for n in (289, 290, 288))
+    u = (t1 - t2) / np.linalg.norm(t1 - t2, axis=1)[:, None]
+    ahead = np.einsum("ij,ij->i", tip - t1, u)
+    np.testing.assert_allclose(tip, t1 + ahead[:, None] * u, atol=1e-3)
+    assert ahead.max() <= K.TONGUE_TIP_AHEAD_MM * m.scale + 1e-3
+    assert ahead.min() >= K.TONGUE_TIP_MIN_AHEAD_MM * m.scale - 1e-3
     np.testing.assert_array_equal(anim10.vertex(293), np.broadcast_to(face.vertices[292],
                                                                       (anim10.n_frames, 3)))
     assert follow[294] == 289 and follow[299] is None         # edges: beside tip -> T1, back
     assert [follow[n] for n in (295, 296, 297, 298)] == [289, 290, 291, 292]
+    # The edge beside the tip keeps its neutral offset from the tip (unless the arch holds it).
+    side = face.vertices[293, [0, 2]] - face.vertices[287, [0, 2]]
+    np.testing.assert_allclose(anim10.vertex(294)[:, 2] - anim10.vertex(288)[:, 2],
+                               np.full(anim10.n_frames, side[1]), atol=1e-3)
+
+
+def test_tongue_tip_stays_behind_the_incisors_on_the_real_face():
+    # Regression for the tip carried 10 mm ahead of T1 (the neutral model's offset): on the face
+    # model, with T1 placed 4 mm behind the lower incisor (a tongue at rest), the tip must sit in
+    # front of T1 but behind the incisors' lingual surface by the clearance, and the edge vertices
+    # inside the arch of the bottom teeth.
+    from cassi.versions.cassi10 import arch_wall_x, incisor_wall_x
+    face_mod = pytest.importorskip("cassi.data.face")
+    face = face_mod.build_face()
+    v = np.asarray(face.vertices, dtype=np.float64)
+    prof = toy_profile()
+    m = XrmbToParke.from_face(v, prof.jaw_length_mm)
+    rec = toy_recording()
+    xy = rec.xy_mm
+    # Jaw pellets onto the model's own MANi / MANm sites (no jaw rotation), T1 4 mm behind the
+    # lower incisor at mid-height, T2-T4 behind it along the tongue.
+    xy[:, MNI] = m.to_xrmb(v[257, [0, 2]])
+    xy[:, MNM] = m.to_xrmb(v[[280, 285]][:, [0, 2]].mean(0))
+    inc = m.to_xrmb(v[254, [0, 2]] * 0.5 + v[257, [0, 2]] * 0.5)
+    for k, p in enumerate((T1, T2, T3, T4)):
+        xy[:, p] = inc + np.array([-4.0 - 14.0 * k, 1.0])
+    xy[:, T1, 0] += np.linspace(-1.0, 1.0, len(xy))      # a little motion
+    anim = Cassi10().animate(prof, face, rec)
+    pos = anim.positions.astype(np.float64)
+    np.testing.assert_allclose(pos[:, 288, [0, 2]], m.to_parke(xy[3:, T1]), atol=1e-3)
+    tip = pos[:, 287]
+    wall = incisor_wall_x(pos, tip[:, 2])
+    assert np.all(tip[:, 0] > pos[:, 288, 0])                                   # in front of T1
+    assert np.all(tip[:, 0] <= wall - K.TONGUE_TIP_TEETH_CLEARANCE_MM * m.scale + 1e-3)
+    edges = np.asarray(N.TONGUE_EDGE[:-1]) - 1
+    arch = arch_wall_x(pos, v[edges, 1])
+    assert np.all(pos[:, edges, 0] <= arch - K.TONGUE_TIP_TEETH_CLEARANCE_MM * m.scale + 1e-3)
+    # The old rigid offset (40 units = 10 mm at Parke's scale) would have been through the teeth.
+    old_tip = pos[:, 288, 0] + (v[287, 0] - v[288, 0])
+    assert np.any(old_tip > wall)
 
 
 def test_nose_kept_above_a_high_upper_lip(face):

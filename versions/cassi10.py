@@ -12,8 +12,10 @@ The version is four stages run in order (see :class:`~cassi.versions.protocol.St
    replace this stage (:meth:`Cassi10.lip_stage`).
 3. :class:`NoseClearanceStage` (4.1.1): the nose tip is raised when a high upper lip would leave
    no space below it.
-4. :class:`TongueStage` (4.1.1): 289-292 sit on T1-T4 (parameters 55-62); the tip follows T1, the
-   edge vertices their nearest centre vertex, the back stays anchored.
+4. :class:`TongueStage` (4.1.1): 289-292 sit on T1-T4 (parameters 55-62); the tip sits in front
+   of T1 along T2 -> T1 and behind the central incisors (:func:`place_tongue_tip`), the edge
+   vertices follow their nearest centre vertex (the one beside the tip, the tip), the back stays
+   anchored.
 
 The palate comes with the face (``cassi.data.face.build_face(palate_mm=...)``); Table 4.2's
 disabled parameters are listed in :mod:`cassi.versions.constants` and refused by
@@ -38,6 +40,9 @@ __all__ = [
     "NoseClearanceStage",
     "TongueStage",
     "check_parameters",
+    "incisor_wall_x",
+    "place_tongue_tip",
+    "parameters_frame",
     "jaw_reference_vertices",
     "tongue_followers",
     "nose_tip_vertices",
@@ -168,10 +173,10 @@ class LipFollowStage:
         delta = w_ul[None, :, None] * d_ul[:, None, :] + w_ll[None, :, None] * d_ll[:, None, :]
         for axis_out, axis_in in ((0, 0), (2, 1)):
             positions[:, idx, axis_out] = ctx.start[idx, axis_out] + delta[..., axis_in]
-        _parameters(ctx, {63: ("UL", 0), 64: ("UL", 1), 65: ("LL", 0), 66: ("LL", 1)})
+        parameters_frame(ctx, {63: ("UL", 0), 64: ("UL", 1), 65: ("LL", 0), 66: ("LL", 1)})
 
 
-def _parameters(ctx: TaskContext, spec: dict[int, tuple[str, int]]) -> None:
+def parameters_frame(ctx: TaskContext, spec: dict[int, tuple[str, int]]) -> None:
     """Table 4.1's parameters as diagnostics columns: displacement from the first valid row."""
     for number, (pellet, axis) in spec.items():
         ctx.diagnostics[f"param_{number}"] = ctx.displacement(pellet)[:, axis]
@@ -222,9 +227,117 @@ def tongue_followers(vertices: np.ndarray | None = None) -> dict[int, int | None
     return dict(K.TONGUE_FOLLOW)
 
 
+def incisor_wall_x(vertices: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """x of the front-most wall the tongue tip must stay behind, at height ``z``.
+
+    Parameters
+    ----------
+    vertices : float (F, V, 3) or (V, 3)
+        Positions (Parke units) with the teeth already placed for each frame.
+    z : float (F,) or scalar
+        Height of the tip per frame.
+
+    Returns
+    -------
+    float (F,)
+        The smaller of the lower and the upper central incisor's x at ``z`` along their centre-line
+        edge (:data:`~cassi.versions.constants.TONGUE_TIP_INCISOR_EDGES`), each edge extended
+        vertically beyond its ends (a tip above a lowered lower incisor still stays behind it).
+    """
+    v = np.asarray(vertices, dtype=np.float64)
+    if v.ndim == 2:
+        v = v[None]
+    z = np.broadcast_to(np.asarray(z, dtype=np.float64), (v.shape[0],))
+    walls = []
+    for tip, gum in K.TONGUE_TIP_INCISOR_EDGES:
+        a, b = v[:, tip - 1], v[:, gum - 1]
+        dz = b[:, 2] - a[:, 2]
+        t = np.clip((z - a[:, 2]) / np.where(np.abs(dz) > 1e-12, dz, 1.0), 0.0, 1.0)
+        walls.append(a[:, 0] + t * (b[:, 0] - a[:, 0]))
+    return np.minimum(*walls)
+
+
+def place_tongue_tip(t1: np.ndarray, t2: np.ndarray, vertices: np.ndarray, scale: float
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Tip (x, z) in front of T1 along T2 -> T1, kept behind the incisors (4.1.1).
+
+    Parameters
+    ----------
+    t1, t2 : float (F, 2)
+        T1 and T2 (Parke x, z) per frame.
+    vertices : float (F, V, 3)
+        Positions with the teeth placed.
+    scale : float
+        Parke units per subject mm (p / d).
+
+    Returns
+    -------
+    tip : float (F, 2)
+    ahead_mm : float (F,)
+        How far in front of T1 the tip was placed (subject mm).
+    """
+    t1 = np.asarray(t1, dtype=np.float64)
+    u = t1 - np.asarray(t2, dtype=np.float64)
+    n = np.hypot(u[:, 0], u[:, 1])
+    u = np.where(n[:, None] > 1e-9, u / np.where(n > 1e-9, n, 1.0)[:, None], [1.0, 0.0])
+    ahead = np.full(len(t1), K.TONGUE_TIP_AHEAD_MM * scale)
+    low = K.TONGUE_TIP_MIN_AHEAD_MM * scale
+    # Shorten the step until the tip is clear of the incisor wall at the tip's own height (the
+    # wall is nearly vertical, so two passes settle it).
+    for _ in range(3):
+        tip = t1 + ahead[:, None] * u
+        room = incisor_wall_x(vertices, tip[:, 1]) - K.TONGUE_TIP_TEETH_CLEARANCE_MM * scale
+        over = (tip[:, 0] > room) & (u[:, 0] > 1e-9)
+        want = np.where(u[:, 0] > 1e-9, (room - t1[:, 0]) / np.where(u[:, 0] > 1e-9, u[:, 0], 1.0),
+                        ahead)
+        ahead = np.where(over, np.clip(want, low, ahead), ahead)
+    tip = t1 + ahead[:, None] * u
+    return tip, ahead / scale
+
+
+def _arch_segments() -> np.ndarray:
+    """(S, 2) vertex rows of the biting-line segments of both tooth sets (0-based)."""
+    segs = []
+    for k in range(N.TEETH_PER_SET):
+        lo = N.lower_tooth(k)
+        up = N.upper_tooth(k)
+        segs += [(lo[0] - 1, lo[1] - 1), (up[3] - 1, up[2] - 1)]
+    return np.asarray(segs, dtype=np.int64)
+
+
+def arch_wall_x(vertices: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """x of the front-facing teeth (biting line of both sets) at lateral offset ``y``.
+
+    Parameters
+    ----------
+    vertices : float (F, V, 3)
+    y : float (E,)
+        |y| of the points to bound.
+
+    Returns
+    -------
+    float (F, E)
+        The smallest x of the front-facing segments spanning each y; +inf where none does.
+    """
+    v = np.asarray(vertices, dtype=np.float64)
+    seg = _arch_segments()
+    a, b = v[:, seg[:, 0]], v[:, seg[:, 1]]                    # (F, S, 3)
+    dx, dy = b[..., 0] - a[..., 0], np.abs(b[..., 1]) - np.abs(a[..., 1])
+    length = np.hypot(dx, dy)
+    front = np.abs(dy) >= K.TONGUE_ARCH_FRONT_NX * np.where(length > 0, length, np.inf)
+    ya, yb = np.abs(a[..., 1])[:, None], np.abs(b[..., 1])[:, None]     # (F, 1, S)
+    yy = np.abs(np.asarray(y, dtype=np.float64))[None, :, None]         # (1, E, 1)
+    lo, hi = np.minimum(ya, yb), np.maximum(ya, yb)
+    span = (yy >= lo) & (yy <= hi) & front[:, None, :]
+    t = (yy - ya) / np.where(np.abs(yb - ya) > 1e-12, yb - ya, 1.0)
+    x = a[..., 0][:, None] + t * dx[:, None]
+    return np.where(span, x, np.inf).min(axis=-1)
+
+
 @dataclass
 class TongueStage:
-    """289-292 on T1-T4; tip, edges follow; back anchored (4.1.1, parameters 55-62)."""
+    """289-292 on T1-T4; tip ahead of T1 behind the teeth; edges follow; back anchored (4.1.1,
+    parameters 55-62)."""
 
     name: str = "tongue"
 
@@ -232,28 +345,55 @@ class TongueStage:
         if "tongue_plan" not in ctx.state:
             follow = tongue_followers(ctx.neutral)
             centre = np.asarray(K.V_TONGUE_PELLETS) - 1
-            # Column j of the (F, 4, 2) pellet displacements drives each moving vertex.
-            movers = [v for v, lead in follow.items() if lead is not None]
+            # The tip and the edge vertex beside it are placed by place_tongue_tip; every other
+            # moving vertex takes column j of the (F, 4, 2) pellet displacements.
+            tip_pair = {N.TONGUE_TIP, N.TONGUE_EDGE[0]}
+            movers = [v for v, lead in follow.items() if lead is not None and v not in tip_pair]
             idx = np.concatenate([centre, np.asarray(movers, dtype=np.int64) - 1])
             col = np.concatenate([np.arange(4), [K.V_TONGUE_PELLETS.index(follow[v])
                                                  for v in movers]]).astype(np.int64)
-            ctx.state["tongue_plan"] = (idx, col)
+            # The edge beside the tip keeps its neutral offset from the tip.
+            side = ctx.neutral[N.TONGUE_EDGE[0] - 1, _XZ] - ctx.neutral[N.TONGUE_TIP - 1, _XZ]
+            ctx.state["tongue_plan"] = (idx, col, side)
         return ctx.state["tongue_plan"]
 
+    def _tip(self, ctx: TaskContext, out: np.ndarray, t1: np.ndarray, t2: np.ndarray,
+             vertices: np.ndarray) -> np.ndarray:
+        _, _, side = self._setup(ctx)
+        tip, ahead = place_tongue_tip(t1, t2, vertices, ctx.mapping.scale)
+        out[..., N.TONGUE_TIP - 1, 0] = tip[:, 0].reshape(out.shape[:-2])
+        out[..., N.TONGUE_TIP - 1, 2] = tip[:, 1].reshape(out.shape[:-2])
+        out[..., N.TONGUE_EDGE[0] - 1, 0] = (tip[:, 0] + side[0]).reshape(out.shape[:-2])
+        out[..., N.TONGUE_EDGE[0] - 1, 2] = (tip[:, 1] + side[1]).reshape(out.shape[:-2])
+        return ahead
+
+    def _inside_arch(self, ctx: TaskContext, out: np.ndarray) -> None:
+        """Hold every moving edge vertex behind the front of the teeth's arch (4.1.1)."""
+        edges = np.asarray([v for v in N.TONGUE_EDGE if tongue_followers()[v] is not None]) - 1
+        view = out if out.ndim == 3 else out[None]
+        wall = arch_wall_x(view, view[0, edges, 1] if out.ndim == 2 else out[0, edges, 1])
+        room = wall - K.TONGUE_TIP_TEETH_CLEARANCE_MM * ctx.mapping.scale
+        view[:, edges, 0] = np.minimum(view[:, edges, 0], room)
+
     def initialise(self, ctx: TaskContext) -> None:
-        idx, col = self._setup(ctx)
+        idx, col, _ = self._setup(ctx)
         centre = np.asarray(K.V_TONGUE_PELLETS) - 1
         first = np.stack([ctx.pellet(p)[0] for p in ("T1", "T2", "T3", "T4")])   # (4, 2)
         delta = first - ctx.start[centre][:, _XZ]
         ctx.start[np.ix_(idx, _XZ)] += delta[col]
+        self._tip(ctx, ctx.start, first[None, 0], first[None, 1], ctx.start)
+        self._inside_arch(ctx, ctx.start)
 
     def animate(self, ctx: TaskContext, positions: np.ndarray) -> None:
-        idx, col = self._setup(ctx)
+        idx, col, _ = self._setup(ctx)
         d = np.stack([ctx.displacement(p) for p in ("T1", "T2", "T3", "T4")], axis=1)  # (F,4,2)
         positions[:, idx, 0] = ctx.start[idx, 0] + d[:, col, 0]
         positions[:, idx, 2] = ctx.start[idx, 2] + d[:, col, 1]
-        _parameters(ctx, {55: ("T1", 0), 56: ("T1", 1), 57: ("T2", 0), 58: ("T2", 1),
-                          59: ("T3", 0), 60: ("T3", 1), 61: ("T4", 0), 62: ("T4", 1)})
+        ahead = self._tip(ctx, positions, ctx.pellet("T1"), ctx.pellet("T2"), positions)
+        ctx.diagnostics["tongue_tip_ahead_mm"] = ahead
+        self._inside_arch(ctx, positions)
+        parameters_frame(ctx, {55: ("T1", 0), 56: ("T1", 1), 57: ("T2", 0), 58: ("T2", 1),
+                               59: ("T3", 0), 60: ("T3", 1), 61: ("T4", 0), 62: ("T4", 1)})
 
 
 class Cassi10(StagedVersion):

@@ -122,16 +122,48 @@ CORNER_WEIGHTS = {"UL": 0.5, "LL": 0.5}
 #: the neutral face's own gap, so a lip at or below its neutral height never moves the nose.
 #: 2 mm: a visible space at the scale of the lips (~10 mm tall), small enough not to reshape it.
 NOSE_LIP_MIN_GAP_MM = 2.0
-#: CHOSEN (4.1.1 says only "the other vertices on the tongue are adjusted accordingly"): the tip
-#: follows T1; each edge vertex follows the centre vertex it lies beside (the edge beside the tip
-#: follows T1 with the tip); the back vertex and the edge beside it stay anchored (the rubric's
-#: "V shape at the back of the tongue caused by the anchored back points" is that choice's known
-#: consequence). ``None`` = anchored.
+#: CHOSEN (4.1.1 says only "the other vertices on the tongue are adjusted accordingly"): each
+#: edge vertex follows the centre vertex it lies beside; the edge beside the tip (294) keeps its
+#: place beside the tip (it follows the tip, which is placed from T1 and T2, see below); the back
+#: vertex and the edge beside it stay anchored (the rubric's "V shape at the back of the tongue
+#: caused by the anchored back points" is that choice's known consequence, thesis 5.2 and 6.2
+#: "adjusting the anchored points in the tongue"). ``None`` = anchored. The tip (288) itself is
+#: listed as following T1 (its pellet), but is placed by :data:`TONGUE_TIP_AHEAD_MM` below.
 TONGUE_FOLLOW: dict[int, int | None] = {N.TONGUE_TIP: N.T1, N.TONGUE_BACK: None}
 for _centre, _edge in zip(N.TONGUE_CENTRE, N.TONGUE_EDGE):
     TONGUE_FOLLOW[_edge] = (N.T1 if _centre == N.TONGUE_TIP
                             else None if _centre == N.TONGUE_BACK else _centre)
 del _centre, _edge
+#: The tip (288) is placed IN FRONT OF T1 along the tongue's own centre line (the direction T2 ->
+#: T1), not carried rigidly with T1's displacement: 4.1.1 "T1 was placed behind the tip of the
+#: tongue" and the tip vertex "represents the tip of the tongue". Carrying the neutral model's
+#: 40-unit tip offset (10 mm at Parke's scale, whatever the subject's p/d) put the tip ~10 mm
+#: ahead of T1 and through the incisors in 98 % of task files (a bug, not thesis behaviour).
+#: CHOSEN 8 mm (subject mm, turned into Parke units with p/d): the XRMB protocol glues T1 about
+#: 1 cm behind the tip of the protruded tongue; at rest the tip is bunched, so a little less.
+TONGUE_TIP_AHEAD_MM = 8.0
+#: CHOSEN: the tip never comes closer than this (subject mm) to the lingual surface of the central
+#: incisors (lower 255-258, upper 226-223 at the centre line; Parke's teeth are single surfaces, so
+#: the surface is the tooth polygon itself): a real tongue tip rests behind the lower incisors.
+#: 1.5 mm keeps the edge vertex beside the tip (294, 6 units behind the tip and 12 to the side,
+#: where the arch has curved back ~4 units) behind the teeth as well.
+TONGUE_TIP_TEETH_CLEARANCE_MM = 1.5
+#: CHOSEN: the tip stays at least this far (subject mm) in front of T1 so the tip triangles never
+#: collapse; when the data itself puts T1 at (or through) the incisors the tip goes with it (the
+#: clearance above yields): the data is shown, not hidden.
+TONGUE_TIP_MIN_AHEAD_MM = 1.0
+#: The central incisors' centre-line edges (tip vertex, gum vertex) that bound the tip: lower
+#: 255-258 (MANi's tooth), upper 226-223.
+TONGUE_TIP_INCISOR_EDGES = ((N.LOWER_INCISOR_TIP, N.MANI),
+                            (N.UPPER_INCISOR_TIP, N.upper_tooth(0)[0]))
+#: "The tongue has been designed to fit inside the arch of the bottom teeth" (4.1.1, Figure 4.6):
+#: an edge vertex that follows its centre vertex forward keeps its width, so with T1 a few mm
+#: behind the incisors the edge beside T1 (295, 42.8 units to the side) came out through the side
+#: of the arch. Each moving edge vertex is therefore held this far (subject mm, CHOSEN as the tip's
+#: clearance) behind the front-facing part of the teeth's biting line (the tip edges of the lower
+#: and upper tooth quads; segments whose normal is at least this far forward-facing, |n_x|, are the
+#: arch's front, the rest run along the cheek and cannot be passed by moving forward).
+TONGUE_ARCH_FRONT_NX = 0.5
 
 # --- vertex sets (thesis 3.1.3 Figure 3.7 and 4.1.1 Figure 4.6) ---------------------------
 #: "The upper lip is shown as vertices 61 to 69, the lower lip as 49 to 60, and the corners as 70

@@ -498,6 +498,6 @@ class LipMovementStage:
         ctx.diagnostics.update(lips.diagnostics)
         ctx.diagnostics["thickness_rule"] = np.full(len(lips.xyz), plan["rule"].name, dtype=object)
         # Table 4.1's lip parameters drive steps 1-4 exactly as in 1.0: same diagnostics.
-        from .cassi10 import _parameters
+        from .cassi10 import parameters_frame
 
-        _parameters(ctx, {63: ("UL", 0), 64: ("UL", 1), 65: ("LL", 0), 66: ("LL", 1)})
+        parameters_frame(ctx, {63: ("UL", 0), 64: ("UL", 1), 65: ("LL", 0), 66: ("LL", 1)})
