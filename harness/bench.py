@@ -15,6 +15,7 @@ from __future__ import annotations
 import importlib
 import os
 import platform
+import re
 import shutil
 import tempfile
 import time
@@ -125,17 +126,30 @@ def _time_batch(work: dict, executor, n_workers: int, tmp: Path, name: str) -> d
     by_stage = {}
     for rec in res.records.values():
         by_stage[rec.stage] = by_stage.get(rec.stage, 0) + 1
+    failures = sorted({r.reason for r in res.summary.failed})[:3]
+    wall_sum = cpu_sum = 0.0
+    for rec in res.records.values():
+        m = re.match(r"wall ([\d.]+) s, cpu ([\d.]+) s", rec.log[0]) if rec.log else None
+        if m:
+            wall_sum += float(m.group(1))
+            cpu_sum += float(m.group(2))
     return {"jobs": jobs, "jobs_by_stage": by_stage, "failed": c["failed"],
-            "skipped": c["skipped"], "seconds": round(wall, 3),
+            "failure_reasons": failures, "skipped": c["skipped"], "seconds": round(wall, 3),
             "jobs_per_s": round(jobs / wall, 3) if wall else None,
-            "startup_s": round(startup, 3)}
+            "startup_s": round(startup, 3),
+            # CPU time / wall time of the jobs: well below 1 means they waited for a core
+            # (another load on the machine), so the timing says little about the farm.
+            "job_cpu_share": round(cpu_sum / wall_sum, 3) if wall_sum else None}
 
 
-def bench_farm(quick: bool = False, *, workload: str = "auto", ray: bool = True) -> dict:
+def bench_farm(quick: bool = False, *, workload: str = "auto", ray: bool = True,
+               repeats: int = 2) -> dict:
     """Jobs per second with 1 and 2 local workers, and with Ray, on the same batch.
 
-    ``workload="cpu"`` times the CPU-bound stage instead of the CASSI pipeline (tests);
-    ``ray=False`` leaves Ray out.
+    The 1- and 2-worker runs alternate ``repeats`` times and the best of each counts (on a
+    shared machine the other load only ever slows a run down); every run is listed under
+    ``runs``. ``workload="cpu"`` times the CPU-bound stage instead of the CASSI pipeline
+    (tests); ``ray=False`` leaves Ray out.
     """
     use_ray = ray
     work, fallback_reason = _workload(quick, workload)
@@ -146,11 +160,23 @@ def bench_farm(quick: bool = False, *, workload: str = "auto", ray: bool = True)
     tmp = Path(tempfile.mkdtemp(prefix="cassi-bench-"))
     init, initargs = work["warm"]
     try:
+        runs = {1: [], 2: []}
+        for rep in range(max(1, int(repeats))):
+            for n in (1, 2):
+                with LocalExecutor(n, initializer=init, initargs=initargs,
+                                   env=thread_env(1)) as ex:
+                    runs[n].append(_time_batch(work, ex, n, tmp, f"local{n}-{rep}"))
         for n in (1, 2):
-            with LocalExecutor(n, initializer=init, initargs=initargs, env=thread_env(1)) as ex:
-                out[f"local_{n}"] = _time_batch(work, ex, n, tmp, f"local{n}")
+            out[f"local_{n}"] = max(runs[n], key=lambda r: (not r["failed"], r["jobs_per_s"] or 0))
+        out["runs"] = {f"local_{n}": [(r["jobs_per_s"], r["job_cpu_share"]) for r in runs[n]]
+                       for n in (1, 2)}
         a, b = out["local_1"]["jobs_per_s"], out["local_2"]["jobs_per_s"]
-        out["speedup_2_workers"] = round(b / a, 3) if a and b else None
+        same = (out["local_1"]["jobs"] == out["local_2"]["jobs"]
+                and not out["local_1"]["failed"] and not out["local_2"]["failed"])
+        # A speed-up only means something when both runs did the same, complete work.
+        out["speedup_2_workers"] = round(b / a, 3) if a and b and same else None
+        if not same:
+            out["speedup_invalid"] = "the 1- and 2-worker runs did not complete the same jobs"
         out["speedup_goal"] = SPEEDUP_GOAL
         if not use_ray:
             return out
@@ -168,7 +194,8 @@ def bench_farm(quick: bool = False, *, workload: str = "auto", ray: bool = True)
                 if owned and ray.is_initialized():
                     ray.shutdown()
             r, l2 = out["ray_2"]["jobs_per_s"], out["local_2"]["jobs_per_s"]
-            if r and l2:
+            if r and l2 and out["ray_2"]["jobs"] == out["local_2"]["jobs"] \
+                    and not out["ray_2"]["failed"] and not out["local_2"]["failed"]:
                 out["ray_overhead_vs_local"] = round(l2 / r - 1.0, 3)  # extra time fraction
                 out["ray_overhead_ms_per_job"] = round(1000 * (1 / r - 1 / l2), 1)
         except Exception as err:  # noqa: BLE001

@@ -26,6 +26,7 @@ import enum
 import hashlib
 import io
 import json
+import os
 import time
 import traceback
 from dataclasses import asdict, dataclass, field
@@ -184,7 +185,7 @@ def execute_job(stage: StageFn, job: Job, ctx: StageContext, digest: str) -> Out
     Idempotent: running it twice for the same job writes the same blobs and manifest.
     Exceptions other than :class:`SkipJob` propagate (the executor reports them).
     """
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     store = OutputStore(ctx.out_dir)
     inputs: dict[str, bytes] = {}
     for key in job.parents:
@@ -207,7 +208,11 @@ def execute_job(stage: StageFn, job: Job, ctx: StageContext, digest: str) -> Out
     for name, (data, suffix) in out.files.items():
         refs[name] = store.put(data, suffix)
     store.write_manifest(job.key, digest, refs, out.meta)
-    return Outcome(job.key, State.DONE, time.perf_counter() - t0, meta=out.meta, log=out.log)
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    # CPU time beside wall time: a job whose CPU time is far below its wall time waited for a
+    # core (an oversubscribed machine), which is what to look at when workers do not scale.
+    log = [f"wall {wall:.3f} s, cpu {cpu:.3f} s (pid {os.getpid()})", *out.log]
+    return Outcome(job.key, State.DONE, wall, meta=out.meta, log=log)
 
 
 def call_job(stage: StageFn, job: Job, ctx: StageContext, digest: str) -> Outcome:

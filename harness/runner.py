@@ -2,7 +2,10 @@
 
 The run loop is executor-agnostic: it submits ``(key, call_job, (stage, job, ctx, digest))``
 items and reacts to finished ones. Render jobs of a task file are planned as soon as its
-geometry job finishes (or is found already done), so renders overlap with other geometry.
+geometry job finishes (or is found already done), so renders overlap with other geometry; a
+view's image job as soon as all its render chunks are done. A batch is
+``tasks x versions`` geometry jobs, each fanning out to ``views x chunks`` render jobs and
+``views`` image jobs; the ratings stage then runs here, in the main process.
 """
 from __future__ import annotations
 
@@ -14,11 +17,12 @@ from typing import Callable, Iterable
 
 import pandas as pd
 
+from cassi.data.atomic import atomic_write_text
+
 from . import results as R
 from .jobs import GEOMETRY_VIEW, Job, Outcome, StageContext, StageFn, State, call_job, chunk_frames
 from .progress import JobRecord, Progress, Summary, write_job_log
 from .store import OutputStore
-from cassi.data.atomic import atomic_write_text
 
 #: Outputs named ``render-<frame>`` are images; they are listed in ``renders.parquet``.
 RENDER_PREFIX = "render-"

@@ -120,7 +120,7 @@ def test_bench_reports_missing_packages_as_errors_and_times_the_farm():
 
     entry = _registered("cassi.no_such_package.bench", "bench_x", True)
     assert "error" in entry and "not available" in entry["error"]
-    farm = bench_farm(True, workload="cpu", ray=False)
+    farm = bench_farm(True, workload="cpu", ray=False, repeats=1)
     assert farm["local_1"]["jobs"] == farm["local_2"]["jobs"] == 8
     assert farm["local_1"]["failed"] == farm["local_2"]["failed"] == 0
     assert farm["speedup_2_workers"] > 0 and "cpu-bound" in farm["workload"]
