@@ -50,10 +50,12 @@ def _load_version(name: str):
     return obj
 
 
-def _face_for(subject_data):
+def _face_for(subject_data, profile):
     from cassi.data.face import build_face
 
-    return build_face(palate_mm=subject_data.palate_mm, head_measures=subject_data.head_measures)
+    # The palate is scaled by p/d like the pellets (thesis 4.1.1), so the face needs d.
+    return build_face(palate_mm=subject_data.palate_mm, head_measures=subject_data.head_measures,
+                      jaw_length_mm=profile.jaw_length_mm)
 
 
 def default_positions(corpus_dir: str | Path, subject: str, task: int, rep: int, version: str):
@@ -62,19 +64,22 @@ def default_positions(corpus_dir: str | Path, subject: str, task: int, rep: int,
     ``neutral``: every row of the recording, each with the neutral face's vertices.
     """
     from cassi.data.corpus import Corpus
+    from cassi.data.profile import preprocess
 
+    if corpus_dir is None:
+        from cassi.data.synth import default_corpus
+
+        corpus_dir = default_corpus()
     corpus = Corpus(corpus_dir)
     sd = corpus.subject(subject)
     rec = sd.load(task, rep)
-    face = _face_for(sd)
+    profile = preprocess(corpus, [subject])[subject]
+    face = _face_for(sd, profile)
     if version == NEUTRAL:
         n = len(rec.time_us)
         verts = np.asarray(face.vertices, np.float32)
         return face, np.arange(n, dtype=np.int64), np.broadcast_to(verts, (n, *verts.shape))
-    from cassi.data.profile import preprocess
-
     ver = _load_version(version)
-    profile = preprocess(corpus, [subject])[subject]
     anim = ver.animate(profile, face, rec)
     return face, np.asarray(anim.frames, np.int64), np.asarray(anim.positions, np.float32)
 
@@ -138,7 +143,8 @@ def _cmd_animate(args, provider: PositionsProvider) -> int:
 
 
 def _common(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--corpus", required=True, help="corpus directory (see cassi corpus)")
+    p.add_argument("--corpus", default=None,
+                   help="corpus directory (see cassi corpus; default: the embedded synthetic one)")
     p.add_argument("--subject", required=True, help="subject name, e.g. JW45")
     p.add_argument("--task", required=True, type=int, help="task number")
     p.add_argument("--rep", type=int, default=1, help="repetition (default 1)")
