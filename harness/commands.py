@@ -59,6 +59,10 @@ def config_from_args(args: argparse.Namespace) -> C.RunConfig:
     """The run file (if any) with the command-line flags applied over it."""
     base = C.load_config(args.config) if args.config else C.RunConfig()
     flags = {k: getattr(args, k, None) for k in C.FIELDS}
+    for name in ("subjects", "tasks", "versions", "views"):
+        # `--subjects JW11,JW45` and `--subjects JW11 JW45` mean the same.
+        if flags.get(name):
+            flags[name] = [part for item in flags[name] for part in str(item).split(",") if part]
     cfg = C.merge(base, flags)
     if cfg.out is None:
         raise CassiInputError("no output directory: give --out DIR (or out = ... in --config)")

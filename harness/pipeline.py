@@ -66,8 +66,10 @@ def get_face(corpus, subject: str, profile):
 
     key = (str(corpus.root), subject)
     if key not in _faces:
+        # jaw_length_mm scales the palate by p/d like the pellets (thesis 4.1.1).
         _faces[key] = build_face(palate_mm=getattr(profile, "palate_mm", None),
-                                 head_measures=getattr(profile, "head_measures", None))
+                                 head_measures=getattr(profile, "head_measures", None),
+                                 jaw_length_mm=getattr(profile, "jaw_length_mm", None))
     return _faces[key]
 
 

@@ -74,6 +74,15 @@ def test_flags_override_the_file(tmp_path):
     assert cfg.versions == ("cassi-1.0",) and cfg.out == tmp_path / "o"
 
 
+def test_list_flags_take_commas_or_spaces():
+    a = config_from_args(_parser().parse_args(["run", "--out", "o", "--subjects", "JW11,JW12",
+                                               "--tasks", "19,21", "106", "--views", "front,half"]))
+    b = config_from_args(_parser().parse_args(["run", "--out", "o", "--subjects", "JW11", "JW12",
+                                               "--tasks", "19", "21", "106", "--views", "front", "half"]))
+    assert a == b and a.subjects == ("JW11", "JW12") and a.tasks == (19, 21, 106)
+    assert a.views == ("front", "half")
+
+
 def test_flags_are_validated_like_the_file():
     with pytest.raises(CassiInputError, match="workers: must be at least 1"):
         config_from_args(_parser().parse_args(["run", "--out", "x", "--workers", "0"]))
