@@ -153,8 +153,54 @@ def test_neighbours_follow_their_lip_vertices(anims, face, profile, rec):
     stages[0].animate(ctx, alone)
     jaw = alone[:, 40][:, [0, 2]] - ctx.start[40, [0, 2]]
     lip = a20.vertex(49)[:, [0, 2]] - a20.vertex(49)[0, [0, 2]]
-    got = a20.vertex(41)[:, [0, 2]] - a20.vertex(41)[0, [0, 2]]
-    np.testing.assert_allclose(got, 0.5 * jaw + 0.5 * lip, atol=1e-3)
+    # The blend, then the side-view bound of 4.2.1's 41-43 (lips_constants.BELOW_LIP_CHAIN),
+    # which is the only change to it.
+    from cassi.versions.lips import LIP_VERTICES, bound_below_lip
+    blend = np.array(a20.positions, dtype=np.float64)
+    blend[:, 40, [0, 2]] = a20.vertex(41)[0, [0, 2]] + 0.5 * jaw + 0.5 * lip
+    bounded = blend.copy()
+    bound_below_lip(bounded, blend[:, np.asarray(LIP_VERTICES) - 1], np.asarray(face.vertices))
+    np.testing.assert_allclose(a20.vertex(41)[:, [0, 2]], bounded[:, 40, [0, 2]], atol=1e-3)
+
+
+def _concavity(p, a, m, b):
+    d = p[:, b, [0, 2]] - p[:, a, [0, 2]]
+    n = np.stack([d[:, 1], -d[:, 0]], axis=1)
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    n *= np.where(n[:, :1] < 0, -1.0, 1.0)
+    return -np.sum((p[:, m, [0, 2]] - p[:, a, [0, 2]]) * n, axis=1)
+
+
+def test_below_lip_bound_keeps_41_to_43_from_folding():
+    # Regression for 41-43 pulled by half the lower lip's movement into a fold of the chin
+    # (task 106): on the face model, 41-43 pushed 8 mm forward, 8 mm back, or left alone.
+    face_mod = pytest.importorskip("cassi.data.face")
+    from cassi.versions.lips import LIP_VERTICES, bound_below_lip
+    rest = np.asarray(face_mod.build_face().vertices, dtype=np.float64)
+    out = np.repeat(rest[None], 3, axis=0)
+    for v, lip, jaw, _ in LK.BELOW_LIP_CHAIN:
+        # 8 mm (32 units) along the forward normal of the lip-jaw chord, the bound's direction
+        d = rest[jaw - 1, [0, 2]] - rest[lip - 1, [0, 2]]
+        n = np.array([d[1], -d[0]]) / np.hypot(*d)
+        n *= np.sign(n[0])
+        out[0, v - 1, [0, 2]] += 32.0 * n    # forward: the chin would cave in behind v's chord
+        out[1, v - 1, [0, 2]] -= 32.0 * n    # back: a hollow under the lip
+    lips = out[:, np.asarray(LIP_VERTICES) - 1].copy()
+    bounded = out.copy()
+    bound_below_lip(bounded, lips, rest)
+    for v, lip, jaw, jaw2 in LK.BELOW_LIP_CHAIN:
+        v, lip, jaw, jaw2 = v - 1, lip - 1, jaw - 1, jaw2 - 1
+        under0 = _concavity(rest[None], lip, v, jaw)[0]
+        chin0 = _concavity(rest[None], v, jaw, jaw2)[0]
+        assert np.all(_concavity(bounded, lip, v, jaw) <= under0 + 1e-4)
+        assert np.all(_concavity(bounded, v, jaw, jaw2) <= chin0 + 1e-4)
+        # the unbounded moves did fold it (so this test can fail)
+        assert _concavity(out, v, jaw, jaw2)[0] > chin0 + 1.0
+        assert _concavity(out, lip, v, jaw)[1] > under0 + 1.0
+    np.testing.assert_allclose(bounded[2], rest, atol=1e-9)        # rest is left alone
+    again = bounded.copy()
+    bound_below_lip(again, lips, rest)
+    np.testing.assert_allclose(again, bounded, atol=1e-9)          # a projection
 
 
 def test_2_1_identical_to_2_0_for_well_centred_subjects(face, profile, rec, anims):

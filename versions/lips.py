@@ -414,7 +414,7 @@ class LowLipsThicknessPolicy(ThicknessPolicy):
 
 # --- the stage ------------------------------------------------------------------------------
 def _move_neighbours(out: np.ndarray, lips_now: LipFrames, lips_ref: np.ndarray,
-                     base: np.ndarray) -> None:
+                     base: np.ndarray, rest: np.ndarray | None = None) -> None:
     """Move the vertices around the lips by portions of their lip vertices' movement.
 
     Parameters
@@ -429,6 +429,8 @@ def _move_neighbours(out: np.ndarray, lips_now: LipFrames, lips_ref: np.ndarray,
         initialisation; the first frame for the animation).
     base : float (V, 3)
         The neighbours' own positions at the reference (before the stage / the start face).
+    rest : float (V, 3), optional
+        The rest face: when given, 41-43 are bounded by :func:`bound_below_lip`.
     """
     move = lips_now.xyz - lips_ref[None]  # (F, L, 3)
     col = _COL
@@ -443,6 +445,76 @@ def _move_neighbours(out: np.ndarray, lips_now: LipFrames, lips_ref: np.ndarray,
         out[:, v - 1, 1] += K.BELOW_LIP_Y_PORTION * move[:, col[u], 1]
     for u, w in K.CHEEK_CORNER_WEIGHTS:
         out[:, V_CHEEK - 1, :] += w * move[:, col[u], :]
+    if rest is not None:
+        bound_below_lip(out, lips_now.xyz, rest)
+
+
+def _forward_normal(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Unit normal (x, z) of the chord a -> b pointing forward (+x); (F, 2)."""
+    d = b - a
+    n = np.stack([d[:, 1], -d[:, 0]], axis=1)
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+    return n * np.where(n[:, :1] < 0, -1.0, 1.0)
+
+
+def _behind(a: np.ndarray, m: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """How far ``m`` lies behind the chord a -> b (side view, Parke units; > 0 = caved in)."""
+    return -np.sum((m - a) * _forward_normal(a, b), axis=1)
+
+
+def bound_below_lip(out: np.ndarray, lip_xyz: np.ndarray, rest: np.ndarray) -> None:
+    """Keep 41-43 between their lip vertex and the jaw in the side view (no fold), in place.
+
+    Each vertex m may move only forward or back along the forward normal n of the chord from its
+    lip vertex a to the jaw vertex b below it. Bound (1), no deeper hollow under the lip than at
+    rest, is ``m`` at most ``k1`` behind the chord a -> b: t >= t1. Bound (2), no hollow at the
+    chin, is the jaw vertex b at most ``k2`` behind the chord from m to the next jaw vertex c:
+    t <= t2 (the hollow grows as m comes forward; t2 by bisection). k1 and k2 are the rest face's.
+    t is clipped to [t1, t2]; when the lip sits so far forward of the jaw that t1 > t2, m goes
+    between, t = t2 + BELOW_LIP_SPLIT (t1 - t2). Bounding a bounded face leaves it unchanged.
+
+    Parameters
+    ----------
+    out : float (F, V, 3)
+        Positions with the jaw placed and 41-43 blended (section 4.2.1); 41-43 x, z adjusted.
+    lip_xyz : float (F, len(LIP_VERTICES), 3)
+        This call's lip vertex positions (the lip vertices above 41-43 are taken from here, as
+        ``out`` does not hold them yet).
+    rest : float (V, 3)
+        The rest face whose side-view shape gives k1 and k2
+        (:data:`~cassi.versions.lips_constants.BELOW_LIP_CHAIN`).
+    """
+    xz = [0, 2]
+    for v, lip, jaw, jaw2 in K.BELOW_LIP_CHAIN:
+        r = rest[[lip - 1, v - 1, jaw - 1, jaw2 - 1]][:, xz][:, None, :]
+        k1 = _behind(r[0], r[1], r[2])[0]
+        k2 = _behind(r[1], r[2], r[3])[0]
+        a = lip_xyz[:, _COL[lip], :][:, xz]
+        b = out[:, jaw - 1, :][:, xz]
+        c = out[:, jaw2 - 1, :][:, xz]
+        m = out[:, v - 1, :][:, xz]
+        n = _forward_normal(a, b)
+        # (1) (m + t n - a) . n >= -k1
+        t1 = -k1 - np.sum((m - a) * n, axis=1)
+        # (2) _behind(m + t n, b, c) <= k2; the hollow grows as m moves forward, so t2 is the
+        # root, found by bisection over +-BELOW_LIP_SEARCH Parke units.
+        def chin(t):
+            return _behind(m + t[:, None] * n, b, c) - k2
+        lo = np.full(len(m), -K.BELOW_LIP_SEARCH)
+        hi = np.full(len(m), K.BELOW_LIP_SEARCH)
+        never = chin(hi) <= 0.0
+        for _ in range(48):
+            mid = 0.5 * (lo + hi)
+            fine = chin(mid) <= 0.0
+            lo, hi = np.where(fine, mid, lo), np.where(fine, hi, mid)
+        t2 = np.where(never, np.inf, lo)
+        # Where both cannot hold (the lower lip far forward of the jaw), split the move.
+        ok = t1 <= t2 + 1e-6
+        split = np.where(np.isfinite(t2), t2 + K.BELOW_LIP_SPLIT * (t1 - np.where(ok, t1, t2)), t1)
+        t = np.where(ok, np.clip(0.0, t1, t2), split)
+        m = m + t[:, None] * n
+        out[:, v - 1, 0] = m[:, 0]
+        out[:, v - 1, 2] = m[:, 1]
 
 
 @dataclass
@@ -484,7 +556,7 @@ class LipMovementStage:
         first = self._frames(plan, ctx.pellet("UL")[:1], ctx.pellet("LL")[:1])
         idx = np.asarray(LIP_VERTICES) - 1
         out = before[None].copy()
-        _move_neighbours(out, first, before[idx], before)
+        _move_neighbours(out, first, before[idx], before, ctx.neutral)
         out[0, idx, :] = first.xyz[0]
         ctx.start[:] = out[0]
         plan["start_lips"] = first.xyz[0].copy()
@@ -493,7 +565,7 @@ class LipMovementStage:
         plan = self._setup(ctx)
         lips = self._frames(plan, ctx.pellet("UL"), ctx.pellet("LL"))
         idx = np.asarray(LIP_VERTICES) - 1
-        _move_neighbours(positions, lips, lips.xyz[0], ctx.start)
+        _move_neighbours(positions, lips, lips.xyz[0], ctx.start, ctx.neutral)
         positions[:, idx, :] = lips.xyz
         ctx.diagnostics.update(lips.diagnostics)
         ctx.diagnostics["thickness_rule"] = np.full(len(lips.xyz), plan["rule"].name, dtype=object)

@@ -128,6 +128,30 @@ ABOVE_LIP_PORTION: float = 0.5
 BELOW_LIP_JAW_SHARE: float = 0.5
 BELOW_LIP_Y_PORTION: float = 0.5
 
+#: Bound on that lip influence (CHOSEN; the thesis gives the 50/50 blend but no bound): in the
+#: side view each of 41, 42, 43 stays between its lip vertex above and the jaw below it, i.e.
+#: (1) it never lies farther behind the chord from its lip vertex (49, 50, 51) to the jaw vertex
+#: below it (24, 34, 35) than on the rest face (no cave under the lip), and (2) it never comes so
+#: far forward that the jaw vertex below it lies farther behind the chord from it to the next jaw
+#: vertex down (16, 27, 28) than on the rest face (no cave at the chin). Without the bound the
+#: half of the lower lip's (large) initialisation and rounding movement, added to half the jaw
+#: rotation, pulled 41-43 ~5 mm below / ahead of the jaw and folded the chin on jaw-wagging task
+#: 106 (rubric chin_cave_in on 11 of 13 synthetic subjects): a bug, not thesis behaviour. The
+#: vertex moves only along the forward normal of the lip-jaw chord (see
+#: :func:`cassi.versions.lips.bound_below_lip`). Each entry is (vertex, lip vertex above, jaw
+#: vertex below, next jaw vertex down); 41's triple is the rubric's chin (24) and menton (16).
+BELOW_LIP_CHAIN: tuple[tuple[int, int, int, int], ...] = (
+    (41, 49, 24, 16), (42, 50, 34, 27), (43, 51, 35, 28))
+#: When the lower lip sits so far forward of the jaw that both bounds cannot hold (CASSI 1.0's
+#: own face shows the same: 41 ~3 mm behind the 49-chin chord on 12 of 13 synthetic subjects, so
+#: the conflict comes from where the lip and jaw are initialised, not from 41-43), the vertex goes
+#: this share of the way from bound (2) toward bound (1). CHOSEN 0.65 from the synthetic corpus
+#: (task 106, 13 subjects, rubric faults at 1 mm, under-lip / chin): 0.5 gave 10 / 4, 0.65 5 / 7,
+#: 0.8 0 / 10; 0.65 leaves both hollows at a median ~0.9-1.1 mm beyond rest; no share removes both.
+BELOW_LIP_SPLIT: float = 0.65
+#: How far (Parke units, ~12 mm) the bound searches forward and back for the chin's limit.
+BELOW_LIP_SEARCH: float = 50.0
+
 #: Vertex 44, "although influenced by other vertices, is most influenced by vertex 70": it
 #: follows the movement of 70 with weight 0.6 and of its outline neighbours 69 and 51 with
 #: 0.2 each (weights sum to 1: 44 moves rigidly with the lips' corner region).
