@@ -214,6 +214,22 @@ def _variant() -> str:
         return f"error: {type(err).__name__}: {err}"
 
 
+#: Figures copied to the top of the document, under the keys the issues name.
+HEADLINE = {"geometry": ("geometry_frames_per_s",),
+            "render": ("render_per_s", "render_pipeline_efficiency", "render_rss_growth_mb")}
+
+
+def headline(benchmarks: dict) -> dict:
+    """The headline figures of the benchmark entries that produced them (errors have none)."""
+    out = {}
+    for name, keys in HEADLINE.items():
+        entry = benchmarks.get(name)
+        for key in keys:
+            if isinstance(entry, dict) and key in entry:
+                out[key] = entry[key]
+    return out
+
+
 def run_benchmarks(*, quick: bool = False) -> dict:
     """Every benchmark; the document ``cassi bench`` writes."""
     report = {"quick": quick, "cpu_count": os.cpu_count(),
@@ -228,6 +244,7 @@ def run_benchmarks(*, quick: bool = False) -> dict:
         farm = {"error": f"{type(err).__name__}: {err}",
                 "traceback": traceback.format_exc().splitlines()[-6:]}
     report["benchmarks"]["farm"] = farm
+    report.update(headline(report["benchmarks"]))
     if "speedup_2_workers" in farm:
         report["farm_speedup_2_workers"] = farm["speedup_2_workers"]
     if "ray_overhead_vs_local" in farm:
