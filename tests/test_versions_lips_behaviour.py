@@ -193,17 +193,24 @@ def test_middle_outline_pairs_equidistant_and_closing_toward_corner():
 
 
 def test_overlapping_lips_rule():
-    # Thick lips (Thick 25) closed to 30 units: 61 = -10 - 25 = -35, 58 = -40 + 25 = -15, so
-    # 58 is 20 above 61: the inner outline is flat, 61-63 10 below and 58-60 10 above the
-    # centre line -25.
-    thick = LipSubject(x_rest=100.0, x_max=125.0, x_min=70.0, thick=25.0)
+    # Very thick lips (Thick 30) closed to 30 units (67 at -10, 49 at -40): pressed, both lips
+    # compress to LIP_COMPRESS_MIN = 0.8 of currthick (24), still 18 too thick: 61 = -10 - 24 =
+    # -34, 58 = -40 + 24 = -16, so 58 is 18 above 61: the inner outline is flat (4.2.1), 61-63 9
+    # below and 58-60 9 above the centre line -25.
+    assert K.LIP_COMPRESS_MIN == 0.8
+    thick = LipSubject(x_rest=100.0, x_max=125.0, x_min=70.0, thick=30.0)
     ul, ll = pellets(np.full(5, 100.0))
     lips = lip_frames(ul, ll, REST, thick)
     assert lips.diagnostics["lips_overlap"].all()
     for v in (61, 62, 63):
-        np.testing.assert_allclose(lips.vertex(v)[:, 2], -35.0)
+        np.testing.assert_allclose(lips.vertex(v)[:, 2], -34.0)
     for v in (58, 59, 60):
-        np.testing.assert_allclose(lips.vertex(v)[:, 2], -15.0)
+        np.testing.assert_allclose(lips.vertex(v)[:, 2], -16.0)
+    # Thick 18 closed to 30 units: compressed by 30/36 the edges just meet at -25 (before the
+    # compression rule 61 was -28 and 58 -22: the lips crossed by 6 units).
+    lips = lip_frames(ul, ll, REST, LipSubject(x_rest=100.0, x_max=125.0, x_min=70.0, thick=18.0))
+    np.testing.assert_allclose(lips.vertex(61)[:, 2], -25.0)
+    np.testing.assert_allclose(lips.vertex(58)[:, 2], -25.0)
     # Thin lips do not overlap and follow Eq. 4.16: 62 between the centre line and 61.
     lips = lip_frames(ul, ll, REST, SUBJECT)
     assert not lips.diagnostics["lips_overlap"].any()
@@ -334,3 +341,4 @@ def test_corners_keep_the_face_depth_behind_their_track():
     # 287 keeps 60/68 of 70's y and its height above the mouth's centre line (0 here).
     np.testing.assert_allclose(lips.vertex(287)[:, 1], 60 / 68 * y70)
     np.testing.assert_allclose(lips.vertex(287)[:, 2], lips.vertex(70)[:, 2])
+

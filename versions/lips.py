@@ -12,7 +12,8 @@ The steps of Figure 4.28, and where each one is done:
 5.   centre (h, k): h = 0 (the mid-sagittal plane), k midway between 67 and 49;
 6.   OUTER_ABC_CALC (:func:`~cassi.versions.lips_ellipse.outer_abc_sequence`);
 7.   limits on a and c (:func:`~cassi.versions.lips_ellipse.limit_abc`);
-8.   currthick (:func:`~cassi.versions.lips_thickness.current_thickness`);
+8.   currthick (:func:`~cassi.versions.lips_thickness.current_thickness`); lips pressed together
+     compress (:func:`compress_pressed`, CHOSEN, see ``lips_constants.LIP_COMPRESS_MIN``);
 9-10. centre-line z from currthick (:func:`~cassi.versions.lips_thickness.centreline_z`);
 11.  front view (y, z) from the outer, middle and inner outlines (Figure 4.17, Eq. 4.16);
 12.  x from the parabolic tracks (Eq. 4.19), one per centre-line vertex.
@@ -20,7 +21,8 @@ The steps of Figure 4.28, and where each one is done:
 Vertex roles (Figures 4.5, 4.17): outer outline 67, 68, 69 / 49, 50, 51 with corner 70; middle
 outline 64, 65, 66 / pairs 55-52, 56-53, 57-54 with corner 300 (new, midway between 287 and 70);
 inner outline 61, 62, 63 / 58, 59, 60 with corner 287. Around the lips 71-73 follow 67-69,
-41-43 follow 49-51 and the jaw half each, 44 follows the corner.
+41-43 follow 49-51 and the jaw half each (bounded so the chin never folds,
+:func:`bound_below_lip`), 44 follows the corner.
 """
 from __future__ import annotations
 
@@ -143,6 +145,18 @@ def lip_subject(profile, parke_jaw_distance: float, x_origin: float) -> LipSubje
         x_min=vals["min_ul"] * p + x_origin,
         thick=thick_from_lipthick(vals["lipthick"], p),
     )
+
+
+def compress_pressed(upper, lower, z67, z49) -> tuple[np.ndarray, np.ndarray]:
+    """Shrink both lips' thickness where their inner edges would cross (see
+    :data:`~cassi.versions.lips_constants.LIP_COMPRESS_MIN`); arrays (F,), Parke units."""
+    upper = np.asarray(upper, dtype=np.float64)
+    lower = np.asarray(lower, dtype=np.float64)
+    room = np.asarray(z67, dtype=np.float64) - np.asarray(z49, dtype=np.float64)
+    total = upper + lower
+    f = np.where(total > room, np.maximum(room, 0.0) / np.where(total > 0, total, 1.0), 1.0)
+    f = np.clip(f, K.LIP_COMPRESS_MIN, 1.0)
+    return upper * f, lower * f
 
 
 @dataclass(frozen=True, eq=False)
@@ -280,7 +294,7 @@ def lip_frames(
     vertical = is_vertical(track.a, height)  # OUTER_ABC_CALC's orientation (see limit_abc)
     # Step 8: currthick; steps 9-10: the centre line's z.
     currthick = current_thickness(subject.thick, cp)
-    upper_thick, lower_thick = rule.split(currthick)
+    upper_thick, lower_thick = compress_pressed(*rule.split(currthick), z67, z49)
     zc = centreline_z(z67, z49, upper_thick, lower_thick)
     xc = {67: x67, 49: x49}
     for v, dx in rest.dx_upper.items():

@@ -117,6 +117,23 @@ MIDDLE_PAIR_TAPER: tuple[float, float, float] = (1.0, 2.0 / 3.0, 1.0 / 3.0)
 #: visibly pouted yet short of "lips too big at maximum protrusion" (thesis Table 5.8).
 THICKEN_GAIN: float = 0.4
 
+#: Thick (4.2.3) is lipthick * p / 2, half the UL-LL distance at the first valid row mapped by
+#: p/d, exactly as the thesis says (checked again: "scaled from the XRMB coordinate system to
+#: Parke's", then "divided by two"; the ellipse's b is half z67 - z49, 4.2.1). On the synthetic
+#: corpus this gives 9-18.5 mm a lip because the corpus's UL-LL distances are 18-39 mm at the
+#: first row; a 12 mm cap was tried and rejected: the pellets then never come close enough for
+#: such lips to meet (rubric lips_apart_at_start 0 -> 11 of 31 files, lips_never_touch 0 -> 4).
+#: The ~12 mm crossings (lips_too_large_moving, 11 of 31 files) came from currthick growing with
+#: rounding and the pellets closing past the first row while each lip kept its full thickness.
+#: CHOSEN: lips pressed together compress instead of passing through each other. When the inner
+#: edges 61 and 58 would cross (upper + lower currthick > z67 - z49), both thicknesses shrink in
+#: proportion until the edges meet, down to this share of currthick; beyond it the lips cross
+#: and 4.2.1's overlap rule ("placed at equal distances from the centerline") handles the front
+#: view as in the thesis. 0.8 from the synthetic corpus (8 subjects, 31 files, CASSI 2.0):
+#: lips_too_large_moving 11 -> 1 files with upper_lip_sharp unchanged at 4 of 8; 0.7 and 0.6
+#: removed every crossing but thinned the protruded upper lip into a wedge (upper_lip_sharp 7 of 8).
+LIP_COMPRESS_MIN: float = 0.8
+
 #: Vertices 71, 72, 73 "are moved by portions of the movement" of 67, 68, 69 (section 4.2.1).
 #: Reason: 0.5 (the skin just above the vermilion moves about half as far as the lip edge);
 #: the same portion for all three keeps the row above the lip parallel to it.
