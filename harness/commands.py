@@ -28,6 +28,8 @@ def _add_run(sub) -> None:
     p.add_argument("--views", nargs="+", metavar="NAME",
                    help="front side half top (default: all four); 'geometry' alone: no renders")
     p.add_argument("--stride", help="also render every Nth frame (0: first + extremes only)")
+    p.add_argument("--extremes", help="render at most N frames the checks point at, per task "
+                                      "file and version (default 8)")
     p.add_argument("--chunk", help="frames per render job (default 16)")
     p.add_argument("--preset", help="render preset (default preview)")
     p.add_argument("--variant", help="Mitsuba variant (default: the renderer's choice)")

@@ -8,6 +8,7 @@ Example ``run.toml``::
     versions = ["cassi-1.0", "cassi-2.1"]   # default: every registered version
     views = ["front", "half"]        # default: front, side, half, top; ["geometry"]: no renders
     stride = 25                      # render every 25th frame too (0: only first + extremes)
+    extremes = 8                     # at most this many frames the checks point at, per task
     chunk = 16                       # frames per render job
     preset = "preview"
     executor = "local"               # or "ray" (with address = "host:port", else a local cluster)
@@ -51,6 +52,7 @@ class RunConfig:
     versions: tuple[str, ...] | None = None
     views: tuple[str, ...] | None = None
     stride: int = 25
+    extremes: int = 8
     chunk: int = 16
     preset: str = "preview"
     variant: str | None = None
@@ -66,7 +68,7 @@ class RunConfig:
 
 FIELDS = tuple(f.name for f in dataclasses.fields(RunConfig))
 _LISTS = {"subjects": str, "tasks": int, "versions": str, "views": str}
-_INTS = {"stride": 0, "chunk": 1, "workers": 1, "threads": 1, "retries": 0}   # name -> minimum
+_INTS = {"stride": 0, "extremes": 0, "chunk": 1, "workers": 1, "threads": 1, "retries": 0}   # name -> minimum
 _STRS = ("preset", "variant", "executor", "address")
 
 

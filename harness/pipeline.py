@@ -166,7 +166,7 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
     if frames.size == 0:
         raise SkipJob("the version animated no frame")
     pick = select_frames(int(frames[0]), int(frames[-1]), stride=ctx.stride,
-                         extremes=extreme_frames(rows))
+                         extremes=extreme_frames(rows, limit=ctx.option("extremes", MAX_EXTREMES)))
     pick = [f for f in pick if f in set(frames.tolist())]
     idx = np.searchsorted(frames, pick)
     keyframes = npz_bytes(frames=np.asarray(pick, np.int64),

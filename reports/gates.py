@@ -146,7 +146,7 @@ def gate(run_dir: str | os.PathLike, baseline: str | os.PathLike, *,
     elif (base_path / "results.parquet").is_file():
         base_run = load_run(base_path)
         results = metric_gates(run.results, base_run.results)
-        results += image_gates(run, _renders_as_golden(base_run))
+        results += image_gates(run, _renders_as_golden(base_run, run.root / ".gate-baseline"))
     else:
         raise CassiInputError("baseline is neither a run directory (results.parquet) nor a "
                               f"golden directory ({GOLDEN_MARK})", path=base_path)
@@ -155,9 +155,10 @@ def gate(run_dir: str | os.PathLike, baseline: str | os.PathLike, *,
     return passed, results
 
 
-def _renders_as_golden(run: Run) -> Path:
-    """A baseline run's renders laid out like a golden directory (links in a scratch dir)."""
-    scratch = run.root / ".gate-baseline"
+def _renders_as_golden(run: Run, scratch: Path) -> Path:
+    """A baseline run's renders laid out like a golden directory: links in ``scratch`` (inside
+    the run being gated, so the baseline run is never written to), made anew each time."""
+    shutil.rmtree(scratch, ignore_errors=True)
     for _, row in run.renders.iterrows():
         dest = scratch / golden_key(row)
         if not dest.exists():

@@ -74,6 +74,13 @@ def test_flags_override_the_file(tmp_path):
     assert cfg.versions == ("cassi-1.0",) and cfg.out == tmp_path / "o"
 
 
+def test_extremes_setting_is_validated(tmp_path):
+    with pytest.raises(CassiInputError, match="extremes: must be at least 0"):
+        config_from_args(_parser().parse_args(["run", "--out", "x", "--extremes", "-1"]))
+    cfg = config_from_args(_parser().parse_args(["run", "--out", "x", "--extremes", "3"]))
+    assert cfg.extremes == 3 and C.RunConfig().extremes == 8
+
+
 def test_list_flags_take_commas_or_spaces():
     a = config_from_args(_parser().parse_args(["run", "--out", "o", "--subjects", "JW11,JW12",
                                                "--tasks", "19,21", "106", "--views", "front,half"]))
