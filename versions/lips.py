@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from cassi.data import numbering as N
 from cassi.data.errors import CassiInputError
 
 from . import lips_constants as K
@@ -75,15 +76,13 @@ __all__ = [
 ]
 
 # --- vertex roles (thesis Figures 4.5 and 4.17) ----------------------------------------------
-V_UL, V_LL, V_CORNER, V_INNER_CORNER, V_MID_CORNER = 67, 49, 70, 287, 300
-V_TEETH_TIP = 226
-OUTER_UPPER = (67, 68, 69)
-OUTER_LOWER = (49, 50, 51)
-MIDDLE_UPPER = (64, 65, 66)
-MIDDLE_PAIR_TOP = (55, 56, 57)
-MIDDLE_PAIR_BOTTOM = (52, 53, 54)
-INNER_UPPER = (61, 62, 63)
-INNER_LOWER = (58, 59, 60)
+# Local names for the face numbering's outlines (one source of truth: cassi.data.numbering).
+V_UL, V_LL, V_CORNER, V_INNER_CORNER, V_MID_CORNER = N.UL, N.LL, N.CORNER, N.INNER_CORNER, N.CORNER_MIDDLE
+V_TEETH_TIP = N.TEETH_TIP
+OUTER_UPPER, OUTER_LOWER = N.UPPER_OUTER, N.LOWER_OUTER
+MIDDLE_UPPER = N.UPPER_MIDDLE
+MIDDLE_PAIR_TOP, MIDDLE_PAIR_BOTTOM = N.LOWER_MIDDLE_UPPER_ROW, N.LOWER_MIDDLE_LOWER_ROW
+INNER_UPPER, INNER_LOWER = N.UPPER_INNER, N.LOWER_INNER
 #: Every vertex the algorithm places, in the column order of :attr:`LipFrames.xyz`.
 LIP_VERTICES: tuple[int, ...] = (
     OUTER_UPPER + OUTER_LOWER + (V_CORNER,) + MIDDLE_UPPER + MIDDLE_PAIR_TOP + MIDDLE_PAIR_BOTTOM
