@@ -23,7 +23,9 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="cassi", description=__doc__.splitlines()[0] + " See README.md.")
+    parser = _Parser(prog="cassi", description="cassi-farm: the evaluation harness and batch render "
+                     "farm for CASSI, the Computer Animated Speech SImulator. Without --corpus, "
+                     "commands use the embedded synthetic corpus. See README.md.")
     parser.add_argument("--version", action="version", version=f"cassi-farm {version('cassi-farm')}")
     parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
