@@ -1,0 +1,51 @@
+"""The `cassi` console script: every command has --help; exit codes 0 / 2 / 1."""
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+
+import pytest
+
+from cassi.harness.cli import build_parser, main
+
+
+def _commands(parser: argparse.ArgumentParser, prefix=()):
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                yield (*prefix, name)
+                yield from _commands(sub, (*prefix, name))
+
+
+COMMANDS = list(_commands(build_parser()))
+
+
+def test_every_package_contributes_its_commands():
+    top = {c[0] for c in COMMANDS}
+    assert {"corpus", "versions", "render", "animate", "run", "bench", "report", "nightly",
+            "gate", "golden"} <= top
+    assert {("corpus", "make"), ("corpus", "check"), ("corpus", "preprocess")} <= set(COMMANDS)
+
+
+@pytest.mark.parametrize("command", COMMANDS, ids=" ".join)
+def test_help_on_every_command(command, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main([*command, "--help"])
+    assert exc.value.code == 0
+    assert "usage: cassi " + " ".join(command) in capsys.readouterr().out
+
+
+def test_exit_codes_bad_input_and_unknown_command(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["no-such-command"])
+    assert exc.value.code == 2
+    assert main(["run", "--out", str(tmp_path / "o"), "--versions", "cassi-9.9"]) == 2
+    assert "valid versions" in capsys.readouterr().err
+
+
+def test_console_script_is_installed():
+    out = subprocess.run([sys.executable, "-m", "cassi.harness.cli", "versions"],
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0 and out.stdout.split() == sorted(out.stdout.split())
+    assert {"parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1"} <= set(out.stdout.split())
