@@ -233,11 +233,9 @@ def test_2_1_thins_the_upper_lip_of_low_lip_subjects(face, rec):
 # --- on the face model ------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def real_face():
-    mod = pytest.importorskip("cassi.data.face")
-    try:
-        return mod.build_face()
-    except ImportError as err:  # the face model is still landing in pieces
-        pytest.skip(f"face model incomplete: {err}")
+    from cassi.data.face import build_face
+
+    return build_face()
 
 
 def test_real_face_lips_stay_in_front_of_the_upper_teeth(real_face, profile):
