@@ -1,6 +1,8 @@
 """`cassi render` and `cassi animate` end to end on a one-subject synthetic corpus."""
 from __future__ import annotations
 
+import importlib
+
 import json
 
 import numpy as np
@@ -14,7 +16,7 @@ pytestmark = pytest.mark.render
 
 @pytest.fixture(scope="module")
 def corpus(tmp_path_factory):
-    pytest.importorskip("cassi.data.face")
+    importlib.import_module("cassi.data.face")
     from cassi.data.synth import make_corpus
 
     return make_corpus(tmp_path_factory.mktemp("corpus"), subjects=["JW45"])

@@ -6,6 +6,8 @@ that need it skip while that module is not installed).
 """
 from __future__ import annotations
 
+import importlib
+
 import numpy as np
 import pytest
 
@@ -29,7 +31,7 @@ def synth(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def real_face(synth):
-    face_mod = pytest.importorskip("cassi.data.face")
+    face_mod = importlib.import_module("cassi.data.face")
     _, profile = synth
     return face_mod.build_face(palate_mm=profile.palate_mm, head_measures=profile.head_measures)
 
