@@ -3,7 +3,6 @@ local pool; a task whose worker dies is retried (at-least-once) without duplicat
 from __future__ import annotations
 
 import importlib
-
 import os
 import sys
 from pathlib import Path

@@ -26,7 +26,6 @@ What is compared, and why:
 from __future__ import annotations
 
 import importlib
-
 import os
 from pathlib import Path
 

@@ -6,7 +6,6 @@ derived); ``test_real_face_*`` run on the face model when ``cassi.data.face`` is
 from __future__ import annotations
 
 import importlib
-
 import math
 
 import numpy as np

@@ -6,7 +6,6 @@ face model (``cassi.data.face.build_face``) and skip while it is not installed.
 from __future__ import annotations
 
 import importlib
-
 import dataclasses
 
 import numpy as np

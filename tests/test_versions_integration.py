@@ -7,7 +7,6 @@ that need it skip while that module is not installed).
 from __future__ import annotations
 
 import importlib
-
 import numpy as np
 import pytest
 
