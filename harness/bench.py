@@ -239,7 +239,7 @@ def run_benchmarks(*, quick: bool = False) -> dict:
     report["benchmarks"]["geometry"] = _registered("cassi.versions.bench", "bench_geometry", quick)
     report["benchmarks"]["render"] = _registered("cassi.renderer.bench", "bench_render", quick)
     try:
-        farm = bench_farm(quick)
+        farm = bench_farm(quick, repeats=1 if quick else 2)  # --quick: under a minute in all
     except Exception as err:  # noqa: BLE001
         farm = {"error": f"{type(err).__name__}: {err}",
                 "traceback": traceback.format_exc().splitlines()[-6:]}

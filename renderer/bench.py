@@ -10,7 +10,7 @@ Figures (all on this machine's variant, one process):
   load hits both alike; per view at the preview preset, and the front view's value as the headline
   (goal >= 0.7);
 - ``render_rss_growth_mb``: resident memory growth over 2,000 consecutive pipeline frames (quick:
-  150) after a warm-up, with the samples so flatness can be seen (goal < 50 MB).
+  80) after a warm-up, with the samples so flatness can be seen (goal < 50 MB).
 """
 from __future__ import annotations
 
@@ -91,7 +91,7 @@ def bench_render(quick: bool = False, *, topology_for=None, positions=None,
     variant = choose_variant(variant)
     out: dict = {"variant": variant, "quick": quick, "render_per_s": {}, "efficiency_by_view": {},
                  "ms_per_image": {}, "load_average_before": _loadavg()}
-    n_preview = 12 if quick else 40
+    n_preview = 6 if quick else 40
     renderers = {}
     for preset in PRESET_NAMES:
         for view in VIEW_NAMES:
@@ -107,7 +107,7 @@ def bench_render(quick: bool = False, *, topology_for=None, positions=None,
     tmp = Path(tempfile.mkdtemp(prefix="cassi-bench-render-"))
     try:
         # --- efficiency: bare mi.render vs the whole pipeline, alternating blocks -------------
-        block, rounds = (8, 3) if quick else (20, 4)
+        block, rounds = (5, 2) if quick else (20, 4)
         for view in VIEW_NAMES:
             r = renderers[(view, "preview")]
             frames = [moving_positions(positions, k) for k in range(block)]
@@ -131,7 +131,7 @@ def bench_render(quick: bool = False, *, topology_for=None, positions=None,
         out["render_pipeline_efficiency"] = out["efficiency_by_view"]["front"]
 
         # --- memory: many consecutive pipeline frames of one renderer --------------------------
-        n_frames = 150 if quick else 2000
+        n_frames = 80 if quick else 2000
         r = renderers[("front", "preview")]
         samples = []
         with FrameWriter() as writer:
