@@ -30,6 +30,9 @@ def _add_run(sub) -> None:
     p.add_argument("--stride", help="also render every Nth frame (0: first + extremes only)")
     p.add_argument("--extremes", help="render at most N frames the checks point at, per task "
                                       "file and version (default 8)")
+    p.add_argument("--animate-stride", dest="animate_stride",
+                   help="also render the front view of tasks 106 and 118 every N frames, for "
+                        "side-by-side animations of the versions (default 0: off)")
     p.add_argument("--chunk", help="frames per render job (default 16)")
     p.add_argument("--preset", help="render preset (default preview)")
     p.add_argument("--variant", help="Mitsuba variant (default: the renderer's choice)")

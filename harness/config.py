@@ -9,6 +9,7 @@ Example ``run.toml``::
     views = ["front", "half"]        # default: front, side, half, top; ["geometry"]: no renders
     stride = 25                      # render every 25th frame too (0: only first + extremes)
     extremes = 8                     # at most this many frames the checks point at, per task
+    animate_stride = 0               # >0: also render tasks 106/118 (front) every N frames
     chunk = 16                       # frames per render job
     preset = "preview"
     executor = "local"               # or "ray" (with address = "host:port", else a local cluster)
@@ -53,6 +54,7 @@ class RunConfig:
     views: tuple[str, ...] | None = None
     stride: int = 25
     extremes: int = 8
+    animate_stride: int = 0
     chunk: int = 16
     preset: str = "preview"
     variant: str | None = None
@@ -68,7 +70,7 @@ class RunConfig:
 
 FIELDS = tuple(f.name for f in dataclasses.fields(RunConfig))
 _LISTS = {"subjects": str, "tasks": int, "versions": str, "views": str}
-_INTS = {"stride": 0, "extremes": 0, "chunk": 1, "workers": 1, "threads": 1, "retries": 0}   # name -> minimum
+_INTS = {"stride": 0, "extremes": 0, "animate_stride": 0, "chunk": 1, "workers": 1, "threads": 1, "retries": 0}   # name -> minimum
 _STRS = ("preset", "variant", "executor", "address")
 
 

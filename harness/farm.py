@@ -59,7 +59,8 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
     ctx = StageContext(out_dir=store.root.resolve(), corpus=corpus.root.resolve(),
                        stride=cfg.stride, chunk_size=cfg.chunk, preset=cfg.preset,
                        variant=cfg.variant, synthetic=synthetic,
-                       options=(("extremes", cfg.extremes),))
+                       options=(("extremes", cfg.extremes),
+                                ("animate_stride", cfg.animate_stride)))
     meta = C.resolved(cfg, corpus_resolved=str(ctx.corpus), synthetic=synthetic,
                       versions_resolved=versions, views_resolved=views,
                       tasks_resolved=[[t.subject, t.task, t.rep, t.usable, t.reason] for t in tasks],

@@ -25,6 +25,9 @@ from .runner import Pipeline
 #: At most this many "extreme" frames per geometry job (the worst frame of the checks that
 #: fired, most negatives first), so renders stay bounded on long tasks.
 MAX_EXTREMES = 8
+#: Tasks whose front view is also rendered at ``animate_stride`` for side-by-side animations.
+ANIMATED_TASKS = (106, 118)
+ANIMATION_VIEW = "front"
 
 _lock = threading.Lock()
 _corpora: dict[str, object] = {}
@@ -167,14 +170,25 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
         raise SkipJob("the version animated no frame")
     pick = select_frames(int(frames[0]), int(frames[-1]), stride=ctx.stride,
                          extremes=extreme_frames(rows, limit=ctx.option("extremes", MAX_EXTREMES)))
-    pick = [f for f in pick if f in set(frames.tolist())]
-    idx = np.searchsorted(frames, pick)
-    keyframes = npz_bytes(frames=np.asarray(pick, np.int64),
+    animated = set(frames.tolist())
+    pick = [f for f in pick if f in animated]
+    meta = {"render_frames": pick, "n_frames": int(frames.size)}
+    # Tasks 106 and 118 are shown as animations of all versions side by side: the front view
+    # also gets every `animate_stride`-th frame (the same frames for every version).
+    step = int(ctx.option("animate_stride", 0) or 0)
+    if step > 0 and job.task in ANIMATED_TASKS:
+        flip = select_frames(int(frames[0]), int(frames[-1]), stride=step)
+        meta["render_frames_by_view"] = {
+            ANIMATION_VIEW: sorted(set(pick) | {f for f in flip if f in animated})}
+    keep = sorted(set(pick).union(*meta.get("render_frames_by_view", {}).values()))
+    idx = np.searchsorted(frames, keep)
+    keyframes = npz_bytes(frames=np.asarray(keep, np.int64),
                           positions=np.asarray(anim.positions[idx], np.float32))
     log = [f"frames {frames[0]}..{frames[-1]} ({frames.size}); render {len(pick)}: {pick}"]
+    if len(keep) > len(pick):
+        log.append(f"animation frames ({ANIMATION_VIEW} view): {len(keep) - len(pick)} more")
     log += [f"recording warning: {w}" for w in getattr(rec, "warnings", ())]
-    return StageOutput(rows=rows, files={"keyframes": (keyframes, ".npz")},
-                       meta={"render_frames": pick, "n_frames": int(frames.size)}, log=log)
+    return StageOutput(rows=rows, files={"keyframes": (keyframes, ".npz")}, meta=meta, log=log)
 
 
 def _png_bytes(rgb: np.ndarray, metadata: dict | None = None) -> bytes:

@@ -139,9 +139,11 @@ def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterabl
     def after(job: Job, manifest: dict | None) -> None:
         """Plan what a finished job unlocks."""
         if job.stage == "geometry" and manifest is not None:
-            frames = manifest.get("meta", {}).get("render_frames", [])
+            meta = manifest.get("meta", {})
             parent_digest = _outputs_digest([manifest])
             for view in views:
+                # A view may have frames of its own (the front view's animation frames).
+                frames = meta.get("render_frames_by_view", {}).get(view, meta.get("render_frames", []))
                 chunks = chunk_frames(frames, ctx.chunk_size)
                 group = (job.task_key, view)
                 groups[group] = [Job("render", *job.task_key, view, c, i).key

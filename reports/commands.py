@@ -10,6 +10,9 @@ from pathlib import Path
 #: for the default set, hours on 2 cores; first + 8 extremes still took ~20 minutes.
 NIGHTLY_STRIDE = 0
 NIGHTLY_EXTREMES = 3
+#: Tasks 106 and 118 are animated for every version side by side from front renders every 100th
+#: frame (~1,400 extra renders: about a minute).
+NIGHTLY_ANIMATE_STRIDE = 100
 
 
 def register(sub) -> None:
@@ -32,6 +35,9 @@ def register(sub) -> None:
     p.add_argument("--extremes", type=int, default=NIGHTLY_EXTREMES,
                    help="frames the checks point at to render per task file and version "
                         f"(default {NIGHTLY_EXTREMES})")
+    p.add_argument("--animate-stride", type=int, default=NIGHTLY_ANIMATE_STRIDE,
+                   help="front-view frame stride of the task 106/118 animations "
+                        f"(default {NIGHTLY_ANIMATE_STRIDE}; 0: none)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.set_defaults(func=cmd_nightly)
 
@@ -62,7 +68,8 @@ def cmd_nightly(args: argparse.Namespace) -> int:
     from cassi.harness.config import RunConfig  # noqa: PLC0415
     from cassi.reports.nightly import nightly  # noqa: PLC0415
 
-    cfg = RunConfig(workers=args.workers, stride=args.stride, extremes=args.extremes)
+    cfg = RunConfig(workers=args.workers, stride=args.stride, extremes=args.extremes,
+                    animate_stride=args.animate_stride)
     passed, index = nightly(args.out, corpus=args.corpus, config=cfg, progress=not args.quiet)
     print(f"{'PASSED' if passed else 'FAILED'}: {index}")
     return 0 if passed else 1

@@ -24,6 +24,9 @@ from cassi.reports.tables import (RATINGS, component_ratings, markdown_table, ra
 #: How many frames per check and version get thumbnails on a subject page.
 MAX_SHEETS_PER_VERSION = 6
 ANIMATED_TASKS = (106, 118)
+#: Renders of an animation are sparse (every ~100th recording row of 145.6 Hz data), so a slow
+#: flip-book rate keeps each frame readable.
+ANIMATION_FPS = 4
 
 
 def slug(text: str) -> str:
@@ -163,7 +166,7 @@ def _animations(run: Run, out: Path) -> list[dict]:
         if g["version"].nunique() < 2:
             continue
         dest = out / "animations" / f"{slug(subject)}_{int(task):03d}_{int(rep)}_{slug(view)}.mp4"
-        if media.side_by_side_animation(g, dest) is not None:
+        if media.side_by_side_animation(g, dest, fps=ANIMATION_FPS) is not None:
             anims.append({"label": f"{subject} task {task}, {view} view ({', '.join(order_versions(g['version'].unique()))})",
                           "href": dest.relative_to(out).as_posix()})
     return anims
