@@ -11,7 +11,6 @@ import shutil
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-import imageio.v3 as iio
 import numpy as np
 import pandas as pd
 from skimage.filters import gaussian
@@ -19,6 +18,7 @@ from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
 from cassi.data.atomic import atomic_tmp_path, atomic_write_text
 from cassi.data.errors import CassiInputError
+from cassi.reports.media import read_rgb8
 from cassi.reports.runio import Run, load_run
 from cassi.reports.tables import verdicts
 
@@ -59,13 +59,6 @@ def golden_key(row) -> Path:
                 f"{row['subject']}_{int(row['task']):03d}_{int(row['rep'])}_{int(row['frame']):05d}.png")
 
 
-def _read_rgb(path: Path) -> np.ndarray:
-    img = np.asarray(iio.imread(path))
-    if img.ndim == 2:
-        img = np.stack([img] * 3, axis=-1)
-    return img[..., :3]
-
-
 def image_metrics(rendered: np.ndarray, reference: np.ndarray) -> tuple[float, float]:
     """SSIM of the images blurred by NOISE_SIGMA px, and PSNR (dB) of the raw images; both
     8-bit RGB of the same shape."""
@@ -96,7 +89,7 @@ def image_gates(run: Run, reference_dir: Path, *, ssim_min: float = SSIM_MIN,
                                   f"no golden image {ref}"))
             continue
         try:
-            ssim, psnr = image_metrics(_read_rgb(Path(row["path"])), _read_rgb(ref))
+            ssim, psnr = image_metrics(read_rgb8(Path(row["path"])), read_rgb8(ref))
         except (OSError, ValueError) as err:
             out.append(GateResult("image", row["subject"], row["version"], item, "fail", str(err)))
             continue

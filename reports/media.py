@@ -22,7 +22,8 @@ def copy_image(src: str | os.PathLike, dest: Path) -> Path:
     return dest
 
 
-def _rgb(path) -> np.ndarray:
+def read_rgb8(path) -> np.ndarray:
+    """An image file as 8-bit RGB (grey expanded, alpha dropped)."""
     img = np.asarray(iio.imread(path))
     if img.ndim == 2:
         img = np.stack([img] * 3, axis=-1)
@@ -47,7 +48,7 @@ def contact_sheet(paths: list[str], dest: Path, *, columns: int = 4) -> Path:
     """One PNG with the given renders in a grid (e.g. the four views at a check's frame)."""
     dest.parent.mkdir(parents=True, exist_ok=True)
     tmp = atomic_tmp_path(dest)
-    iio.imwrite(tmp, tile([_rgb(p) for p in paths], columns=columns), extension=".png")
+    iio.imwrite(tmp, tile([read_rgb8(p) for p in paths], columns=columns), extension=".png")
     os.replace(tmp, dest)
     return dest
 
@@ -65,7 +66,7 @@ def side_by_side_animation(renders: pd.DataFrame, dest: Path, *, fps: int = 12) 
         return None
     import imageio_ffmpeg  # noqa: PLC0415 - only needed here
 
-    first = tile([_rgb(p) for p in by_frame.get_group(frames[0]).set_index("version")
+    first = tile([read_rgb8(p) for p in by_frame.get_group(frames[0]).set_index("version")
                   .loc[versions, "path"]], columns=len(versions))
     h, w = (first.shape[0] // 2) * 2, (first.shape[1] // 2) * 2  # yuv420p wants even sizes
     dest.parent.mkdir(parents=True, exist_ok=True)
@@ -76,7 +77,7 @@ def side_by_side_animation(renders: pd.DataFrame, dest: Path, *, fps: int = 12) 
     try:
         for f in frames:
             g = by_frame.get_group(f).set_index("version")
-            img = tile([_rgb(p) for p in g.loc[versions, "path"]], columns=len(versions))
+            img = tile([read_rgb8(p) for p in g.loc[versions, "path"]], columns=len(versions))
             writer.send(np.ascontiguousarray(img[:h, :w]))
     finally:
         writer.close()

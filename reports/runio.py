@@ -14,9 +14,7 @@ import pandas as pd
 from cassi.data.errors import CassiInputError
 from cassi.harness.results import ratings as derive_ratings
 from cassi.harness.results import read_results
-
-#: Columns of a run's render index (one row per image a run rendered).
-RENDER_COLUMNS = ("subject", "task", "rep", "version", "view", "frame", "path")
+from cassi.harness.runner import RENDER_COLUMNS  # the render index the farm writes
 
 
 @dataclass
