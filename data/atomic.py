@@ -1,6 +1,8 @@
 """Atomic file writes: write to a temporary file in the same directory, fsync, rename.
 
 A reader never sees a half-written file, and a crash leaves the old file (or none) intact.
+Files get the mode an ordinary ``open`` would give them (0666 less the umask), not the 0600 of
+a temporary file, and an OS error names the file it was about.
 """
 from __future__ import annotations
 
@@ -9,6 +11,27 @@ import os
 import tempfile
 from pathlib import Path
 from typing import IO, Iterator
+
+
+def current_umask() -> int:
+    """The process's umask, read without changing it (Linux), else by setting it back."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _with_path(err: OSError, path: Path) -> OSError:
+    """``err`` naming ``path`` when it names no file (ENOSPC from write() names none)."""
+    if not err.filename:
+        err.filename = str(path)
+    return err
 
 
 @contextlib.contextmanager
@@ -21,16 +44,27 @@ def atomic_open(path: str | os.PathLike, mode: str = "w", **kwargs) -> Iterator[
     if mode not in ("w", "wb"):
         raise ValueError(f"atomic_open mode must be 'w' or 'wb', not {mode!r}")
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise _with_path(err, path) from None
     if mode == "w":
         kwargs.setdefault("encoding", "utf-8")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as err:
+        raise _with_path(err, path) from None
+    try:
+        os.fchmod(fd, 0o666 & ~current_umask())
         with os.fdopen(fd, mode, **kwargs) as fh:
             yield fh
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, path)
+    except OSError as err:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise _with_path(err, path) from None
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
@@ -51,7 +85,12 @@ def atomic_tmp_path(path: str | os.PathLike) -> Path:
     """A fresh temporary path beside ``path`` for writers that need a file name
     (OpenImageIO, pyarrow); the caller renames it with ``os.replace`` when done."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}",
+                                   dir=path.parent)
+        os.fchmod(fd, 0o666 & ~current_umask())
+    except OSError as err:
+        raise _with_path(err, path) from None
     os.close(fd)
     return Path(tmp)

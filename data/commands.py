@@ -145,6 +145,10 @@ def cmd_check(args) -> int:
         print(json.dumps(records, indent=1))
     else:
         _print_table(records, synthetic=synthetic)
+        # A file's own warnings (implausible coordinates, odd sample intervals) are in the
+        # JSON records; the text output states them too.
+        for w in dict.fromkeys(w for r in records for w in r.get("warnings") or []):
+            print(f"warning: {w}", file=sys.stderr)
     if getattr(args, "strict", False):
         errors = errors + [p for r in records if r.get("task") is not None and not r.get("error")
                            and not r.get("usable") for p in r.get("problems", [])]

@@ -201,6 +201,14 @@ class SubjectData:
             raise CassiInputError(f"does not list subject {self.name}", path=own)
         return self.corpus.head_measures_table.get(self.name.upper())
 
+    def subject_files(self) -> list[Path]:
+        """The subject-level files that exist (PAL.DAT, PHA.DAT, Mis.dat, and the head-measures
+        file that applies: the subject's own, else the corpus's)."""
+        files = [self._file(name, required=False) for name in SUBJECT_FILES.values()]
+        own = self._file(HEAD_MEASURES_FILE, required=False)
+        files.append(own if own is not None else self.corpus.head_measures_path())
+        return [f for f in files if f is not None]
+
     # ------------------------------------------------------------------ tasks
     def load(self, task: int, rep: int = 1, *, require_valid: bool = True) -> TaskRecording:
         """Read one task file (see :func:`cassi.data.xrmb.read_txy`)."""
@@ -323,12 +331,17 @@ class Corpus:
     @cached_property
     def head_measures_table(self) -> dict[str, HeadMeasures]:
         """The corpus-level head-measures file ({} when absent)."""
+        path = self.head_measures_path()
+        return {} if path is None else read_head_measures(path)
+
+    def head_measures_path(self) -> Path | None:
+        """The corpus-level head-measures file, if there is one."""
         for e in os.scandir(self.root):
             if e.name.lower() == HEAD_MEASURES_FILE.lower():
                 path = self.root / e.name
                 ensure_inside(self.root, path)
-                return read_head_measures(path)
-        return {}
+                return path
+        return None
 
     @property
     def subjects(self) -> list[str]:

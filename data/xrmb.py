@@ -56,9 +56,9 @@ NOMINAL_PERIOD_US = 6866
 N_COLUMNS = 1 + 2 * len(PELLETS)
 COLUMN_NAMES = ("time",) + tuple(f"{p}{c}" for p in PELLETS for c in "xy")
 
-# At most 12 digits before and after the point: int64 and exact float64 conversion, and a
-# coordinate of 10^12 um is already absurd.
-_NUM = r"[+-]?(?:[0-9]{1,12}(?:\.[0-9]{0,12})?|\.[0-9]{1,12})"
+# Every column is a whole number (time in us, coordinates in um; the real files have no
+# fraction). At most 12 digits: exact in int64, and a coordinate of 10^12 um is already absurd.
+_NUM = r"[+-]?[0-9]{1,12}"
 _SEP = r"[ \t\f\v]+"
 # One well-formed row; rows that do not match are diagnosed field by field (the slow path).
 _ROW_RE = re.compile(rf"[ \t\f\v]*[0-9]{{1,15}}(?:{_SEP}{_NUM}){{16}}[ \t\f\v\r]*", re.ASCII)
@@ -164,6 +164,9 @@ def _diagnose_row(toks: list[str], *, path, line) -> None:
     for k, tok in enumerate(toks[1:], start=2):
         what = f"column {k} ({COLUMN_NAMES[k - 1]})"
         parse_num(tok, what=what, path=path, line=line)
+        if re.fullmatch(r"[+-]?(?:[0-9]*\.[0-9]*|[0-9.]+[eE][+-]?[0-9]+)", tok, re.ASCII):
+            raise CassiInputError(f"{what}: {tok[:40]!r} is not a whole number of micrometres "
+                                  "(XRMB coordinates are integers)", path=path, line=line)
         if not re.fullmatch(_NUM, tok, re.ASCII):
             raise CassiInputError(f"{what}: {tok[:40]!r} has too many digits", path=path,
                                   line=line)
@@ -241,10 +244,7 @@ def parse_txy(data: bytes | str, *, path: str | os.PathLike | None = None,
     if inner:
         warn(f"{len(inner)} blank line(s) between rows (first at line {inner[0]})", inner[0])
 
-    joined = " ".join(rows)
-    # Integer text (the real files) converts about twice as fast as float text.
-    dtype = np.float64 if "." in joined else np.int64
-    values = np.array(joined.split(), dtype=dtype).reshape(len(rows), N_COLUMNS)
+    values = np.array(" ".join(rows).split(), dtype=np.int64).reshape(len(rows), N_COLUMNS)
     time_us = values[:, 0].astype(np.int64)
     dt = np.diff(time_us)
     bad_dt = np.flatnonzero(dt <= 0)
