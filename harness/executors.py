@@ -263,7 +263,7 @@ class RayExecutor:
         self.close()
 
     def start(self) -> None:
-        import ray  # noqa: PLC0415 - heavy; only when this executor is chosen
+        ray = require_ray()
 
         if not ray.is_initialized():
             if self.address:
@@ -321,6 +321,16 @@ class RayExecutor:
         if self._owns_cluster and ray.is_initialized():
             ray.shutdown()
             self._owns_cluster = False
+
+
+def require_ray():
+    """The ``ray`` module, or a clear error saying how to install it (an optional extra)."""
+    try:
+        import ray  # noqa: PLC0415 - heavy; only when this executor is chosen
+    except ImportError:
+        raise CassiInputError("--executor ray needs Ray, which is an optional extra: "
+                              "pip install 'cassi-farm[ray]'") from None
+    return ray
 
 
 def thread_env(threads: int) -> dict[str, str]:

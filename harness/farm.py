@@ -6,14 +6,18 @@ locked) before the first job starts, so bad input never leaves a half-done batch
 from __future__ import annotations
 
 import json
+import os
+import sys
 import time
 
 from cassi.data.atomic import atomic_write_text
 
 from . import config as C
 from .evalset import default_tasks, explicit_tasks
-from .executors import make_executor
+from .executors import make_executor, require_ray
+from .inputs import check_inputs
 from .jobs import GEOMETRY_VIEW, StageContext
+from .provenance import code_provenance
 from .runner import Pipeline, RunResult, run_batch
 from .store import OutputStore
 
@@ -24,7 +28,7 @@ def plan(cfg: C.RunConfig):
     Returns
     -------
     (corpus, tasks, versions, views)
-        ``tasks`` a list of :class:`~cassi.harness.runner.TaskSpec` (unusable ones included,
+        ``tasks`` a list of :class:`~cassi.harness.plan.TaskSpec` (unusable ones included,
         with reasons), ``views`` the render views (empty for a geometry-only run).
 
     Raises
@@ -47,23 +51,65 @@ def plan(cfg: C.RunConfig):
     return corpus, tasks, versions, views
 
 
-def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = None) -> RunResult:
-    """Run ``cfg`` (see :mod:`cassi.harness.config`); writes everything under ``cfg.out``."""
-    from .pipeline import cassi_pipeline, worker_env  # noqa: PLC0415
+def worker_count(requested: int, jobs: int, *, cpus: int | None = None) -> tuple[int, str]:
+    """Workers to start: at most one per job (a worker with nothing to do only costs a start),
+    with a warning when more are asked for than there are cores."""
+    cpus = cpus or os.cpu_count() or 1
+    n = max(1, min(int(requested), int(jobs)))
+    warning = ""
+    if n > cpus:
+        warning = (f"{n} workers on {cpus} CPU cores: workers will wait for each other "
+                   f"(one worker per core is the fastest)")
+    return n, warning
 
+
+def _warn(lines: list[str], *, limit: int = 10) -> None:
+    for line in lines[:limit]:
+        print(f"warning: {line}", file=sys.stderr)
+    if len(lines) > limit:
+        print(f"warning: ... and {len(lines) - limit} more (see `cassi corpus check`)",
+              file=sys.stderr)
+
+
+def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = None) -> RunResult:
+    """Run ``cfg`` (see :mod:`cassi.harness.config`); writes everything under ``cfg.out``.
+
+    Everything is checked before the first job: names, the render variant, and every corpus
+    file the run reads (:func:`cassi.harness.inputs.check_inputs`).
+    """
+    from .pipeline import cassi_pipeline, get_profile, worker_env  # noqa: PLC0415
+
+    if cfg.executor == "ray":
+        require_ray()
     corpus, tasks, versions, views = plan(cfg)
+    variant = cfg.variant
+    if views:
+        from cassi.renderer.variant import choose_variant  # noqa: PLC0415
+
+        variant = choose_variant(cfg.variant)  # an unknown or unusable variant fails here
+    checked = check_inputs(corpus, tasks, get_profile=get_profile)
+    _warn(checked.warnings)
+    tasks = checked.tasks
     synthetic = bool(getattr(corpus, "is_synthetic", False))
     pipeline = pipeline or cassi_pipeline(render=bool(views))
+    provenance = code_provenance(versions)
+    workers, warning = worker_count(cfg.workers, max(1, sum(t.usable for t in tasks) * len(versions)))
+    if warning:
+        _warn([warning])
     store = OutputStore(cfg.out)
     store.prepare()
     ctx = StageContext(out_dir=store.root.resolve(), corpus=corpus.root.resolve(),
                        stride=cfg.stride, chunk_size=cfg.chunk, preset=cfg.preset,
-                       variant=cfg.variant, synthetic=synthetic,
+                       variant=variant, synthetic=synthetic,
                        options=(("extremes", cfg.extremes),
-                                ("animate_stride", cfg.animate_stride)))
+                                ("animate_stride", cfg.animate_stride)),
+                       provenance=json.dumps(provenance, sort_keys=True),
+                       ship=cfg.executor == "ray")
     meta = C.resolved(cfg, corpus_resolved=str(ctx.corpus), synthetic=synthetic,
                       versions_resolved=versions, views_resolved=views,
+                      variant_resolved=variant, workers_resolved=workers,
                       tasks_resolved=[[t.subject, t.task, t.rep, t.usable, t.reason] for t in tasks],
+                      provenance=provenance,
                       started=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
     if synthetic:
         meta["note"] = ("results on the synthetic corpus describe the software, not real "
@@ -71,7 +117,7 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
     with store.lock():
         store.remove_partials()
         atomic_write_text(store.root / "run.json", json.dumps(meta, indent=1, default=str))
-        executor = make_executor(cfg.executor, workers=cfg.workers, address=cfg.address,
+        executor = make_executor(cfg.executor, workers=workers, address=cfg.address,
                                  retries=cfg.retries, initializer=worker_env,
                                  initargs=(cfg.threads,), threads=cfg.threads)
         with executor:

@@ -36,7 +36,7 @@ from typing import Callable, Mapping
 import pandas as pd
 
 from . import results as R
-from .store import BlobRef, OutputStore
+from .store import OutputStore
 
 GEOMETRY_VIEW = "geometry"
 
@@ -75,6 +75,9 @@ class Job:
         job's render chunks).
     parent_digest : str
         Content hash of the parents' outputs, so a changed parent invalidates this job.
+    inputs : str
+        Digest of the corpus files the job reads (task file, subject files, profile), so a
+        changed input invalidates exactly the jobs that read it.
     """
 
     stage: str
@@ -87,6 +90,7 @@ class Job:
     chunk: int = 0
     parents: tuple[str, ...] = ()
     parent_digest: str = ""
+    inputs: str = ""
 
     @property
     def key(self) -> str:
@@ -104,14 +108,21 @@ class Job:
         return (self.subject, self.task, self.rep, self.version)
 
     def digest(self, salt: str = "") -> str:
-        """SHA-256 of the job and ``salt`` (the run settings its outputs depend on)."""
+        """SHA-256 of the job and ``salt`` (the run settings and code its outputs depend on)."""
         doc = json.dumps({"job": asdict(self), "salt": salt}, sort_keys=True, default=str)
         return hashlib.sha256(doc.encode()).hexdigest()
 
 
 @dataclass(frozen=True)
 class StageContext:
-    """Run settings every stage sees (picklable; sent to worker processes)."""
+    """Run settings every stage sees (picklable; sent to worker processes).
+
+    ``provenance`` names the code the outputs come from (package version, a digest of the
+    installed cassi code and of the rubric registry, :mod:`.provenance`): part of every job's
+    digest, so new code or a changed threshold recomputes. ``ship`` makes workers take their
+    inputs from the job and hand their outputs back instead of using ``out_dir`` (a cluster
+    whose nodes do not share the driver's filesystem).
+    """
 
     out_dir: Path
     corpus: Path | None = None
@@ -121,13 +132,16 @@ class StageContext:
     variant: str | None = None
     synthetic: bool = False
     options: tuple[tuple[str, object], ...] = ()
+    provenance: str = ""
+    ship: bool = False
 
     def salt(self) -> str:
         """The settings that change outputs (not out_dir, which only says where they go)."""
         return json.dumps({"corpus": str(self.corpus), "stride": self.stride,
                            "chunk": self.chunk_size, "preset": self.preset,
                            "variant": self.variant, "synthetic": self.synthetic,
-                           "options": [list(o) for o in self.options]}, sort_keys=True)
+                           "options": [list(o) for o in self.options],
+                           "provenance": self.provenance}, sort_keys=True)
 
     def option(self, name: str, default=None):
         return dict(self.options).get(name, default)
@@ -156,7 +170,11 @@ StageFn = Callable[[Job, StageContext, Mapping[str, bytes]], StageOutput]
 
 @dataclass
 class Outcome:
-    """What a worker reports back for one job (small: the outputs are in the store)."""
+    """What a worker reports back for one job.
+
+    Small when the worker wrote its outputs into the shared store; with ``ctx.ship`` the
+    outputs travel back in ``blobs`` (name -> (bytes, suffix)) for the driver to store.
+    """
 
     key: str
     state: State
@@ -164,9 +182,11 @@ class Outcome:
     reason: str = ""
     meta: dict = field(default_factory=dict)
     log: list[str] = field(default_factory=list)
+    blobs: dict[str, tuple[bytes, str]] | None = None
 
 
 def rows_to_bytes(rows: pd.DataFrame) -> bytes:
+    """Parquet bytes of rows already normalised by :func:`results.normalize`."""
     return R.to_parquet_bytes(rows)
 
 
@@ -179,48 +199,72 @@ def npz_bytes(**arrays) -> bytes:
     return buf.getvalue()
 
 
-def execute_job(stage: StageFn, job: Job, ctx: StageContext, digest: str) -> Outcome:
-    """Run ``stage`` for ``job`` in this (worker) process and store its outputs.
+def parent_inputs(store: OutputStore, job: Job) -> dict[str, bytes] | None:
+    """The outputs of ``job``'s parents by name, or None when a parent has none.
 
-    Idempotent: running it twice for the same job writes the same blobs and manifest.
-    Exceptions other than :class:`SkipJob` propagate (the executor reports them).
+    Each parent's ``rows`` are left out when there are several parents: they are already in
+    the results, and their names would clash.
     """
-    t0, c0 = time.perf_counter(), time.process_time()
-    store = OutputStore(ctx.out_dir)
     inputs: dict[str, bytes] = {}
     for key in job.parents:
         parent = store.read_manifest(key)
         if parent is None:
-            return Outcome(job.key, State.SKIPPED, reason=f"no outputs of {key}")
+            return None
         for name, ref in parent["outputs"].items():
             if name == "rows" and len(job.parents) > 1:
-                continue  # each parent's rows are already in the results; names must not clash
+                continue
             inputs[name] = store.get(ref)
+    return inputs
+
+
+def store_outputs(store: OutputStore, key: str, digest: str,
+                  blobs: Mapping[str, tuple[bytes, str]], meta: Mapping) -> None:
+    """Store a job's blobs, then its manifest (last: a manifest never names a missing blob)."""
+    refs = {name: store.put(data, suffix) for name, (data, suffix) in blobs.items()}
+    store.write_manifest(key, digest, refs, meta)
+
+
+def execute_job(stage: StageFn, job: Job, ctx: StageContext, digest: str,
+                shipped: Mapping[str, bytes] | None = None) -> Outcome:
+    """Run ``stage`` for ``job`` in this (worker) process.
+
+    With the shared store (default) the parents' outputs are read from ``ctx.out_dir`` and the
+    job's outputs written there; with ``ctx.ship`` they come as ``shipped`` and go back in the
+    outcome. Idempotent either way: the same job writes the same blobs and manifest.
+    Exceptions other than :class:`SkipJob` propagate (the executor reports them).
+    """
+    t0, c0 = time.perf_counter(), time.process_time()
+    store = None if ctx.ship else OutputStore(ctx.out_dir)
+    inputs = dict(shipped or {}) if ctx.ship else parent_inputs(store, job)
+    if inputs is None:
+        return Outcome(job.key, State.SKIPPED, reason="a parent job has no outputs")
     try:
         out = stage(job, ctx, inputs)
     except SkipJob as why:
         return Outcome(job.key, State.SKIPPED, time.perf_counter() - t0, reason=str(why))
-    refs: dict[str, BlobRef] = {}
+    blobs: dict[str, tuple[bytes, str]] = {}
     if out.rows is not None:
         rows = R.normalize(out.rows, subject=job.subject, task=job.task, rep=job.rep,
                            version=job.version, view=job.view, synthetic=ctx.synthetic)
-        refs["rows"] = store.put(rows_to_bytes(rows), ".parquet")
-    for name, (data, suffix) in out.files.items():
-        refs[name] = store.put(data, suffix)
-    store.write_manifest(job.key, digest, refs, out.meta)
+        blobs["rows"] = (rows_to_bytes(rows), ".parquet")
+    blobs.update(out.files)
+    if store is not None:
+        store_outputs(store, job.key, digest, blobs, out.meta)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     # CPU time beside wall time: a job whose CPU time is far below its wall time waited for a
     # core (an oversubscribed machine), which is what to look at when workers do not scale.
     log = [f"wall {wall:.3f} s, cpu {cpu:.3f} s (pid {os.getpid()})", *out.log]
-    return Outcome(job.key, State.DONE, wall, meta=out.meta, log=log)
+    return Outcome(job.key, State.DONE, wall, meta=out.meta, log=log,
+                   blobs=blobs if store is None else None)
 
 
-def call_job(stage: StageFn, job: Job, ctx: StageContext, digest: str) -> Outcome:
+def call_job(stage: StageFn, job: Job, ctx: StageContext, digest: str,
+             shipped: Mapping[str, bytes] | None = None) -> Outcome:
     """:func:`execute_job`, with a Python exception turned into a FAILED outcome (with its
     traceback) instead of propagating; a process crash still ends the worker."""
     t0 = time.perf_counter()
     try:
-        return execute_job(stage, job, ctx, digest)
+        return execute_job(stage, job, ctx, digest, shipped)
     except Exception as err:  # noqa: BLE001 - reported per job; the batch goes on
         return Outcome(job.key, State.FAILED, time.perf_counter() - t0,
                        reason=f"{type(err).__name__}: {err}",

@@ -87,10 +87,7 @@ def get_neutral():
 
 def get_renderer(corpus, subject: str, face, view: str, preset: str, variant: str | None):
     """The process's renderer for (subject, view, preset): its Mitsuba scene is loaded once."""
-    try:
-        from cassi.data.face import render_topology  # noqa: PLC0415 - where the contract says
-    except ImportError:
-        from cassi.data.topology import render_topology  # noqa: PLC0415 - where it lives
+    from cassi.data.topology import render_topology  # noqa: PLC0415
     from cassi.renderer.render import FaceRenderer  # noqa: PLC0415
 
     key = (str(corpus.root), subject, view, preset, variant)
@@ -133,13 +130,16 @@ def extreme_frames(rows: pd.DataFrame, *, limit: int = MAX_EXTREMES) -> list[int
     return sorted(picked)
 
 
-def _usable_or_skip(subject_data, job: Job) -> None:
+def load_usable(subject_data, job: Job):
+    """The job's recording, parsed once; SkipJob with the reason when it cannot be animated."""
     try:
-        u = subject_data.usability(job.task, job.rep)
+        rec = subject_data.load(job.task, job.rep, require_valid=False)
+        u = subject_data.usability(job.task, job.rep, recording=rec)
     except CassiInputError as err:
         raise SkipJob(str(err)) from err
     if not u.usable:
         raise SkipJob("; ".join(u.reasons) or "task file not usable")
+    return rec
 
 
 def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> StageOutput:
@@ -153,9 +153,7 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
     from cassi.versions.registry import get_version  # noqa: PLC0415
 
     corpus = get_corpus(ctx.corpus)
-    subject = corpus.subject(job.subject)
-    _usable_or_skip(subject, job)
-    rec = subject.load(job.task, job.rep)
+    rec = load_usable(corpus.subject(job.subject), job)
     try:
         profile = get_profile(corpus, job.subject)
     except CassiInputError as err:
@@ -259,18 +257,12 @@ def image_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> Sta
                        log=[f"image checks on {len(frames)} frame(s): {len(rows)} row(s)"])
 
 
-def _rubric_attr(name: str):
-    try:
-        from cassi.harness import rubric  # noqa: PLC0415
-    except ImportError:
-        return None
-    return getattr(rubric, name, None)
-
-
 def cassi_pipeline(*, render: bool = True) -> Pipeline:
     """The real pipeline; ``render=False`` for geometry-only runs."""
+    from cassi.harness.rubric import rate  # noqa: PLC0415
+
     return Pipeline(geometry=geometry_stage, render=render_stage if render else None,
-                    image=image_stage if render else None, rate=_rubric_attr("rate"))
+                    image=image_stage if render else None, rate=rate)
 
 
 def catalog(corpus):

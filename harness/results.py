@@ -14,9 +14,8 @@ from typing import Callable, Iterable
 
 import pandas as pd
 
-from cassi.data.atomic import atomic_tmp_path, atomic_write_bytes
 
-#: Columns of the results table, in order (CONTRACTS.tmp.md).
+#: Columns of the results table, in order.
 COLUMNS = ("subject", "task", "rep", "version", "view", "frame", "check", "table", "component",
            "value", "unit", "threshold", "negatives", "detail", "synthetic")
 
@@ -83,7 +82,7 @@ def combine(frames: Iterable[pd.DataFrame]) -> pd.DataFrame:
     Sorting makes the table independent of the order in which jobs finished, so an interrupted
     and resumed batch yields the same table as an uninterrupted one.
     """
-    frames = [normalize(f) for f in frames if f is not None and len(f)]
+    frames = [f for f in frames if f is not None and len(f)]  # normalised where they were made
     if not frames:
         return empty()
     df = pd.concat(frames, ignore_index=True)
@@ -92,47 +91,20 @@ def combine(frames: Iterable[pd.DataFrame]) -> pd.DataFrame:
 
 
 def to_parquet_bytes(df: pd.DataFrame) -> bytes:
-    """Serialize a results table to Parquet bytes (deterministic for equal tables)."""
+    """Serialize a normalised results table to Parquet bytes (deterministic for equal tables)."""
     buf = io.BytesIO()
-    normalize(df).to_parquet(buf, index=False, engine="pyarrow")
+    df.to_parquet(buf, index=False, engine="pyarrow")
     return buf.getvalue()
 
 
 def from_parquet_bytes(data: bytes) -> pd.DataFrame:
-    return normalize(pd.read_parquet(io.BytesIO(data), engine="pyarrow"))
-
-
-def write_table(df: pd.DataFrame, path: str | os.PathLike) -> tuple[Path, Path]:
-    """Write ``df`` atomically as ``path`` (Parquet) and a CSV copy beside it.
-
-    Returns
-    -------
-    (parquet_path, csv_path)
-    """
-    path = Path(path)
-    if path.suffix != ".parquet":
-        path = path.with_suffix(".parquet")
-    tmp = atomic_tmp_path(path)
-    try:
-        df.to_parquet(tmp, index=False, engine="pyarrow")
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    csv_path = path.with_suffix(".csv")
-    atomic_write_bytes(csv_path, df.to_csv(index=False, lineterminator="\n").encode("utf-8"))
-    return path, csv_path
+    """A table written by :func:`to_parquet_bytes` (Parquet keeps the columns and dtypes)."""
+    return pd.read_parquet(io.BytesIO(data), engine="pyarrow")
 
 
 def read_results(path: str | os.PathLike) -> pd.DataFrame:
-    """Read a results table written by :func:`write_table` (Parquet)."""
+    """Read a results table (Parquet) of a run's table set (:mod:`.tableset`)."""
     return normalize(pd.read_parquet(path, engine="pyarrow"))
-
-
-def default_rate(negatives: int) -> str:
-    """Thesis Table 5.2 (used only when the rubric package is absent)."""
-    scale = ("EXCELLENT", "VERY GOOD", "GOOD", "FAIR", "POOR", "VERY POOR")
-    return scale[negatives] if 0 <= negatives < len(scale) else "UNACCEPTABLE"
 
 
 def ratings(results: pd.DataFrame, rate: Callable[[int], str] | None = None) -> pd.DataFrame:
@@ -146,13 +118,10 @@ def ratings(results: pd.DataFrame, rate: Callable[[int], str] | None = None) -> 
     results : DataFrame
         A results table.
     rate : callable, optional
-        Negatives -> rating words; default :func:`cassi.harness.rubric.rate` when present.
+        Negatives -> rating words; default :func:`cassi.harness.rubric.rate`.
     """
     if rate is None:
-        try:
-            from cassi.harness.rubric import rate  # noqa: PLC0415 - optional sibling module
-        except ImportError:
-            rate = default_rate
+        from cassi.harness.rubric import rate  # noqa: PLC0415 - the one rating scale
     df = normalize(results)
     df = df[(df["frame"] == -1) & df["table"].notna()]
     if df.empty:

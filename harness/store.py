@@ -71,6 +71,8 @@ class OutputStore:
 
     def __init__(self, root: str | os.PathLike):
         self.root = Path(root)
+        # Blobs this object has written or hashed: each is hashed at most once per run.
+        self._good: set[str] = set()
 
     # -- set-up -------------------------------------------------------------------------------
     def prepare(self) -> None:
@@ -132,10 +134,22 @@ class OutputStore:
     def put(self, data: bytes, suffix: str) -> BlobRef:
         """Store ``data``; an existing blob with the right hash is left alone."""
         ref = BlobRef(sha256_bytes(data), suffix)
-        path = self.root / ref.relpath
-        if not (path.exists() and path.stat().st_size == len(data) and sha256_file(path) == ref.sha256):
-            atomic_write_bytes(path, data)
+        if not self._blob_ok(ref):
+            atomic_write_bytes(self.root / ref.relpath, data)
+            self._good.add(ref.relpath)
         return ref
+
+    def _blob_ok(self, ref: BlobRef) -> bool:
+        """Whether the blob exists and hashes to its name (hashed once, then remembered)."""
+        if ref.relpath in self._good:
+            return (self.root / ref.relpath).is_file()
+        try:
+            ok = sha256_file(self.root / ref.relpath) == ref.sha256
+        except OSError:
+            return False
+        if ok:
+            self._good.add(ref.relpath)
+        return ok
 
     def get(self, ref: BlobRef) -> bytes:
         data = (self.root / ref.relpath).read_bytes()
@@ -176,11 +190,6 @@ class OutputStore:
         doc = self.read_manifest(key)
         if doc is None or doc.get("digest") != digest:
             return None
-        for ref in doc["outputs"].values():
-            path = self.root / ref.relpath
-            try:
-                if sha256_file(path) != ref.sha256:
-                    return None
-            except OSError:
-                return None
+        if not all(self._blob_ok(ref) for ref in doc["outputs"].values()):
+            return None
         return doc

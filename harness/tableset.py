@@ -1,0 +1,116 @@
+"""A run's tables, written and read as one set.
+
+``results``, ``ratings`` and ``renders`` (Parquet + CSV each) and ``summary.json`` belong
+together: ratings are derived from the results, the render index from the same jobs. They are
+written aside, renamed into place, and only then is ``tables.json`` written, naming the SHA-256
+of every file of the set. A reader checks every file against it, so a set interrupted between
+two renames (a crash, a full disk) is refused instead of read as a mix of old and new.
+"""
+from __future__ import annotations
+
+import io
+import json
+import os
+from pathlib import Path
+from typing import Mapping
+
+import pandas as pd
+
+from cassi.data.atomic import atomic_tmp_path, atomic_write_text
+from cassi.data.errors import CassiInputError
+
+from .store import sha256_bytes, sha256_file
+
+SET_FILE = "tables.json"
+#: The tables of a run, each written as ``NAME.parquet`` and ``NAME.csv``.
+TABLE_NAMES = ("results", "ratings", "renders")
+SUMMARY_FILE = "summary.json"
+
+
+class TableSetError(CassiInputError):
+    """The run's tables are missing or do not belong to one set."""
+
+
+def _encode(tables: Mapping[str, pd.DataFrame], summary: Mapping) -> dict[str, bytes]:
+    files: dict[str, bytes] = {}
+    for name in TABLE_NAMES:
+        df = tables[name]
+        buf = io.BytesIO()
+        df.to_parquet(buf, index=False, engine="pyarrow")
+        files[f"{name}.parquet"] = buf.getvalue()
+        files[f"{name}.csv"] = df.to_csv(index=False, lineterminator="\n").encode("utf-8")
+    files[SUMMARY_FILE] = (json.dumps(dict(summary), indent=1, sort_keys=True, default=str)
+                           + "\n").encode("utf-8")
+    return files
+
+
+def write_table_set(root: str | os.PathLike, tables: Mapping[str, pd.DataFrame],
+                    summary: Mapping) -> Path:
+    """Write ``tables`` (every name of :data:`TABLE_NAMES`) and ``summary`` into ``root`` as
+    one set; returns the path of ``tables.json``.
+
+    Raises
+    ------
+    OSError
+        With the path that could not be written; the previous set then fails verification
+        (or is intact, when nothing was renamed yet).
+    """
+    root = Path(root)
+    files = _encode(tables, summary)
+    aside: dict[str, Path] = {}
+    try:
+        for name, data in files.items():
+            tmp = atomic_tmp_path(root / name)
+            aside[name] = tmp
+            _write_synced(tmp, data)
+        for name, tmp in aside.items():
+            os.replace(tmp, root / name)
+    except OSError as err:
+        if not err.filename:
+            err.filename = str(root)
+        raise
+    finally:
+        for tmp in aside.values():
+            if tmp.exists():
+                tmp.unlink()
+    doc = {"files": {name: sha256_bytes(data) for name, data in sorted(files.items())}}
+    atomic_write_text(root / SET_FILE, json.dumps(doc, indent=1, sort_keys=True) + "\n")
+    return root / SET_FILE
+
+
+def _write_synced(path: Path, data: bytes) -> None:
+    with open(path, "wb") as fh:
+        fh.write(data)
+        fh.flush()
+        os.fsync(fh.fileno())
+
+
+def verify_table_set(root: str | os.PathLike) -> dict[str, str]:
+    """Check that ``root``'s tables are one complete set; returns {file: sha256}.
+
+    Raises
+    ------
+    TableSetError
+        No ``tables.json`` (the run never finished writing its tables), or a file missing or
+        different from the set it names (a half-written set).
+    """
+    root = Path(root)
+    path = root / SET_FILE
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+        files = dict(doc["files"])
+    except FileNotFoundError:
+        raise TableSetError(f"no {SET_FILE}: the run's tables were never completed (rerun the "
+                            "same `cassi run` command to finish them)", path=root) from None
+    except (OSError, ValueError, KeyError, TypeError) as err:
+        raise TableSetError(f"unreadable table set: {err}", path=path) from err
+    for name, sha in files.items():
+        try:
+            ok = sha256_file(root / name) == sha
+        except OSError:
+            ok = False
+        if not ok:
+            raise TableSetError(f"{name} is missing or not the one {SET_FILE} names: the "
+                                "tables are a half-written set (rerun the same `cassi run` "
+                                "command to rewrite them)", path=root / name)
+    return files
