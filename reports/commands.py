@@ -39,6 +39,9 @@ def register(sub) -> None:
     p.add_argument("--animate-stride", type=int, default=NIGHTLY_ANIMATE_STRIDE,
                    help="front-view frame stride of the task 106/118 animations "
                         f"(default {NIGHTLY_ANIMATE_STRIDE}; 0: none)")
+    p.add_argument("--common-only", action="store_true", dest="common_only",
+                   help="when the previous night covered other task files, versions or views, "
+                        "gate only what both nights share (default: such a night fails its gate)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.set_defaults(func=cmd_nightly)
 
@@ -47,6 +50,9 @@ def register(sub) -> None:
                        "gate.json and gate.md into RUN; exit 0 when all gates hold, 1 otherwise.")
     p.add_argument("run", type=Path)
     p.add_argument("--baseline", type=Path, required=True, help="a run directory or golden directory")
+    p.add_argument("--common-only", action="store_true", dest="common_only",
+                   help="compare only the task files, versions and views both runs have, and say "
+                        "so in gate.md (default: a baseline of another scope is an error, exit 2)")
     p.set_defaults(func=cmd_gate)
 
     p = sub.add_parser("golden", help="make a run's renders the golden images (explicit only)",
@@ -71,7 +77,8 @@ def cmd_nightly(args: argparse.Namespace) -> int:
 
     cfg = RunConfig(workers=args.workers, stride=args.stride, extremes=args.extremes,
                     animate_stride=args.animate_stride)
-    passed, index = nightly(args.out, corpus=args.corpus, config=cfg, progress=not args.quiet)
+    passed, index = nightly(args.out, corpus=args.corpus, config=cfg, progress=not args.quiet,
+                            common_only=args.common_only)
     print(f"{'PASSED' if passed else 'FAILED'}: {index}")
     return 0 if passed else 1
 
@@ -79,7 +86,7 @@ def cmd_nightly(args: argparse.Namespace) -> int:
 def cmd_gate(args: argparse.Namespace) -> int:
     from cassi.reports.gates import gate  # noqa: PLC0415
 
-    passed, results = gate(args.run, args.baseline)
+    passed, results = gate(args.run, args.baseline, common_only=args.common_only)
     fails = [r for r in results if r.status == "fail"]
     for r in fails:
         print(f"FAIL {r.gate} {r.version} {r.subject} {r.item}: {r.reason}")

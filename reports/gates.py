@@ -102,20 +102,16 @@ def image_gates(run: Run, reference_dir: Path, *, ssim_min: float = SSIM_MIN,
 
 
 def tolerance(check: str) -> int:
-    try:
-        from cassi.harness.rubric import CHECKS  # noqa: PLC0415
-    except ImportError:
-        return DEFAULT_TOLERANCE
+    from cassi.harness.rubric import CHECKS  # noqa: PLC0415
+
     entry = CHECKS.get(check) if hasattr(CHECKS, "get") else None
     return int(getattr(entry, "gate_tolerance", DEFAULT_TOLERANCE))
 
 
 def metric_gates(run: pd.DataFrame, baseline: pd.DataFrame) -> list[GateResult]:
-    """Per version, table and check: the negatives summed over subjects may not grow beyond the
-    check's tolerance. Only versions and subjects present in both runs are compared."""
+    """Per version, table and check: the negatives summed over the task files may not grow
+    beyond the check's tolerance (both tables cover the same task files: :func:`gate`)."""
     cur, base = verdicts(run), verdicts(baseline)
-    common = set(cur["subject"]) & set(base["subject"])
-    cur, base = cur[cur["subject"].isin(common)], base[base["subject"].isin(common)]
     keys = ["version", "table", "check"]
     a = cur.groupby(keys)["negatives"].sum()
     b = base.groupby(keys)["negatives"].sum()
@@ -130,29 +126,120 @@ def metric_gates(run: pd.DataFrame, baseline: pd.DataFrame) -> list[GateResult]:
     return out
 
 
+#: What two runs must share for their gates to compare like with like.
+LIKE_WITH_LIKE = ("tasks", "versions", "views", "preset")
+_KEY = ["subject", "task", "rep", "version"]
+
+
+class MismatchedBaseline(CassiInputError):
+    """The baseline was run on other tasks, versions, views or preset than the run."""
+
+
+def run_scope(meta: dict) -> dict[str, set]:
+    """A run's scope from its resolved config (run.json): task files (subject, task, rep),
+    versions, views and preset."""
+    return {"tasks": {(str(s), int(t), int(r)) for s, t, r, *_ in meta.get("tasks_resolved") or []},
+            "versions": set(meta.get("versions_resolved") or []),
+            "views": set(meta.get("views_resolved") or []),
+            "preset": {meta.get("preset")}}
+
+
+def _fmt(items: set) -> str:
+    items = sorted(items, key=str)
+    text = ", ".join("/".join(map(str, i)) if isinstance(i, tuple) else str(i) for i in items[:6])
+    return text + (f" and {len(items) - 6} more" if len(items) > 6 else "")
+
+
+def scope_differences(run: dict, base: dict) -> list[str]:
+    """What differs between two scopes (:func:`run_scope`), one sentence per setting."""
+    out = []
+    for key in LIKE_WITH_LIKE:
+        only_run, only_base = run[key] - base[key], base[key] - run[key]
+        if only_run or only_base:
+            parts = [f"only in the run: {_fmt(only_run)}" if only_run else "",
+                     f"only in the baseline: {_fmt(only_base)}" if only_base else ""]
+            out.append(f"{key} differ ({'; '.join(p for p in parts if p)})")
+    return out
+
+
+def _restrict(df: pd.DataFrame, keys: set[tuple], views: set) -> pd.DataFrame:
+    if df.empty:
+        return df
+    idx = pd.MultiIndex.from_frame(df[_KEY].astype({"task": int, "rep": int}))
+    keep = idx.isin(list(keys)) & (df["view"].isin(views | {"geometry"}))
+    return df[keep].reset_index(drop=True)
+
+
+def job_gates(run: Run) -> list[GateResult]:
+    """A failed job fails the gate (its results are missing); a skipped job is listed."""
+    out = [GateResult("jobs", "all", "all", key, "fail", f"job failed: {why}")
+           for key, why in sorted(run.failed.items())]
+    out += [GateResult("jobs", "all", "all", key, "skip", f"job skipped: {why}")
+            for key, why in sorted(run.skipped.items())]
+    return out
+
+
 def gate(run_dir: str | os.PathLike, baseline: str | os.PathLike, *,
-         out_dir: str | os.PathLike | None = None) -> tuple[bool, list[GateResult]]:
+         out_dir: str | os.PathLike | None = None,
+         common_only: bool = False, jobs: bool = True) -> tuple[bool, list[GateResult]]:
     """Apply the gates of run ``run_dir`` against ``baseline`` (a run directory or a golden
     directory), write ``gate.json`` and ``gate.md`` into ``out_dir`` (default: the run), and
-    return (passed, results). A baseline run gives metric gates and, through its renders,
-    image gates; a golden directory gives image gates (and metric gates when it holds the
-    results snapshot that :func:`update_golden` stores)."""
+    return (passed, results).
+
+    A baseline run gives metric gates and, through its renders, image gates; a golden
+    directory gives image gates (and metric gates from the results snapshot that
+    :func:`update_golden` stores). The baseline must have the run's scope (task files,
+    versions, views, preset); with ``common_only`` only what both share is compared, and
+    gate.md says so. Failed jobs of the run fail the gate; skipped ones are listed (``jobs``
+    False leaves the job gates to the caller).
+
+    Raises
+    ------
+    MismatchedBaseline
+        When the scopes differ and ``common_only`` is False (the message says what differs).
+    """
     run = load_run(run_dir)
     base_path = Path(baseline)
     if (base_path / GOLDEN_MARK).is_file():
-        results = [*image_gates(run, base_path)]
+        base_meta = json.loads((base_path / GOLDEN_MARK).read_text(encoding="utf-8")).get("run", {})
         snap = base_path / "results.parquet"
-        if snap.is_file():
-            results += metric_gates(run.results, pd.read_parquet(snap))
+        base_results = pd.read_parquet(snap) if snap.is_file() else None
+        reference = base_path
     elif (base_path / "results.parquet").is_file():
         base_run = load_run(base_path)
-        results = metric_gates(run.results, base_run.results)
-        results += image_gates(run, _renders_as_golden(base_run, run.root / ".gate-baseline"))
+        base_meta, base_results = base_run.meta, base_run.results
+        reference = None
     else:
         raise CassiInputError("baseline is neither a run directory (results.parquet) nor a "
                               f"golden directory ({GOLDEN_MARK})", path=base_path)
+    notes: list[str] = []
+    run_results, renders = run.results, run.renders
+    scope, base_scope = run_scope(run.meta), run_scope(base_meta)
+    known = all(m.get("tasks_resolved") is not None for m in (run.meta, base_meta))
+    differences = scope_differences(scope, base_scope) if known else []
+    if differences and not common_only:
+        raise MismatchedBaseline("the baseline does not cover what the run covers, so their "
+                                 "gates cannot compare like with like: " + "; ".join(differences)
+                                 + " (rerun with the same settings, or pass --common-only to "
+                                 "compare only what both share)", path=base_path)
+    if differences:
+        keys = {(s, t, r, v) for s, t, r in scope["tasks"] & base_scope["tasks"]
+                for v in scope["versions"] & base_scope["versions"]}
+        views = scope["views"] & base_scope["views"]
+        run_results = _restrict(run_results, keys, views)
+        base_results = None if base_results is None else _restrict(base_results, keys, views)
+        renders = _restrict(renders, keys, views)
+        notes.append("Compared on the common task files, versions and views only (--common-only): "
+                     + "; ".join(differences) + ".")
+    results = job_gates(run) if jobs else []
+    if base_results is not None:
+        results += metric_gates(run_results, base_results)
+    if reference is None:
+        reference = _renders_as_golden(base_run, run.root / ".gate-baseline")
+    results += image_gates(Run(run.root, run_results, run.ratings, run.meta, renders), reference)
     passed = not any(r.status == "fail" for r in results)
-    write_gate_report(Path(out_dir or run.root), passed, results, baseline=str(base_path))
+    write_gate_report(Path(out_dir or run.root), passed, results, baseline=str(base_path),
+                      notes=notes)
     return passed, results
 
 
@@ -168,14 +255,15 @@ def _renders_as_golden(run: Run, scratch: Path) -> Path:
     return scratch
 
 
-def write_gate_report(out_dir: Path, passed: bool, results: list[GateResult], *, baseline: str) -> None:
+def write_gate_report(out_dir: Path, passed: bool, results: list[GateResult], *, baseline: str,
+                      notes: list[str] = ()) -> None:
     counts = {s: sum(r.status == s for r in results) for s in ("pass", "fail", "skip")}
-    payload = {"passed": passed, "baseline": baseline, "counts": counts,
+    payload = {"passed": passed, "baseline": baseline, "counts": counts, "notes": list(notes),
                "gates": [asdict(r) for r in results]}
     atomic_write_text(out_dir / "gate.json", json.dumps(payload, indent=2, default=str) + "\n")
     lines = [f"# Gates: {'PASSED' if passed else 'FAILED'}", "",
              f"Baseline: `{baseline}`. {counts['pass']} passed, {counts['fail']} failed, "
-             f"{counts['skip']} skipped.", ""]
+             f"{counts['skip']} skipped.", "", *[f"**Note.** {n}\n" for n in notes]]
     for status in ("fail", "skip"):
         rows = [r for r in results if r.status == status]
         if rows:
@@ -205,7 +293,9 @@ def update_golden(run_dir: str | os.PathLike, golden_dir: str | os.PathLike) -> 
     tmp = atomic_tmp_path(golden / "results.parquet")
     run.results.to_parquet(tmp, index=False)
     os.replace(tmp, golden / "results.parquet")
+    scope = {k: run.meta.get(k) for k in ("tasks_resolved", "versions_resolved",
+                                          "views_resolved", "preset")}
     atomic_write_text(golden / GOLDEN_MARK, json.dumps(
-        {"from_run": str(Path(run_dir).resolve()), "images": n, "synthetic": run.synthetic},
-        indent=2) + "\n")
+        {"from_run": str(Path(run_dir).resolve()), "images": n, "synthetic": run.synthetic,
+         "run": scope}, indent=2) + "\n")
     return n

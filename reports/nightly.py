@@ -12,6 +12,7 @@ Layout of the nightly directory::
 from __future__ import annotations
 
 import datetime as dt
+import json
 import os
 from pathlib import Path
 
@@ -19,7 +20,9 @@ import pandas as pd
 
 from cassi.data.atomic import atomic_write_text
 from cassi.harness.config import RunConfig
-from cassi.reports.gates import GOLDEN_MARK, gate, write_gate_report
+from cassi.harness.tableset import SET_FILE as TABLE_SET
+from cassi.reports.gates import (GOLDEN_MARK, GateResult, MismatchedBaseline, gate, job_gates,
+                                 write_gate_report)
 from cassi.reports.report import write_report
 from cassi.reports.runio import load_run
 from cassi.reports.tables import verdicts
@@ -27,20 +30,28 @@ from cassi.reports.tables import verdicts
 HISTORY_COLUMNS = ["night", "version", "negatives", "gate"]
 
 
+#: Written into a night's run directory once the whole night (run, gates, history, report) is
+#: done; a night of today's date without it was interrupted and is resumed.
+NIGHT_DONE = "night.json"
+
+
 def night_name(runs_dir: Path, today: dt.date | None = None) -> str:
-    """Today's ISO date, suffixed -2, -3 ... when the directory already exists."""
+    """Today's ISO date; an unfinished night of that date is resumed (same name, its finished
+    jobs reused), a finished one is followed by -2, -3 ..."""
     base = (today or dt.datetime.now(dt.timezone.utc).date()).isoformat()
     name, n = base, 1
     while (runs_dir / name).exists():
+        if not (runs_dir / name / NIGHT_DONE).is_file():
+            return name
         n += 1
         name = f"{base}-{n}"
     return name
 
 
 def previous_night(runs_dir: Path, current: str) -> Path | None:
-    """The newest finished night before ``current`` (one with a results table)."""
+    """The newest night before ``current`` with a complete table set."""
     nights = sorted((p for p in runs_dir.iterdir() if p.is_dir() and p.name != current
-                     and (p / "results.parquet").is_file()), key=lambda p: p.name)
+                     and (p / TABLE_SET).is_file()), key=lambda p: p.name)
     earlier = [p for p in nights if p.name < current]
     return earlier[-1] if earlier else None
 
@@ -53,8 +64,12 @@ def read_history(path: Path) -> pd.DataFrame:
 
 def nightly(out_dir: str | os.PathLike, *, corpus: str | os.PathLike | None = None,
             config: RunConfig | None = None, today: dt.date | None = None,
-            progress: bool = True) -> tuple[bool, Path]:
-    """One night. Returns (gates passed, report index path)."""
+            progress: bool = True, common_only: bool = False) -> tuple[bool, Path]:
+    """One night. Returns (gates passed, report index path).
+
+    A previous night or golden set of another scope fails tonight's gate with the reason
+    (unless ``common_only``), and a failed job fails it too; the report is written anyway.
+    """
     from cassi.harness.farm import run as run_farm  # noqa: PLC0415 - heavy import, only here
 
     root = Path(out_dir)
@@ -67,17 +82,19 @@ def nightly(out_dir: str | os.PathLike, *, corpus: str | os.PathLike | None = No
 
     prev = previous_night(runs_dir, name)
     golden = root / "golden"
-    passed, gate_results = True, []
-    if prev is not None:
-        passed, gate_results = gate(run_dir, prev)
-    if (golden / GOLDEN_MARK).is_file():
-        ok, more = gate(run_dir, golden)
-        passed, gate_results = passed and ok, gate_results + more
-    if not gate_results:
-        write_gate_report(run_dir, True, [], baseline="none (first night, no golden images)")
-    else:
-        write_gate_report(run_dir, passed, gate_results,
-                          baseline=", ".join(str(p) for p in (prev, golden) if p is not None))
+    baselines = [p for p in (prev, golden if (golden / GOLDEN_MARK).is_file() else None)
+                 if p is not None]
+    gate_results = job_gates(load_run(run_dir))
+    for baseline in baselines:
+        try:
+            gate_results += gate(run_dir, baseline, common_only=common_only, jobs=False)[1]
+        except MismatchedBaseline as err:
+            gate_results.append(GateResult("baseline", "all", "all", str(baseline), "fail",
+                                           err.reason))
+    passed = not any(r.status == "fail" for r in gate_results)
+    write_gate_report(run_dir, passed, gate_results,
+                      baseline=", ".join(map(str, baselines)) or "none (first night, no golden "
+                                                                 "images)")
     passed = passed and result.ok
 
     history_path = root / "history.csv"
@@ -91,4 +108,7 @@ def nightly(out_dir: str | os.PathLike, *, corpus: str | os.PathLike | None = No
 
     index = write_report(run_dir, reports_dir / name, compare=prev, history=history)
     atomic_write_text(root / "latest.txt", name + "\n")
+    atomic_write_text(run_dir / NIGHT_DONE, json.dumps(
+        {"night": name, "passed": passed,
+         "finished": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")}) + "\n")
     return passed, index

@@ -12,9 +12,9 @@ from pathlib import Path
 import pandas as pd
 
 from cassi.data.errors import CassiInputError
-from cassi.harness.results import ratings as derive_ratings
 from cassi.harness.results import read_results
 from cassi.harness.runner import RENDER_COLUMNS  # the render index the farm writes
+from cassi.harness.tableset import SUMMARY_FILE, verify_table_set
 
 
 @dataclass
@@ -32,6 +32,9 @@ class Run:
         The run's ``run.json`` (resolved config, package version, git revision, ...).
     renders : DataFrame
         RENDER_COLUMNS; ``path`` is absolute. Empty when the run rendered nothing.
+    summary : dict
+        The run's ``summary.json``: job counts by state, and the reason of every skipped and
+        failed job.
     """
 
     root: Path
@@ -39,6 +42,17 @@ class Run:
     ratings: pd.DataFrame
     meta: dict = field(default_factory=dict)
     renders: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=RENDER_COLUMNS))
+    summary: dict = field(default_factory=dict)
+
+    @property
+    def failed(self) -> dict[str, str]:
+        """Failed job -> reason: results of a run with failures are incomplete."""
+        return dict(self.summary.get("failed", {}))
+
+    @property
+    def skipped(self) -> dict[str, str]:
+        """Skipped job -> reason (unusable inputs)."""
+        return dict(self.summary.get("skipped", {}))
 
     @property
     def synthetic(self) -> bool:
@@ -75,17 +89,14 @@ def _read_json(path: Path) -> dict:
 
 
 def _read_renders(root: Path) -> pd.DataFrame:
-    for name in ("renders.parquet", "renders.csv"):
-        path = root / name
-        if path.exists():
-            df = pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
-            missing = [c for c in RENDER_COLUMNS if c not in df]
-            if missing:
-                raise CassiInputError(f"render index lacks columns {missing}", path=path)
-            df = df[list(RENDER_COLUMNS)].copy()
-            df["path"] = [str(_inside(root, p)) for p in df["path"]]
-            return df.reset_index(drop=True)
-    return pd.DataFrame({c: pd.Series(dtype="object") for c in RENDER_COLUMNS})
+    path = root / "renders.parquet"
+    df = pd.read_parquet(path)
+    missing = [c for c in RENDER_COLUMNS if c not in df]
+    if missing:
+        raise CassiInputError(f"render index lacks columns {missing}", path=path)
+    df = df[list(RENDER_COLUMNS)].copy()
+    df["path"] = [str(_inside(root, p)) for p in df["path"]]
+    return df.reset_index(drop=True)
 
 
 def _inside(root: Path, rel: str) -> Path:
@@ -102,16 +113,15 @@ def load_run(path: str | os.PathLike) -> Run:
     Raises
     ------
     CassiInputError
-        When ``path`` is not a run directory (no results table).
+        When ``path`` is not a run directory (no results table), or its tables are not one
+        complete set (:class:`~cassi.harness.tableset.TableSetError`).
     """
     root = Path(path)
-    results_path = root / "results.parquet"
-    if not results_path.is_file():
+    if not (root / "results.parquet").is_file():
         raise CassiInputError("not a run directory: no results.parquet (run `cassi run` first)",
                               path=root)
-    results = read_results(results_path)
-    ratings_path = root / "ratings.parquet"
-    ratings = (pd.read_parquet(ratings_path) if ratings_path.is_file()
-               else derive_ratings(results))
-    return Run(root=root, results=results, ratings=ratings, meta=_read_json(root / "run.json"),
-               renders=_read_renders(root))
+    verify_table_set(root)  # one complete set of tables, or a clear refusal
+    return Run(root=root, results=read_results(root / "results.parquet"),
+               ratings=pd.read_parquet(root / "ratings.parquet"),
+               meta=_read_json(root / "run.json"), renders=_read_renders(root),
+               summary=_read_json(root / SUMMARY_FILE))

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import pandas as pd
 
-from cassi.harness.results import default_rate
 
 #: Rating words in the thesis's order (Table 5.2), best first.
 RATINGS = ("EXCELLENT", "VERY GOOD", "GOOD", "FAIR", "POOR", "VERY POOR", "UNACCEPTABLE")
@@ -29,11 +28,9 @@ TABLE_TOPICS = {"A": "teeth, lips and tongue", "B": "face shape", "C": "lip plac
 
 
 def rate(negatives: int) -> str:
-    """Thesis Table 5.2, from the rubric when it is installed."""
-    try:
-        from cassi.harness.rubric import rate as rubric_rate  # noqa: PLC0415
-    except ImportError:
-        return default_rate(int(negatives))
+    """Thesis Table 5.2 (the rubric's one rating scale)."""
+    from cassi.harness.rubric import rate as rubric_rate  # noqa: PLC0415
+
     return rubric_rate(int(negatives))
 
 

@@ -9,7 +9,9 @@ import imageio.v3 as iio
 import numpy as np
 import pandas as pd
 
-from cassi.harness.results import normalize, ratings, write_table
+from cassi.harness.results import normalize, ratings
+from cassi.harness.runner import RENDER_COLUMNS
+from cassi.harness.tableset import write_table_set
 
 VERSIONS = ("cassi-1.0", "cassi-2.0", "cassi-2.1")
 
@@ -42,11 +44,9 @@ def image(seed: int, shape=(48, 64)) -> np.ndarray:
 
 
 def write_run(root: Path, results: pd.DataFrame, *, images: dict | None = None,
-              meta: dict | None = None) -> Path:
+              meta: dict | None = None, summary: dict | None = None) -> Path:
     """Write a run directory; ``images[(subject, task, version, view, frame)] = array``."""
     root.mkdir(parents=True, exist_ok=True)
-    write_table(results, root / "results.parquet")
-    write_table(ratings(results), root / "ratings.parquet")
     (root / "run.json").write_text(json.dumps({"synthetic": bool(results["synthetic"].any()),
                                                **(meta or {})}))
     rows = []
@@ -56,6 +56,15 @@ def write_run(root: Path, results: pd.DataFrame, *, images: dict | None = None,
         iio.imwrite(root / rel, arr)
         rows.append(dict(subject=subject, task=task, rep=1, version=version, view=view,
                          frame=frame, path=str(rel)))
-    if rows:
-        pd.DataFrame(rows).to_parquet(root / "renders.parquet", index=False)
+    write_table_set(root, {"results": results, "ratings": ratings(results),
+                           "renders": pd.DataFrame(rows, columns=list(RENDER_COLUMNS))},
+                    {"synthetic": bool(results["synthetic"].any()), **(summary or {})})
     return root
+
+
+def rewrite_results(root: Path, results: pd.DataFrame) -> None:
+    """Replace a run's results (and the ratings derived from them) as a new table set."""
+    renders = pd.read_parquet(root / "renders.parquet")
+    summary = json.loads((root / "summary.json").read_text())
+    write_table_set(root, {"results": results, "ratings": ratings(results), "renders": renders},
+                    summary)

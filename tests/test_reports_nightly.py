@@ -9,8 +9,9 @@ import pandas as pd
 import pytest
 
 from cassi.harness.config import RunConfig
-from cassi.harness.results import write_table
 from cassi.reports.nightly import nightly
+
+from reports_fixtures import rewrite_results
 
 pytestmark = pytest.mark.render
 
@@ -45,7 +46,7 @@ def test_two_nights_then_a_planted_regression_fails_the_gate(tmp_path):
     fired = res[(res["frame"] == -1) & (res["negatives"] > 0)]
     assert len(fired), "the small evaluation fired no check; pick another task"
     res.loc[fired.index[:1], "negatives"] = 0
-    write_table(res, prev)
+    rewrite_results(prev.parent, res)
     ok3, _ = nightly(tmp_path, config=SMALL, today=day3, progress=False)
     assert not ok3
     gate3 = (tmp_path / "runs" / "2026-11-22" / "gate.md").read_text()
