@@ -216,7 +216,9 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
         run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
         summaries=version_summaries(run.results), comparison=_comparison(run, previous, out),
         tables=_table_sections(run, out), animations=_animations(run, out),
-        subjects=subject_links, trend=trend, gate=gate)
+        subjects=subject_links, trend=trend, gate=gate,
+        jobs={"counts": run.summary.get("counts", {}), "failed": run.failed,
+              "skipped": run.skipped} if run.summary else None)
     index = out / "index.html"
     atomic_write_text(index, html)
     return index

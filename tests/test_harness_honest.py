@@ -290,3 +290,14 @@ def test_results_are_normalised_where_they_are_made(corpus, tmp_path):
                   **GEOMETRY), progress=False)
     df = pd.read_parquet(tmp_path / "out" / "results.parquet")
     pd.testing.assert_frame_equal(df, R.normalize(df))
+
+
+def test_the_report_says_which_jobs_failed_or_were_skipped(tmp_path):
+    from cassi.reports.report import write_report
+
+    bad = _run_dir(tmp_path / "bad", [("JW11", 19)],
+                   failed={"JW11/019-1/cassi-2.0/geometry": "<script>boom</script>"})
+    html = write_report(bad, tmp_path / "report").read_text()
+    assert "Incomplete results: 1 job(s) failed" in html
+    assert "&lt;script&gt;boom" in html and "<script>boom" not in html
+    assert "1 job(s) skipped" in html and "no file for task 99" in html
