@@ -2,6 +2,8 @@
 
 - ``geometry``: :func:`cassi.versions.bench.bench_geometry` (owned by the versions package);
 - ``render``: :func:`cassi.renderer.bench.bench_render` (owned by the renderer package);
+- ``geometry_memory``: peak RSS of one worker on a 100,000-row task
+  (:mod:`.bench_memory`, ``geometry_peak_rss_mb``);
 - ``farm``: the same batch run with 1 and 2 local worker processes side by side
   (``farm_speedup_2_workers``, goal >= 1.6) and through a local Ray cluster (its overhead
   against the 2-worker local pool).
@@ -216,6 +218,7 @@ def _variant() -> str:
 
 #: Figures copied to the top of the document, under the keys the issues name.
 HEADLINE = {"geometry": ("geometry_frames_per_s",),
+            "geometry_memory": ("geometry_peak_rss_mb",),
             "render": ("render_per_s", "render_pipeline_efficiency", "render_rss_growth_mb")}
 
 
@@ -238,6 +241,8 @@ def run_benchmarks(*, quick: bool = False) -> dict:
               "variant": _variant(), "benchmarks": {}}
     report["benchmarks"]["geometry"] = _registered("cassi.versions.bench", "bench_geometry", quick)
     report["benchmarks"]["render"] = _registered("cassi.renderer.bench", "bench_render", quick)
+    report["benchmarks"]["geometry_memory"] = _registered("cassi.harness.bench_memory",
+                                                          "bench_geometry_memory", quick)
     try:
         farm = bench_farm(quick, repeats=1 if quick else 2)  # --quick: under a minute in all
     except Exception as err:  # noqa: BLE001

@@ -1,0 +1,96 @@
+"""``geometry_peak_rss_mb``: peak memory of one worker animating and checking a long task.
+
+A 100,000-row task file (about 11.5 minutes at 145.6 Hz) is made from a real-format task file
+of the embedded corpus, its rows repeated with the time running on; each version's geometry
+job (animation, geometric checks, key frames) then runs in a fresh process, whose peak resident
+set size (``ru_maxrss``) is the figure. The goal is under 1 GB per worker for any legal file.
+"""
+from __future__ import annotations
+
+import json
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROWS = 100_000
+GOAL_MB = 1024.0
+
+
+def long_task_corpus(root: Path, *, rows: int = ROWS, subject: str = "JW12", task: int = 2) -> Path:
+    """A corpus in ``root`` holding ``subject`` of the embedded corpus with task ``task``
+    lengthened to ``rows`` rows (copies: a corpus refuses links that lead outside it)."""
+    from cassi.data.synth import default_corpus  # noqa: PLC0415
+    from cassi.data.xrmb import NOMINAL_PERIOD_US, read_txy, task_file_name, write_txy  # noqa: PLC0415
+
+    src = Path(default_corpus())
+    dest = root / subject
+    shutil.copytree(src / subject, dest)
+    for name in ("corpus.json", "Headmeasures.txt"):
+        if (src / name).exists():
+            shutil.copy(src / name, root / name)
+    rec = read_txy(src / subject / task_file_name(task))
+    first = rec.first_valid_index
+    reps = -(-rows // (rec.n_frames - first))
+    idx = np.concatenate([np.arange(rec.n_frames)] +
+                         [np.arange(first, rec.n_frames)] * reps)[:rows]
+    long = type(rec)(None, rec.subject, task, 1,
+                     np.arange(rows, dtype=np.int64) * NOMINAL_PERIOD_US + int(rec.time_us[0]),
+                     rec.xy_mm[idx], rec.valid[idx])
+    (dest / task_file_name(task)).unlink()
+    write_txy(dest / task_file_name(task), long)
+    return root
+
+
+def child(corpus: str, subject: str, task: int, version: str) -> None:
+    """In a fresh process: one geometry job; print peak RSS (MB), wall time and frames."""
+    from cassi.harness.jobs import Job, StageContext  # noqa: PLC0415
+    from cassi.harness.pipeline import geometry_stage, get_corpus, get_profile  # noqa: PLC0415
+
+    c = get_corpus(corpus)
+    get_profile(c, subject)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    t0 = time.perf_counter()
+    out = geometry_stage(Job("geometry", subject, task, 1, version),
+                         StageContext(out_dir=Path(corpus), corpus=Path(corpus)), {})
+    wall = time.perf_counter() - t0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    print(json.dumps({"peak_rss_mb": round(peak, 1), "rss_before_mb": round(before, 1),
+                      "seconds": round(wall, 2), "frames": out.meta.get("n_frames")}))
+
+
+def bench_geometry_memory(quick: bool = False, *, versions=None, rows: int = ROWS) -> dict:
+    """Peak RSS of one geometry job per version on a ``rows``-row task (fresh process each);
+    ``quick``: one version on 10,000 rows (the figure is then not the 100k-row one)."""
+    from cassi.versions.registry import available_versions  # noqa: PLC0415
+
+    versions = list(versions or (["cassi-2.1"] if quick else available_versions()))
+    rows = min(rows, 10_000) if quick else rows
+    tmp = Path(tempfile.mkdtemp(prefix="cassi-bench-mem-"))
+    try:
+        corpus = long_task_corpus(tmp / "corpus", rows=rows)
+        per_version = {}
+        for version in versions:
+            code = (f"from cassi.harness.bench_memory import child; "
+                    f"child({str(corpus)!r}, 'JW12', 2, {version!r})")
+            proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                                  env={**os.environ, "OMP_NUM_THREADS": "1"}, timeout=1800)
+            if proc.returncode != 0:
+                per_version[version] = {"error": proc.stderr.strip().splitlines()[-1:]}
+                continue
+            per_version[version] = json.loads(proc.stdout.strip().splitlines()[-1])
+        peaks = [v["peak_rss_mb"] for v in per_version.values() if "peak_rss_mb" in v]
+        out = {"rows": rows, "versions": per_version, "goal_mb": GOAL_MB}
+        if rows == ROWS:  # the headline figure is defined on 100,000 rows only
+            out["geometry_peak_rss_mb"] = max(peaks) if peaks else None
+        else:
+            out["peak_rss_mb"] = max(peaks) if peaks else None
+        return out
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
