@@ -9,6 +9,7 @@ jobs the process runs, instead of rebuilding them per job.
 from __future__ import annotations
 
 import os
+import platform
 import tempfile
 import threading
 from pathlib import Path
@@ -46,9 +47,20 @@ def corpus_root(corpus: Path | str | None) -> Path:
 
 
 def get_corpus(corpus: Path | str | None):
+    """This process's :class:`~cassi.data.corpus.Corpus` for ``corpus`` (cached).
+
+    A cluster worker reads the corpus from the path the run declares: when it cannot see it,
+    the error says so (outputs travel back to the driver, but the corpus is storage the
+    cluster must share).
+    """
     from cassi.data.corpus import Corpus  # noqa: PLC0415
 
     root = str(corpus_root(corpus))
+    if not os.path.isdir(root):
+        raise CassiInputError(
+            f"the corpus directory is not visible in this process (host {platform.node()}, "
+            f"pid {os.getpid()}): every node of a cluster must see the corpus at the same path",
+            path=root)
     with _lock:
         if root not in _corpora:
             _corpora[root] = Corpus(root)
