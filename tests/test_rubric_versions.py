@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from cassi.harness import rubric as R
-from cassi.harness import rubric_geometry as G
+from cassi.harness.rubric import geometry as G
 
 VERSIONS = ("parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1")
 
@@ -103,8 +103,8 @@ def test_planted_defects_fire_on_every_version(subject, version):
     n = int(0.6 * F)
     drop = p[:n, parts.ll_inner, 2] - (p[:n, parts.lower_gum, 2] - 5.0 / mm)
     p[:n, lower, 2] -= drop[:, None]
-    assert _run(subject, _with(anim, p), 5, ["lips_centered_low"]).loc[
-        "lips_centered_low", "negatives"] == 2
+    assert _run(subject, _with(anim, p), 5, ["lower_lip_below_teeth"]).loc[
+        "lower_lip_below_teeth", "negatives"] == 2
 
     # the tongue tip 2 mm through the back of the upper incisors (at the tooth's middle height)
     p = pos.copy()

@@ -11,7 +11,7 @@ is ``d / p`` millimetres).
 
 The measures are what the thesis's authors judged by eye (thesis chapter 5, restated in
 ``shared/spec/rubric.md``); the thresholds that turn them into negatives live in
-:mod:`cassi.harness.rubric`, never here.
+:mod:`cassi.harness.rubric.registry`, never here.
 """
 from __future__ import annotations
 
@@ -518,24 +518,21 @@ def profile_angle(pos: np.ndarray, a: int, b: int, c: int) -> np.ndarray:
 
 #: Savitzky-Golay window (frames) and order separating jitter from motion: 9 frames = 62 ms at
 #: XRMB's 146 Hz; articulator movements (50-200 ms) stay in the fit, frame-to-frame shake does not.
-JITTER_WINDOW = 9
-JITTER_ORDER = 2
-
-
-def _shake(x: np.ndarray) -> np.ndarray:
-    """Distance of each frame from a local quadratic fit of its neighbours: (F, ...) -> (F, ...)."""
+def _shake(x: np.ndarray, window: int, order: int) -> np.ndarray:
+    """Distance of each frame from a local polynomial fit of its neighbours: (F, ...) -> (F, ...)."""
     from scipy.signal import savgol_filter  # noqa: PLC0415
 
-    if x.shape[0] < JITTER_WINDOW:
+    if x.shape[0] < window:
         return np.zeros(x.shape[:-1])
-    smooth = savgol_filter(x, JITTER_WINDOW, JITTER_ORDER, axis=0, mode="interp")
+    smooth = savgol_filter(x, window, order, axis=0, mode="interp")
     return np.linalg.norm(x - smooth, axis=-1)
 
 
-def excess_jitter(pos: np.ndarray, points, ref_points) -> np.ndarray:
+def excess_jitter(pos: np.ndarray, points, ref_points, *, window: int, order: int) -> np.ndarray:
     """Frame-to-frame shake of lip points beyond that of reference points, per frame.
 
-    Shake is the distance of a point from a local quadratic fit over JITTER_WINDOW frames
+    Shake is the distance of a point from a local polynomial fit (degree ``order``) over
+    ``window`` frames
     (Savitzky-Golay), so smooth movements, even fast ones, give ~0 and alternating or one-frame
     displacements give their size. Jitter the jaw (or a lip pellet) shows equally comes from the
     data and is no fault (thesis Table 5.8): the excess is the largest shake of ``points`` minus
@@ -543,20 +540,21 @@ def excess_jitter(pos: np.ndarray, points, ref_points) -> np.ndarray:
     """
     pos = np.asarray(pos, np.float64)
     F = pos.shape[0]
-    if F < JITTER_WINDOW:
+    if F < window:
         return np.zeros(F)
-    lip = _shake(pos[:, np.asarray(points, np.int64)]).max(axis=1)
-    ref = _shake(pos[:, np.atleast_1d(np.asarray(ref_points, np.int64))]).max(axis=1)
+    lip = _shake(pos[:, np.asarray(points, np.int64)], window, order).max(axis=1)
+    ref = _shake(pos[:, np.atleast_1d(np.asarray(ref_points, np.int64))], window, order).max(axis=1)
     return np.maximum(lip - ref, 0.0)
 
 
 def switch_jumps(pos: np.ndarray, parts: MouthParts, branch) -> tuple[np.ndarray, np.ndarray]:
-    """Jumps of the lip corners at the switch between ellipse branches.
+    """Jumps of the lip corners where a per-frame label changes.
 
     Parameters
     ----------
     branch : (F,) array-like or None
-        The OUTER_ABC_CALC branch per frame (Animation diagnostics); None = no switches known.
+        A label per frame (the rubric passes the ``ellipse`` diagnostic, horizontal or
+        vertical); None = no switches known.
 
     Returns
     -------
