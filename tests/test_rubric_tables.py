@@ -128,7 +128,7 @@ def test_table_f_summary_names_the_worst_version():
                      rows("cassi-1.0", [("fidelity_tongue_error", 0), ("fidelity_lips_error", 0)])])
     s = R.version_summaries(res)
     assert any(x.startswith("Fidelity to the recording (cassi-farm's Table F): worst parke-1974 "
-                            "with 3 negatives") for x in s)
+                            "with 3 negatives; best cassi-1.0 with 0 negatives") for x in s)
 
 
 def test_history_totals_and_empty_inputs():

@@ -23,11 +23,11 @@ GOOD_RATINGS = ("EXCELLENT", "VERY GOOD")
 
 #: Rubric tables: letter -> (thesis table, title). F is cassi-farm's addition, not the thesis's.
 TABLES = {
-    "A": ("5.3", "Teeth, lips and tongue, per subject"),
+    "A": ("5.3", "Teeth, lips and tongue per subject"),
     "B": ("5.4", "Overall face shape at initialization"),
     "C": ("5.5", "Lip placement and movement across versions"),
-    "D": ("5.8", "Maximum lip protrusion (task 118)"),
-    "E": ("5.9", "Jaw wagging (task 106)"),
+    "D": ("5.8", "Maximum lip protrusion, task 118"),
+    "E": ("5.9", "Jaw wagging, task 106"),
     "F": ("", "Fidelity to the recording (cassi-farm's addition, not in the thesis)"),
 }
 #: What each table judges, for the "versions compared" sentences.

@@ -22,7 +22,7 @@ __all__ = ["file_verdicts", "verdicts", "table_c_rule", "component_ratings", "ra
            "version_totals", "version_summaries", "negatives_text", "order_versions",
            "VERDICT_COLUMNS"]
 
-VERDICT_COLUMNS = ["version", "table", "subject", "component", "check", "negatives",
+VERDICT_COLUMNS = ["version", "table", "own_table", "subject", "component", "check", "negatives",
                    "raw_negatives", "files", "fired_files", "tasks", "value", "unit", "threshold",
                    "note"]
 
@@ -41,11 +41,12 @@ def file_verdicts(results: pd.DataFrame) -> pd.DataFrame:
     """Whole-task rows, one per (version, table, subject, task file, check), with Table A's lip
     rows repeated as Table C and one fault charged once per file.
 
-    Columns: version, table, subject, task, rep, file, component, check, negatives (charged),
+    Columns: version, table, own_table (the table that declares the check: A for Table A's lip
+    rows judged again in C), subject, task, rep, file, component, check, negatives (charged),
     raw_negatives (the check's own), value, unit, threshold, note.
     """
-    cols = ["version", "table", "subject", "task", "rep", "file", "component", "check",
-            "negatives", "raw_negatives", "value", "unit", "threshold", "note"]
+    cols = ["version", "table", "own_table", "subject", "task", "rep", "file", "component",
+            "check", "negatives", "raw_negatives", "value", "unit", "threshold", "note"]
     if results is None or not len(results):
         return pd.DataFrame(columns=cols)
     df = results[(results["frame"] == -1) & results["table"].notna()].copy()
@@ -55,6 +56,7 @@ def file_verdicts(results: pd.DataFrame) -> pd.DataFrame:
         df[c] = df[c].astype("object").where(df[c].notna(), "")
     df["file"] = [_file(t, r) for t, r in zip(df["task"], df["rep"])]
     df["raw_negatives"] = df["negatives"].astype(int)
+    df["own_table"] = df["table"]
     lip_a = df[(df["table"] == "A") & df["component"].isin(TABLE_C_FROM_A)].copy()
     lip_a["table"] = "C"
     df = pd.concat([df, lip_a], ignore_index=True)
@@ -88,7 +90,7 @@ def verdicts(results: pd.DataFrame) -> pd.DataFrame:
                         kind="mergesort")
     keys = ["version", "table", "subject", "component", "check"]
     g = fv.groupby(keys, sort=True)
-    out = g.first()[["value", "unit", "threshold"]]
+    out = g.first()[["own_table", "value", "unit", "threshold"]]
     out["negatives"] = g["negatives"].max()
     out["raw_negatives"] = g["raw_negatives"].max()
     out["files"] = g["file"].nunique()
@@ -258,7 +260,15 @@ def _deciding(v: pd.DataFrame, table: str, prev: str, cur: str, *, limit: int = 
     if not len(same):
         return "no check fired for either"
     return "the same faults decided both: " + ", ".join(
-        f"{k} ({r.a} negatives each)" for k, r in same.head(limit).iterrows())
+        f"{k} ({_n(r.a)} each)" for k, r in same.head(limit).iterrows())
+
+
+def _list(names: list[str]) -> str:
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+
+
+def _n(n: int) -> str:
+    return f"{int(n)} negative" + ("" if int(n) == 1 else "s")
 
 
 def version_summaries(results: pd.DataFrame) -> list[str]:
@@ -290,12 +300,12 @@ def version_summaries(results: pd.DataFrame) -> list[str]:
             else:
                 verb = "matches"
             out.append(f"{cur} {verb} {topic} over {prev}: {gb} VERY GOOD/EXCELLENT cells against "
-                       f"{ga}, {nb} negatives against {na}; {_deciding(v, table, prev, cur)}")
+                       f"{ga}, {_n(nb)} against {na}; {_deciding(v, table, prev, cur)}")
         if table == "F" and len(names) > 1:
-            worst = neg.reindex(names).idxmax()
-            ties = [n for n in names if int(neg[n]) == int(neg[worst])]
+            n = neg.reindex(names).astype(int)
+            worst = [k for k in names if n[k] == n.max()]
+            best = [k for k in names if n[k] == n.min()]
             out.append(f"Fidelity to the recording (cassi-farm's Table F): worst "
-                       f"{' and '.join(ties)} with {int(neg[worst])} negatives"
-                       + ("" if len(ties) == len(names) else
-                          f"; best {neg.reindex(names).idxmin()} with {int(neg.min())}"))
+                       f"{_list(worst)} with {_n(n.max())}"
+                       + ("" if len(worst) == len(names) else f"; best {_list(best)} with {_n(n.min())}"))
     return out
