@@ -19,6 +19,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from cassi.data.errors import CassiInputError
+
 __all__ = [
     "MouthParts", "mouth_parts", "mm_per_unit", "surface_hits", "front_triangles",
     "tongue_teeth_penetration", "tongue_palate_penetration", "lip_teeth_penetration",
@@ -194,24 +196,29 @@ def mouth_parts(face) -> MouthParts:
         jaw_point=N.MANI - 1, jaw=z(N.JAW))
 
 
-def mm_per_unit(face_vertices: np.ndarray, jaw_length_mm: float | None, *,
-                mani: int = 257, manm: tuple[int, int] = (280, 285)) -> float:
-    """Millimetres per Parke unit: the subject's XRMB jaw length over the model's (thesis 4.1.1).
+def mm_per_unit(face_vertices: np.ndarray, jaw_length_mm: float | None) -> float:
+    """Millimetres per Parke unit, d / p: the inverse of the thesis's 4.1.1 mapping scale
+    (:class:`cassi.versions.mapping.XrmbToParke`, the one place that computes p).
 
     Parameters
     ----------
     face_vertices : float (V, 3)
         The face in Parke units.
-    jaw_length_mm : float or None
-        The subject's distance MNI-MNM (mm); None gives the model's own length mapped onto a
-        typical 60 mm adult jaw... never used for a rating (the farm always has a profile).
+    jaw_length_mm : float
+        The subject's distance MNI-MNM (mm).
+
+    Raises
+    ------
+    CassiInputError
+        Without a positive jaw length, or when the face's jaw length p is zero: no millimetre
+        can be measured, and a guessed scale would grade every check wrongly.
     """
-    v = np.asarray(face_vertices, dtype=np.float64)
-    p = float(np.linalg.norm(v[mani, [0, 2]] - 0.5 * (v[manm[0], [0, 2]] + v[manm[1], [0, 2]])))
-    if not np.isfinite(p) or p <= 0:
-        return 1.0
-    d = float(jaw_length_mm) if jaw_length_mm else 60.0
-    return d / p
+    from cassi.versions.mapping import XrmbToParke  # noqa: PLC0415 - the one mapping
+
+    if jaw_length_mm is None:
+        raise CassiInputError("the subject's jaw length (profile.jaw_length_mm) is needed to "
+                              "measure in millimetres (thesis 4.1.1)")
+    return 1.0 / XrmbToParke.from_face(face_vertices, jaw_length_mm).scale
 
 
 # ----------------------------------------------------------------------------------------------

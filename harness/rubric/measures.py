@@ -18,7 +18,7 @@ from cassi.data.errors import CassiInputError
 from . import geometry as G
 from .model import Measurement
 from .registry import (CHECKS, END_SHARE, JAW_NEAR_CLOSED_MM, JITTER_ORDER, JITTER_WINDOW,
-                       LIPS_BELOW_TEETH_MM, MIN_FRAMES, TEETH_HOLD_FRAMES, WIDE_OPEN_MM,
+                       LIPS_BELOW_TEETH_MM, MIN_FRAMES, OFTEN_PERCENTILE, TEETH_HOLD_FRAMES, WIDE_OPEN_MM,
                        WIDE_OPEN_SHARE)
 
 class GeometryContext:
@@ -210,10 +210,10 @@ def m_lips_too_large_moving(ctx):
         return Measurement(float("nan"), -1, "the lips never cross")
     area = _outer_area(ctx.pos, ctx.parts) / _outer_area(ctx.rest[None], ctx.parts)[0]
     idx = np.flatnonzero(crossing)
-    v = float(np.percentile(area[idx], 90))
+    v = float(np.percentile(area[idx], OFTEN_PERCENTILE))
     f = int(idx[np.argmax(area[idx])])
     handled = int(np.sum(ctx.handled_overlap & crossing))
-    return Measurement(v, f, f"front-view lip area over the rest face's, 90th percentile over the "
+    return Measurement(v, f, f"front-view lip area over the rest face's, {OFTEN_PERCENTILE}th percentile over the "
                              f"{n} frames where the lips cross ({handled} handled by the version)",
                        frame_value=float(area[f]))
 
@@ -234,9 +234,10 @@ def m_lips_through_teeth(ctx):
 
 def m_lower_lip_protrudes(ctx):
     d = G.protrusion_difference(ctx.pos, ctx.parts) * ctx.mm
-    v = float(np.percentile(d, 90))
+    v = float(np.percentile(d, OFTEN_PERCENTILE))
     f = int(np.argmax(d))
-    return Measurement(v, f, "90th percentile over frames of x(49) - x(67)", frame_value=float(d[f]))
+    return Measurement(v, f, f"{OFTEN_PERCENTILE}th percentile over frames of x(49) - x(67)",
+                       frame_value=float(d[f]))
 
 
 def m_tongue_teeth(ctx):

@@ -59,6 +59,9 @@ LIPS_BELOW_TEETH_MM = 0.5
 #: opening, and at least WIDE_OPEN_MM apart: the shape of a slit is not the shape of the mouth.
 WIDE_OPEN_SHARE = 0.7
 WIDE_OPEN_MM = 3.0
+#: "Often" over a task for protrusion and crossing lips: the value a tenth of the frames reach
+#: (90th percentile), so a few frames at a turning point do not decide and a habit does.
+OFTEN_PERCENTILE = 90
 #: Lip jitter: shake is the distance from a Savitzky-Golay fit over JITTER_WINDOW frames of degree
 #: JITTER_ORDER (9 frames = 62 ms, shorter than a syllable, so speech movements are smooth in it).
 JITTER_WINDOW = 9

@@ -83,14 +83,11 @@ def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | N
         parts = G.mouth_parts(face)
     if mm_per_unit is None:
         jaw = getattr(profile, "jaw_length_mm", None) if profile is not None else None
-        mm_per_unit = G.mm_per_unit(rest if rest is not None else pos[0], jaw,
-                                    mani=parts.jaw_point)
+        mm_per_unit = G.mm_per_unit(rest if rest is not None else pos[0], jaw)
     if neutral is None and face is not None:
-        try:
-            from cassi.data.face import build_face  # noqa: PLC0415 - Table B reference only
-            neutral = build_face().vertices
-        except Exception:  # the face module not present: the jaw checks report "not measurable"
-            neutral = None
+        from cassi.data.face import build_face  # noqa: PLC0415 - Table B's reference only
+
+        neutral = build_face().vertices
     ctx = GeometryContext(pos, parts, rest=rest, mm_per_unit=mm_per_unit,
                           diagnostics=getattr(anim, "diagnostics", None), neutral=neutral, task=task)
     ids = dict(subject=subject or getattr(profile, "subject", None), task=int(task), rep=int(rep),
