@@ -80,7 +80,7 @@ class Check:
     name : str
         Unique registry key (the ``check`` column).
     table : str
-        ``A`` .. ``E`` (:data:`TABLES`); ``thesis_table`` the thesis's table number.
+        ``A`` .. ``F`` (:data:`TABLES`); ``thesis_table`` the thesis's table number ("" for F).
     component : str
         teeth, lips, tongue, palate, jaw, face ...
     view : str
