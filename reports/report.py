@@ -20,7 +20,7 @@ from cassi.reports import media, plots
 from cassi.reports.runio import Run, load_run, order_versions
 from cassi.harness.rubric import (AGGREGATION_RULES, CHECKS, RATINGS, component_ratings,
                                   file_verdicts, rating_counts, table_c_rule, table_title,
-                                  version_summaries)
+                                  version_comparisons)
 from cassi.reports.tables import markdown_table
 
 #: How many fired checks per version and task file show the four views of their frame on a
@@ -245,6 +245,14 @@ def _animations(run: Run, out: Path) -> list[dict]:
     return anims
 
 
+def _summaries(run: Run) -> list[dict]:
+    """The "versions compared" sentences grouped by table, each group linked to its table."""
+    groups: dict[str, list[str]] = {}
+    for table, sentence in version_comparisons(run.results):
+        groups.setdefault(table, []).append(sentence)
+    return [{"id": slug(t), "title": table_title(t), "sentences": s} for t, s in groups.items()]
+
+
 def _meta_items(run: Run) -> list[tuple[str, str]]:
     keys = ("started", "finished", "package_version", "git_revision", "variant", "preset", "stride",
             "executor", "corpus_resolved")
@@ -289,7 +297,7 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
                           if (run.root / "gate.md").is_file() else "")
     html = env.get_template("index.html.j2").render(
         run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
-        summaries=version_summaries(run.results), comparison=_comparison(run, previous, out),
+        summaries=_summaries(run), comparison=_comparison(run, previous, out),
         tables=_table_sections(run, cr, out), animations=_animations(run, out),
         rules=AGGREGATION_RULES,
         subjects=subject_links, trend=trend, gate=gate)

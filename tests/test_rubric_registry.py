@@ -46,7 +46,7 @@ def test_registry_is_complete_and_consistent():
 
 def test_every_rubric_md_criterion_is_registered(shared_dir):
     """Each bullet of rubric.md's Tables A-E (bar Table C's version comparison, done by
-    tabulate) maps to a registered check; the mapping is by key words of the bullet."""
+    cassi.harness.rubric.tables) maps to a registered check; the mapping is by key words of the bullet."""
     text = " ".join((shared_dir / "spec" / "rubric.md").read_text().split())
     expected_words = {
         "front teeth overlap": "teeth_front_overlap", "back teeth overlap": "teeth_back_overlap",

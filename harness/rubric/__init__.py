@@ -19,12 +19,13 @@ from .registry import (AGGREGATION_RULES, CHECKS, MIN_FRAMES, checks_for, get_ch
                        registry_table)
 from .run import run_geometry_checks, run_image_checks
 from .tables import (component_ratings, file_verdicts, negatives_text, order_versions,
-                     rating_counts, table_c_rule, verdicts, version_summaries, version_totals)
+                     rating_counts, table_c_rule, verdicts, version_comparisons,
+                     version_summaries, version_totals)
 
 __all__ = [
     "Check", "Measurement", "CHECKS", "TABLES", "TABLE_TOPICS", "RATINGS", "GOOD_RATINGS",
     "VERSION_ORDER", "MIN_FRAMES", "AGGREGATION_RULES", "rate", "table_title", "get_check",
     "checks_for", "registry_table", "run_geometry_checks", "run_image_checks", "file_verdicts",
     "verdicts", "table_c_rule", "component_ratings", "rating_counts", "version_totals",
-    "version_summaries", "negatives_text", "order_versions",
+    "version_summaries", "version_comparisons", "negatives_text", "order_versions",
 ]

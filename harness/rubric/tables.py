@@ -19,7 +19,7 @@ from .model import GOOD_RATINGS, RATINGS, TABLE_TOPICS, TABLES, VERSION_ORDER, r
 from .registry import CHECKS, MARKED_SHARE, TABLE_C_FROM_A
 
 __all__ = ["file_verdicts", "verdicts", "table_c_rule", "component_ratings", "rating_counts",
-           "version_totals", "version_summaries", "negatives_text", "order_versions",
+           "version_totals", "version_summaries", "version_comparisons", "negatives_text", "order_versions",
            "VERDICT_COLUMNS"]
 
 VERDICT_COLUMNS = ["version", "table", "own_table", "subject", "component", "check", "negatives",
@@ -278,6 +278,11 @@ def version_summaries(results: pd.DataFrame) -> list[str]:
     "cassi-2.1 improves lip placement over cassi-2.0: 10 VERY GOOD/EXCELLENT cells against 6,
     31 negatives against 40; decided by lips_never_touch (3 against 9 negatives), ..."
     """
+    return [s for _, s in version_comparisons(results)]
+
+
+def version_comparisons(results: pd.DataFrame) -> list[tuple[str, str]]:
+    """:func:`version_summaries` as (table, sentence) pairs, for reports that group them."""
     cr = component_ratings(results)
     if cr.empty:
         return []
@@ -299,13 +304,15 @@ def version_summaries(results: pd.DataFrame) -> list[str]:
                         else "worsens (same ratings, more negatives)")
             else:
                 verb = "matches"
-            out.append(f"{cur} {verb} {topic} over {prev}: {gb} VERY GOOD/EXCELLENT cells against "
-                       f"{ga}, {_n(nb)} against {na}; {_deciding(v, table, prev, cur)}")
+            out.append((table, f"{cur} {verb} {topic} over {prev}: {gb} VERY GOOD/EXCELLENT cells "
+                               f"against {ga}, {_n(nb)} against {na}; "
+                               f"{_deciding(v, table, prev, cur)}"))
         if table == "F" and len(names) > 1:
             n = neg.reindex(names).astype(int)
             worst = [k for k in names if n[k] == n.max()]
             best = [k for k in names if n[k] == n.min()]
-            out.append(f"Fidelity to the recording (cassi-farm's Table F): worst "
-                       f"{_list(worst)} with {_n(n.max())}"
-                       + ("" if len(worst) == len(names) else f"; best {_list(best)} with {_n(n.min())}"))
+            out.append((table, f"Fidelity to the recording (cassi-farm's Table F): worst "
+                               f"{_list(worst)} with {_n(n.max())}"
+                               + ("" if len(worst) == len(names)
+                                  else f"; best {_list(best)} with {_n(n.min())}")))
     return out
