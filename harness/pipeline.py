@@ -173,7 +173,7 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
     face = get_face(corpus, job.subject, profile)
     anim = get_version(job.version).animate(profile, face, rec)
     rows = rubric.run_geometry_checks(anim, face, profile, task=job.task, subject=job.subject,
-                                      rep=job.rep, neutral=get_neutral())
+                                      rep=job.rep, neutral=get_neutral(), recording=rec)
     rows = pd.DataFrame(rows)
     frames = np.asarray(anim.frames, dtype=np.int64)
     if frames.size == 0:

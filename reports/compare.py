@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pandas as pd
 
-from cassi.reports.tables import component_ratings, verdicts
+from cassi.harness.rubric import component_ratings, verdicts
 
 ARROWS = {-1: "▲ better", 0: "= same", 1: "▼ worse"}
 

@@ -25,7 +25,7 @@ from cassi.reports.gates import (GOLDEN_MARK, GateResult, MismatchedBaseline, ga
                                  write_gate_report)
 from cassi.reports.report import write_report
 from cassi.reports.runio import load_run
-from cassi.reports.tables import verdicts
+from cassi.harness.rubric import version_totals
 
 HISTORY_COLUMNS = ["night", "version", "negatives", "gate"]
 
@@ -99,8 +99,8 @@ def nightly(out_dir: str | os.PathLike, *, corpus: str | os.PathLike | None = No
 
     history_path = root / "history.csv"
     history = read_history(history_path)
-    v = verdicts(load_run(run_dir).results)
-    tonight = v.groupby("version")["negatives"].sum().reset_index()
+    # the total over every table cell, as the report's tables count it (Table C's rules included)
+    tonight = version_totals(load_run(run_dir).results)
     tonight.insert(0, "night", name)
     tonight["gate"] = "pass" if passed else "fail"
     history = pd.concat([history[history["night"] != name], tonight], ignore_index=True)

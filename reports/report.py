@@ -18,11 +18,14 @@ from cassi.data.atomic import atomic_write_text
 from cassi.reports import compare as cmp
 from cassi.reports import media, plots
 from cassi.reports.runio import Run, load_run, order_versions
-from cassi.reports.tables import (RATINGS, component_ratings, markdown_table, rating_counts,
-                                  table_title, version_summaries)
+from cassi.harness.rubric import (AGGREGATION_RULES, CHECKS, RATINGS, component_ratings,
+                                  file_verdicts, rating_counts, table_c_rule, table_title,
+                                  version_comparisons)
+from cassi.reports.tables import markdown_table
 
-#: How many frames per check and version get thumbnails on a subject page.
-MAX_SHEETS_PER_VERSION = 6
+#: How many fired checks per version and task file show the four views of their frame on a
+#: subject page (the rest link to the frame's number only).
+MAX_SHEETS_PER_VERSION = 12
 ANIMATED_TASKS = (106, 118)
 #: Renders of an animation are sparse (every ~100th recording row of 145.6 Hz data), so a slow
 #: flip-book rate keeps each frame readable.
@@ -51,12 +54,16 @@ def _write_table(df: pd.DataFrame, out: Path, stem: str) -> tuple[str, str]:
     return csv.relative_to(out).as_posix(), md.relative_to(out).as_posix()
 
 
-def _table_sections(run: Run, out: Path) -> list[dict]:
-    cr = component_ratings(run.results)
+def evidence_anchor(version: str, table: str) -> str:
+    """The id of a version's evidence for one table on a subject page."""
+    return f"{slug(version)}-table-{slug(table)}"
+
+
+def _table_sections(run: Run, cr: pd.DataFrame, out: Path) -> list[dict]:
     sections = []
     for table in sorted(cr["table"].unique()):
         tid = slug(table)
-        counts = rating_counts(run.results, table)
+        counts = rating_counts(run.results, table, ratings=cr)
         counts_csv, counts_md = _write_table(counts, out, f"rating_counts_{tid}")
         plot = plots.rating_distribution(counts, out / "plots" / f"ratings_{tid}.png",
                                          title=table_title(table), synthetic=run.synthetic)
@@ -67,24 +74,56 @@ def _table_sections(run: Run, out: Path) -> list[dict]:
         for version in versions:
             cells = sub[sub["version"] == version]
             csv, md = _write_table(
-                cells.set_index(["subject", "component"])[["negatives", "rating", "text"]],
+                cells.set_index(["subject", "component"])[["negatives", "rating", "text", "reason"]],
                 out, f"table_{tid}_{slug(version)}")
             files.append({"version": version, "csv": csv, "md": md})
         lookup = sub.set_index(["subject", "version", "component"])
         rows = []
         for subject in sorted(sub["subject"].unique()):
+            page = f"subjects/{slug(subject)}.html"
             cells = []
             for version in versions:
                 for c in components:
                     key = (subject, version, c)
                     cells.append(None if key not in lookup.index else {
                         "rating": lookup.at[key, "rating"], "text": lookup.at[key, "text"],
-                        "level": RATINGS.index(lookup.at[key, "rating"])})
-            rows.append({"subject": subject, "href": f"subjects/{slug(subject)}.html", "cells": cells})
+                        "reason": lookup.at[key, "reason"],
+                        "level": RATINGS.index(lookup.at[key, "rating"]),
+                        "href": f"{page}#{evidence_anchor(version, table)}"})
+            rows.append({"subject": subject, "href": page, "cells": cells})
         grid = {"versions": versions, "components": components, "rows": rows, "files": files}
-        sections.append({"id": tid, "title": table_title(table), "plot": plot.relative_to(out).as_posix(),
-                         "counts_csv": counts_csv, "counts_md": counts_md, "grid": grid})
+        sections.append({"id": tid, "table": table, "title": table_title(table),
+                         "plot": plot.relative_to(out).as_posix(),
+                         "counts_csv": counts_csv, "counts_md": counts_md, "grid": grid,
+                         "fidelity": _fidelity_plots(run, out) if table == "F" else None})
     return sections
+
+
+def _fidelity_plots(run: Run, out: Path) -> list[dict]:
+    """Table F's figures: the error per version and articulator over the task files, and one
+    task's tract variables, model against recording (the traces the rubric keeps)."""
+    figs = []
+    res = run.results
+    err = res[(res["frame"] == -1) & res["check"].isin(
+        [c.name for c in CHECKS.values() if c.kind == "fidelity" and c.unit == "mm"])]
+    if len(err):
+        path = plots.fidelity_errors(err, out / "plots" / "fidelity_errors.png",
+                                     versions=order_versions(err["version"].unique()),
+                                     synthetic=run.synthetic)
+        figs.append({"href": path.relative_to(out).as_posix(),
+                     "alt": "RMSE of the virtual pellets per version and articulator"})
+    tr = res[res["view"] == "trace"]
+    if len(tr):
+        first = tr.sort_values(["subject", "task", "rep"]).iloc[0]
+        one = tr[(tr["subject"] == first["subject"]) & (tr["task"] == first["task"])
+                 & (tr["rep"] == first["rep"])]
+        path = plots.fidelity_traces(one, out / "plots" / "fidelity_traces.png",
+                                     versions=order_versions(one["version"].unique()),
+                                     title=f"{first['subject']} task {int(first['task'])}",
+                                     synthetic=run.synthetic)
+        figs.append({"href": path.relative_to(out).as_posix(),
+                     "alt": f"model against recording, {first['subject']} task {int(first['task'])}"})
+    return figs
 
 
 def _comparison(run: Run, previous: Run | None, out: Path) -> dict | None:
@@ -102,55 +141,89 @@ def _comparison(run: Run, previous: Run | None, out: Path) -> dict | None:
             "changed": changed.to_dict("records")}
 
 
-def _check_frames(results: pd.DataFrame) -> pd.DataFrame:
-    """Per (subject, task, rep, version, check): the frames where the check found a fault."""
-    per_frame = results[(results["frame"] >= 0) & (results["negatives"] > 0)]
-    return (per_frame.groupby(["subject", "task", "rep", "version", "check"])["frame"]
-            .agg(lambda s: sorted(set(int(f) for f in s))).rename("frames").reset_index())
+def _evidence_frames(results: pd.DataFrame) -> dict[tuple, int]:
+    """(subject, task, rep, version, check) -> the frame the check points at (its evidence row)."""
+    ev = results[(results["frame"] >= 0) & results["table"].notna()]
+    return {(r.subject, int(r.task), int(r.rep), r.version, r.check): int(r.frame)
+            for r in ev.itertuples(index=False)}
 
 
-def _nearest_rendered(renders: pd.DataFrame, frames: list[int]) -> list[int]:
+def _nearest_rendered(renders: pd.DataFrame, frame: int) -> int | None:
     have = sorted(set(int(f) for f in renders["frame"]))
-    if not have:
-        return []
-    return sorted({min(have, key=lambda h: abs(h - f)) for f in frames})
+    return min(have, key=lambda h: abs(h - frame)) if have else None
 
 
-def _subject_page(run: Run, subject: str, frames_by_check: pd.DataFrame, out: Path, env) -> str:
-    res = run.results[(run.results["subject"] == subject) & (run.results["frame"] == -1)]
+def _views_at(run: Run, rend: pd.DataFrame, subject: str, task: int, rep: int, version: str,
+              frame: int, out: Path) -> tuple[int | None, list[dict]]:
+    """The four views of the rendered frame nearest ``frame`` (copied beside the report)."""
+    g = rend[(rend["task"] == task) & (rend["rep"] == rep) & (rend["version"] == version)] \
+        if len(rend) else rend
+    if not len(g):
+        return None, []
+    near = _nearest_rendered(g, frame)
+    images = []
+    for v in g[g["frame"] == near].sort_values("view").itertuples(index=False):
+        dest = out / "images" / slug(subject) / slug(version) / \
+            f"{int(task):03d}_{int(rep)}_{int(near):05d}_{slug(v.view)}.png"
+        if not dest.is_file():
+            media.copy_image(v.path, dest)
+        images.append({"href": os.path.relpath(dest, out / "subjects"),
+                       "alt": f"{v.view} view, frame {near}", "view": v.view})
+    return near, images
+
+
+def _fmt(x) -> str:
+    return "" if x is None or pd.isna(x) else f"{float(x):.4g}"
+
+
+def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
+                  rule: pd.DataFrame, out: Path, env) -> str:
+    """Per version and table: the checks that earned negatives first (value, threshold and its
+    side, the thesis's words, the four views of the frame pointed at), silent checks folded."""
+    evidence = _evidence_frames(run.results[run.results["subject"] == subject])
     rend = run.renders[run.renders["subject"] == subject] if len(run.renders) else run.renders
-    fired = frames_by_check[frames_by_check["subject"] == subject]
+    mine = fv[fv["subject"] == subject]
     versions = []
-    for version in order_versions(res["version"].unique()):
-        rows = res[res["version"] == version].sort_values(["task", "rep", "table", "check"])
-        checks = []
-        for r in rows.itertuples(index=False):
-            f = fired[(fired["task"] == r.task) & (fired["rep"] == r.rep) & (fired["version"] == version)
-                      & (fired["check"] == r.check)]["frames"]
-            frames = f.iloc[0] if len(f) else []
-            checks.append({"task": r.task if r.rep == 1 else f"{r.task}_{r.rep}", "table": r.table,
-                           "component": r.component, "check": r.check,
-                           "value": "" if pd.isna(r.value) else f"{r.value:.4g}", "unit": r.unit or "",
-                           "threshold": "" if pd.isna(r.threshold) else f"{r.threshold:.4g}",
-                           "negatives": int(r.negatives), "detail": r.detail or "",
-                           "frames": ", ".join(map(str, frames[:12])) + (" …" if len(frames) > 12 else "")})
-        sheets = []
-        vrend = rend[rend["version"] == version] if len(rend) else rend
-        for (task, rep), g in (vrend.groupby(["task", "rep"]) if len(vrend) else []):
-            wanted = sorted({fr for fs in fired[(fired["task"] == task) & (fired["rep"] == rep) &
-                                                (fired["version"] == version)]["frames"] for fr in fs})
-            picks = _nearest_rendered(g, wanted) or sorted(set(g["frame"]))[:1]
-            for frame in picks[:MAX_SHEETS_PER_VERSION]:
-                images = []
-                for v in g[g["frame"] == frame].sort_values("view").itertuples(index=False):
-                    dest = out / "images" / slug(subject) / slug(version) / \
-                        f"{int(task):03d}_{int(rep)}_{int(frame):05d}_{slug(v.view)}.png"
-                    media.copy_image(v.path, dest)
-                    images.append({"href": os.path.relpath(dest, out / "subjects"),
-                                   "alt": f"{v.view} view, frame {frame}"})
-                reason = "first frame" if frame == min(g["frame"]) and not wanted else "check frame"
-                sheets.append({"label": f"task {task}, frame {frame} ({reason})", "images": images})
-        versions.append({"version": version, "checks": checks, "sheets": sheets})
+    for version in order_versions(mine["version"].unique()):
+        tables = []
+        sheets = 0
+        for table in sorted(mine.loc[mine["version"] == version, "table"].unique()):
+            rows = mine[(mine["version"] == version) & (mine["table"] == table)].sort_values(
+                ["negatives", "raw_negatives", "task", "rep", "check"],
+                ascending=[False, False, True, True, True], kind="mergesort")
+            fired, silent = [], []
+            for r in rows.itertuples(index=False):
+                c = CHECKS.get(r.check)
+                item = {"task": r.file, "check": r.check, "component": r.component,
+                        "text": c.text if c else r.check, "value": _fmt(r.value),
+                        "unit": r.unit or "", "threshold": _fmt(r.threshold),
+                        "side": c.side if c else "", "negatives": int(r.negatives),
+                        "note": r.note, "frame": None, "images": []}
+                if r.raw_negatives > 0:
+                    frame = evidence.get((subject, int(r.task), int(r.rep), version, r.check))
+                    if frame is not None:
+                        item["frame"] = frame
+                        if sheets < MAX_SHEETS_PER_VERSION:
+                            near, item["images"] = _views_at(run, rend, subject, int(r.task),
+                                                             int(r.rep), version, frame, out)
+                            item["rendered"] = near
+                            sheets += bool(item["images"])
+                    fired.append(item)
+                else:
+                    silent.append(item)
+            cells = cr[(cr["subject"] == subject) & (cr["version"] == version) & (cr["table"] == table)]
+            rating = "; ".join(f"{c.component}: {c.rating}" for c in cells.itertuples(index=False))
+            comparison = ""
+            if table == "C" and len(rule):
+                rr = rule[(rule["subject"] == subject) & (rule["version"] == version)]
+                if len(rr) and rr.iloc[0]["reason"]:
+                    adj = int(rr.iloc[0]["adjust"])
+                    comparison = (f"{'+1' if adj > 0 else '-1' if adj < 0 else 'no change'}: "
+                                  f"{rr.iloc[0]['reason']}")
+            tables.append({"id": evidence_anchor(version, table), "title": table_title(table),
+                           "rating": rating, "fired": fired, "silent": silent,
+                           "comparison": comparison})
+        versions.append({"version": version, "id": slug(version), "tables": tables})
     page = out / "subjects" / f"{slug(subject)}.html"
     atomic_write_text(page, env.get_template("subject.html.j2").render(
         subject=subject, versions=versions, synthetic=run.synthetic))
@@ -170,6 +243,14 @@ def _animations(run: Run, out: Path) -> list[dict]:
             anims.append({"label": f"{subject} task {task}, {view} view ({', '.join(order_versions(g['version'].unique()))})",
                           "href": dest.relative_to(out).as_posix()})
     return anims
+
+
+def _summaries(run: Run) -> list[dict]:
+    """The "versions compared" sentences grouped by table, each group linked to its table."""
+    groups: dict[str, list[str]] = {}
+    for table, sentence in version_comparisons(run.results):
+        groups.setdefault(table, []).append(sentence)
+    return [{"id": slug(t), "title": table_title(t), "sentences": s} for t, s in groups.items()]
 
 
 def _meta_items(run: Run) -> list[tuple[str, str]]:
@@ -199,9 +280,11 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     env = _env()
-    frames_by_check = _check_frames(run.results)
-    subjects = sorted(run.results["subject"].dropna().unique())
-    subject_links = [{"name": s, "href": _subject_page(run, s, frames_by_check, out, env)}
+    fv = file_verdicts(run.results)
+    cr = component_ratings(run.results)
+    rule = table_c_rule(run.results, fv=fv)
+    subjects = sorted(fv["subject"].dropna().unique())
+    subject_links = [{"name": s, "href": _subject_page(run, s, fv, cr, rule, out, env)}
                      for s in subjects]
     trend = None
     if history is not None and history["night"].nunique() > 1:
@@ -214,8 +297,9 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
                           if (run.root / "gate.md").is_file() else "")
     html = env.get_template("index.html.j2").render(
         run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
-        summaries=version_summaries(run.results), comparison=_comparison(run, previous, out),
-        tables=_table_sections(run, out), animations=_animations(run, out),
+        summaries=_summaries(run), comparison=_comparison(run, previous, out),
+        tables=_table_sections(run, cr, out), animations=_animations(run, out),
+        rules=AGGREGATION_RULES,
         subjects=subject_links, trend=trend, gate=gate,
         jobs={"counts": run.summary.get("counts", {}), "failed": run.failed,
               "skipped": run.skipped} if run.summary else None)

@@ -69,14 +69,11 @@ class Run:
         return order_versions(self.results["version"].dropna().unique())
 
 
-#: The thesis's order of versions; others (third-party) follow alphabetically.
-VERSION_ORDER = ("parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1")
-
-
 def order_versions(names) -> list[str]:
-    names = {str(n) for n in names}
-    known = [v for v in VERSION_ORDER if v in names]
-    return known + sorted(names - set(known))
+    """The thesis's order of versions (the rubric's); others (third-party) follow by name."""
+    from cassi.harness.rubric.tables import order_versions as rubric_order  # noqa: PLC0415
+
+    return rubric_order({str(n) for n in names})
 
 
 def _read_json(path: Path) -> dict:

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from cassi.harness.rubric_geometry import MouthParts
+from cassi.harness.rubric.geometry import MouthParts
 
 
 class _Builder:
@@ -173,8 +173,12 @@ def animate(m: Mouth, *, F: int = 200, open_rad: float = 0.10, noise: float = 0.
     pos[:, m.corners] = _rotate(pos[:, m.corners], m.pivot, 0.35 * theta)
     rng = np.random.default_rng(seed)
     pos += rng.normal(0, noise, (F, 1, 3))  # the head's pellet noise: every vertex alike
-    branch = (t // switch_every) % 2
-    diag = pd.DataFrame({"frame": t, "outer_abc_branch": branch.astype(np.int8)})
+    # OUTER_ABC_CALC changes branch twice as often as the ellipse switches between horizontal
+    # and vertical: only the latter is the thesis's "ellipse switch"
+    branch = (t // (switch_every // 2)) % 3
+    ellipse = np.where((t // switch_every) % 2 == 1, "vertical", "horizontal")
+    diag = pd.DataFrame({"frame": t, "outer_abc_branch": branch.astype(np.int8),
+                         "ellipse": ellipse.astype(object)})
     return Anim(pos.astype(np.float32), diag, t.copy())
 
 

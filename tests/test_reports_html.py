@@ -30,9 +30,21 @@ def test_report_has_tables_banner_images_and_csv(tmp_path):
         assert not ref.startswith(("http:", "https:", "//")), ref
         assert (index.parent / ref).exists(), ref
     page = (index.parent / "subjects" / "JW11.html").read_text()
-    assert "lip_gap_start" in page and "frame 7" in page
+    assert "lip_gap_start" in page and "frame pointed at: 7" in page
     for ref in re.findall(r'src="([^"]+)"', page):
         assert (index.parent / "subjects" / ref).resolve().is_file(), ref
+    # table cells link to the subject's evidence, which leads with what fired
+    links = re.findall(r'<a class="cell" href="([^"]+)"', html)
+    assert "subjects/JW11.html#cassi-1.0-table-A" in links
+    for link in links:
+        target, anchor = link.split("#")
+        assert f'id="{anchor}"' in (index.parent / target).read_text(), link
+    evidence = page[page.index('id="cassi-1.0-table-A"'):]
+    fired = evidence.index('class="fired"')
+    assert fired < evidence.index("silent check")        # what fired first, silent ones folded
+    block = evidence[fired:evidence.index("</div>", evidence.index('class="views"', fired))]
+    assert "threshold 0.5" in block and "2 negatives" in block and "front" in block
+    assert "How the tables are counted" in html and "One fault, one charge" in html
     csv = pd.read_csv(index.parent / "tables" / "table_A_cassi-1.0.csv")
     assert set(csv["rating"]) == {"GOOD", "EXCELLENT"}
     assert (index.parent / "tables" / "rating_counts_C.md").read_text().startswith("| version")

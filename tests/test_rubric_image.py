@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from cassi.harness import rubric as R
-from cassi.harness import rubric_image as I
+from cassi.harness.rubric import image as I
+from cassi.harness.rubric import registry as REG
 
 H, W = 120, 160
 NAMES = ("background", "skin", "lips", "teeth", "tongue")
@@ -106,6 +107,19 @@ def test_centered_high_fires_when_little_lower_teeth_show(upper, lower, negs):
     assert r["negatives"] == negs, (r["value"], r["detail"])
 
 
+@pytest.mark.parametrize("upper,lower,high,low", [(6, 6, 0, 0), (12, 0, 1, 0), (0, 12, 0, 1),
+                                                  (10, 2, 1, 0), (2, 10, 0, 1)])
+def test_centering_is_judged_symmetrically(upper, lower, high, low):
+    """Centered high and centered low are mirror images: the same 4:1 split either way fires
+    the matching check and leaves the other silent (thesis Table 5.3, 'similar portions')."""
+    frames = [frame(open_h=h, upper=upper, lower=lower) for h in (10, 14, 16)]
+    r = run(frames, checks=["lips_centered_high", "lips_centered_low"])
+    assert r.loc["lips_centered_high", "negatives"] == high
+    assert r.loc["lips_centered_low", "negatives"] == low
+    assert r.loc["lips_centered_high", "value"] + r.loc["lips_centered_low", "value"] == pytest.approx(1.0)
+    assert R.CHECKS["lips_centered_low"].thresholds == R.CHECKS["lips_centered_high"].thresholds
+
+
 def test_centering_118_fires_both_ways():
     for up, lo in ((12, 1), (1, 12)):
         frames = [frame(open_h=h, upper=up, lower=lo) for h in (10, 14, 16)]
@@ -174,7 +188,7 @@ def test_a_slit_between_the_lips_is_not_an_open_mouth():
     slit.mask[ring] = LIPS
     slit.mask[(yy == 60) & (np.abs(xx - 80) < 25)] = TEETH   # a 1-pixel line of teeth glint
     ctx = I.ImageContext.of({0: slit})
-    assert ctx.openings[0].sum() >= R.OPEN_MIN_PIXELS and not ctx.open[0]
+    assert ctx.openings[0].sum() >= REG.OPEN_MIN_PIXELS and not ctx.open[0]
 
 
 def test_centering_is_judged_on_the_wide_open_frames():

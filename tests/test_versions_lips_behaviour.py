@@ -342,3 +342,15 @@ def test_corners_keep_the_face_depth_behind_their_track():
     np.testing.assert_allclose(lips.vertex(287)[:, 1], 60 / 68 * y70)
     np.testing.assert_allclose(lips.vertex(287)[:, 2], lips.vertex(70)[:, 2])
 
+
+
+def test_c_prime_is_guarded_before_eq_4_8():
+    """An upper lip beyond the subject's MAX UL (x_max 125) gives c' < c_min by Eq. 4.13; guarded,
+    the lips stay as round as at MAX UL instead of widening again (a = sqrt(b^2 + c'^2))."""
+    ulx = np.concatenate([np.full(50, 100.0), np.linspace(100, 140, 150), np.full(150, 140.0)])
+    ul, ll = pellets(ulx)
+    d = lip_frames(ul, ll, REST, SUBJECT).diagnostics
+    at_max = int(np.argmin(np.abs(ulx - 125.0)))
+    assert d["c_prime_unclipped"][-1] < K.C_MIN
+    assert d["c_prime"].min() == pytest.approx(K.C_MIN)
+    assert d["a"][-1] <= d["a"][at_max] + 1e-9

@@ -286,7 +286,11 @@ def lip_frames(
     b_signed = 0.5 * (z67 - z49)
     height = np.abs(b_signed)
     # Step 6: OUTER_ABC_CALC (c' from Eq. 4.13 on 67's x).
-    cp = c_prime(x67, subject.x_rest, subject.x_max, subject.x_min)
+    cp_raw = c_prime(x67, subject.x_rest, subject.x_max, subject.x_min)
+    # Guard before Eq. 4.8: c' is linear in x beyond the subject's sampled extremes, and a
+    # c' < c_min (or > c_max) would make a = sqrt(b^2 + c^2) widen the lips again at full
+    # protrusion; the key values bound roundness (4.2.1: fully rounded c_min, fully stretched c_max).
+    cp = np.clip(cp_raw, K.C_MIN, K.C_MAX)
     track = outer_abc_sequence(height, cp, params=params, state=state)
     # Step 7: limits.
     a, c = limit_abc(track.a, track.c)
@@ -363,6 +367,7 @@ def lip_frames(
         "b": height,
         "c": c,
         "c_prime": cp,
+        "c_prime_unclipped": cp_raw,
         "a_unlimited": track.a,
         "c_unlimited": track.c,
         "outer_abc_branch": track.branch_labels,

@@ -11,13 +11,15 @@ is ``d / p`` millimetres).
 
 The measures are what the thesis's authors judged by eye (thesis chapter 5, restated in
 ``shared/spec/rubric.md``); the thresholds that turn them into negatives live in
-:mod:`cassi.harness.rubric`, never here.
+:mod:`cassi.harness.rubric.registry`, never here.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from cassi.data.errors import CassiInputError
 
 __all__ = [
     "MouthParts", "mouth_parts", "mm_per_unit", "surface_hits", "front_triangles",
@@ -194,24 +196,29 @@ def mouth_parts(face) -> MouthParts:
         jaw_point=N.MANI - 1, jaw=z(N.JAW))
 
 
-def mm_per_unit(face_vertices: np.ndarray, jaw_length_mm: float | None, *,
-                mani: int = 257, manm: tuple[int, int] = (280, 285)) -> float:
-    """Millimetres per Parke unit: the subject's XRMB jaw length over the model's (thesis 4.1.1).
+def mm_per_unit(face_vertices: np.ndarray, jaw_length_mm: float | None) -> float:
+    """Millimetres per Parke unit, d / p: the inverse of the thesis's 4.1.1 mapping scale
+    (:class:`cassi.versions.mapping.XrmbToParke`, the one place that computes p).
 
     Parameters
     ----------
     face_vertices : float (V, 3)
         The face in Parke units.
-    jaw_length_mm : float or None
-        The subject's distance MNI-MNM (mm); None gives the model's own length mapped onto a
-        typical 60 mm adult jaw... never used for a rating (the farm always has a profile).
+    jaw_length_mm : float
+        The subject's distance MNI-MNM (mm).
+
+    Raises
+    ------
+    CassiInputError
+        Without a positive jaw length, or when the face's jaw length p is zero: no millimetre
+        can be measured, and a guessed scale would grade every check wrongly.
     """
-    v = np.asarray(face_vertices, dtype=np.float64)
-    p = float(np.linalg.norm(v[mani, [0, 2]] - 0.5 * (v[manm[0], [0, 2]] + v[manm[1], [0, 2]])))
-    if not np.isfinite(p) or p <= 0:
-        return 1.0
-    d = float(jaw_length_mm) if jaw_length_mm else 60.0
-    return d / p
+    from cassi.versions.mapping import XrmbToParke  # noqa: PLC0415 - the one mapping
+
+    if jaw_length_mm is None:
+        raise CassiInputError("the subject's jaw length (profile.jaw_length_mm) is needed to "
+                              "measure in millimetres (thesis 4.1.1)")
+    return 1.0 / XrmbToParke.from_face(face_vertices, jaw_length_mm).scale
 
 
 # ----------------------------------------------------------------------------------------------
@@ -518,24 +525,21 @@ def profile_angle(pos: np.ndarray, a: int, b: int, c: int) -> np.ndarray:
 
 #: Savitzky-Golay window (frames) and order separating jitter from motion: 9 frames = 62 ms at
 #: XRMB's 146 Hz; articulator movements (50-200 ms) stay in the fit, frame-to-frame shake does not.
-JITTER_WINDOW = 9
-JITTER_ORDER = 2
-
-
-def _shake(x: np.ndarray) -> np.ndarray:
-    """Distance of each frame from a local quadratic fit of its neighbours: (F, ...) -> (F, ...)."""
+def _shake(x: np.ndarray, window: int, order: int) -> np.ndarray:
+    """Distance of each frame from a local polynomial fit of its neighbours: (F, ...) -> (F, ...)."""
     from scipy.signal import savgol_filter  # noqa: PLC0415
 
-    if x.shape[0] < JITTER_WINDOW:
+    if x.shape[0] < window:
         return np.zeros(x.shape[:-1])
-    smooth = savgol_filter(x, JITTER_WINDOW, JITTER_ORDER, axis=0, mode="interp")
+    smooth = savgol_filter(x, window, order, axis=0, mode="interp")
     return np.linalg.norm(x - smooth, axis=-1)
 
 
-def excess_jitter(pos: np.ndarray, points, ref_points) -> np.ndarray:
+def excess_jitter(pos: np.ndarray, points, ref_points, *, window: int, order: int) -> np.ndarray:
     """Frame-to-frame shake of lip points beyond that of reference points, per frame.
 
-    Shake is the distance of a point from a local quadratic fit over JITTER_WINDOW frames
+    Shake is the distance of a point from a local polynomial fit (degree ``order``) over
+    ``window`` frames
     (Savitzky-Golay), so smooth movements, even fast ones, give ~0 and alternating or one-frame
     displacements give their size. Jitter the jaw (or a lip pellet) shows equally comes from the
     data and is no fault (thesis Table 5.8): the excess is the largest shake of ``points`` minus
@@ -543,20 +547,21 @@ def excess_jitter(pos: np.ndarray, points, ref_points) -> np.ndarray:
     """
     pos = np.asarray(pos, np.float64)
     F = pos.shape[0]
-    if F < JITTER_WINDOW:
+    if F < window:
         return np.zeros(F)
-    lip = _shake(pos[:, np.asarray(points, np.int64)]).max(axis=1)
-    ref = _shake(pos[:, np.atleast_1d(np.asarray(ref_points, np.int64))]).max(axis=1)
+    lip = _shake(pos[:, np.asarray(points, np.int64)], window, order).max(axis=1)
+    ref = _shake(pos[:, np.atleast_1d(np.asarray(ref_points, np.int64))], window, order).max(axis=1)
     return np.maximum(lip - ref, 0.0)
 
 
 def switch_jumps(pos: np.ndarray, parts: MouthParts, branch) -> tuple[np.ndarray, np.ndarray]:
-    """Jumps of the lip corners at the switch between ellipse branches.
+    """Jumps of the lip corners where a per-frame label changes.
 
     Parameters
     ----------
     branch : (F,) array-like or None
-        The OUTER_ABC_CALC branch per frame (Animation diagnostics); None = no switches known.
+        A label per frame (the rubric passes the ``ellipse`` diagnostic, horizontal or
+        vertical); None = no switches known.
 
     Returns
     -------

@@ -11,7 +11,7 @@ background) and ``depth`` float (H, W) distance to the camera (``inf`` = nothing
 (``teeth_upper``/``teeth_lower``, or any names containing ``upper``/``lower``); a single teeth
 part is split into upper and lower at the row of least teeth inside the opening.
 
-All thresholds live in :mod:`cassi.harness.rubric`.
+All thresholds and windows live in :mod:`cassi.harness.rubric.registry`.
 """
 from __future__ import annotations
 
@@ -22,11 +22,12 @@ import numpy as np
 from scipy import ndimage
 from skimage import measure
 
-from .rubric import (CENTERING_OPEN_SHARE, OPEN_MIN_HEIGHT, OPEN_MIN_PIXELS, TONGUE_MIN_PIXELS,
-                     Measurement)
+from .model import Measurement
+from .registry import (CENTERING_OPEN_SHARE, LOWER_TEETH_MIN_PIXELS, OPEN_MIN_HEIGHT,
+                       OPEN_MIN_PIXELS, TEETH_MIN_PIXELS, TONGUE_MIN_PIXELS, WIDE_OPEN_SHARE)
 
 __all__ = ["FrameMasks", "ImageContext", "mouth_opening", "teeth_split", "opening_extent",
-           "m_centered_high", "m_centering_offset", "m_tongue_visible", "m_tongue_in_front",
+           "m_centered_high", "m_centered_low", "m_centering_offset", "m_tongue_visible", "m_tongue_in_front",
            "m_lower_teeth_seen", "m_opening_extent"]
 
 
@@ -187,7 +188,7 @@ class ImageContext:
                 continue
             u = int((f.upper_teeth & o).sum())
             lo = int((f.lower_teeth & o).sum())
-            if u + lo >= OPEN_MIN_PIXELS // 3:
+            if u + lo >= TEETH_MIN_PIXELS:
                 shares.append(u / (u + lo))
                 frames.append(f.frame)
         return np.asarray(shares, float), np.asarray(frames, int)
@@ -206,6 +207,19 @@ def m_centered_high(ctx: ImageContext) -> Measurement:
     return Measurement(float(np.median(s)), int(fr[i]),
                        f"median over {s.size} open frames; upper share {s.min():.2f}-{s.max():.2f}",
                        frame_value=float(s[i]))
+
+
+def m_centered_low(ctx: ImageContext) -> Measurement:
+    """Median share of LOWER teeth inside the lip opening over open frames: the mirror of
+    :func:`m_centered_high` (1 = only lower teeth show)."""
+    s, fr = ctx.upper_shares()
+    if s.size == 0:
+        return _none("no frame with the lips open and teeth showing")
+    low = 1.0 - s
+    i = int(np.argmax(low))
+    return Measurement(float(np.median(low)), int(fr[i]),
+                       f"median over {s.size} open frames; lower share {low.min():.2f}-{low.max():.2f}",
+                       frame_value=float(low[i]))
 
 
 def m_centering_offset(ctx: ImageContext) -> Measurement:
@@ -245,7 +259,7 @@ def m_lower_teeth_seen(ctx: ImageContext) -> Measurement:
     of = ctx.open_frames()
     if not of:
         return _none("no frame with the lips open")
-    seen = np.asarray([int((f.lower_teeth & o).sum()) >= 5 for f, o in of])
+    seen = np.asarray([int((f.lower_teeth & o).sum()) >= LOWER_TEETH_MIN_PIXELS for f, o in of])
     i = int(np.argmin(seen))
     return Measurement(float(seen.mean()), of[i][0].frame,
                        f"lower teeth seen in {int(seen.sum())} of {seen.size} open frames",
@@ -286,7 +300,7 @@ def m_opening_extent(ctx: ImageContext) -> Measurement:
     if not stats:
         return _none("no frame with the lips open")
     areas = np.asarray([a for _, a, _ in stats])
-    wide = [(fr, e) for fr, a, e in stats if a >= 0.7 * areas.max() and np.isfinite(e)]
+    wide = [(fr, e) for fr, a, e in stats if a >= WIDE_OPEN_SHARE * areas.max() and np.isfinite(e)]
     if not wide:
         return _none("no wide-open frame")
     ext = np.asarray([e for _, e in wide])

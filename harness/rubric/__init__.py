@@ -1,0 +1,31 @@
+"""The automated rubric: every criterion of the thesis's evaluation (chapter 5, restated in
+``shared/spec/rubric.md``) as one registered check, plus cassi-farm's Table F (fidelity to the
+recording), and the one aggregation of check rows into the thesis's tables.
+
+Modules by role:
+
+- :mod:`.model` -- the check model (:class:`Check`, :class:`Measurement`) and the rating scale;
+- :mod:`.geometry` -- pure geometric measures over vertex positions;
+- :mod:`.measures` -- one geometric measure per check over an animation;
+- :mod:`.image` -- measures on the renderer's part masks;
+- :mod:`.fidelity` -- Table F: the model's pellet sites against the measured pellets;
+- :mod:`.registry` -- every check, threshold, window and aggregation rule, with its reason;
+- :mod:`.run` -- running checks into rows of the long results table;
+- :mod:`.tables` -- the one aggregation into the thesis's tables.
+"""
+from .model import (GOOD_RATINGS, RATINGS, TABLE_TOPICS, TABLES, VERSION_ORDER, Check,
+                    Measurement, rate, table_title)
+from .registry import (AGGREGATION_RULES, CHECKS, MIN_FRAMES, checks_for, get_check,
+                       registry_table)
+from .run import run_geometry_checks, run_image_checks
+from .tables import (component_ratings, file_verdicts, negatives_text, order_versions,
+                     rating_counts, table_c_rule, verdicts, version_comparisons,
+                     version_summaries, version_totals)
+
+__all__ = [
+    "Check", "Measurement", "CHECKS", "TABLES", "TABLE_TOPICS", "RATINGS", "GOOD_RATINGS",
+    "VERSION_ORDER", "MIN_FRAMES", "AGGREGATION_RULES", "rate", "table_title", "get_check",
+    "checks_for", "registry_table", "run_geometry_checks", "run_image_checks", "file_verdicts",
+    "verdicts", "table_c_rule", "component_ratings", "rating_counts", "version_totals",
+    "version_summaries", "version_comparisons", "negatives_text", "order_versions",
+]

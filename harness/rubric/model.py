@@ -1,0 +1,197 @@
+"""The check model and the rating scale: what a rubric check is, what a measure returns, and how
+negatives become ratings (thesis chapter 5, Table 5.2; restated in ``shared/spec/rubric.md``).
+
+This module holds no threshold: every check, with its thresholds and their reasons, is declared
+in :mod:`cassi.harness.rubric.registry`.
+"""
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from cassi.data.errors import CassiInputError
+
+__all__ = ["RATINGS", "GOOD_RATINGS", "TABLES", "TABLE_TOPICS", "VERSION_ORDER", "rate",
+           "table_title", "Measurement", "Check"]
+
+#: Thesis Table 5.2: negatives -> rating (6 or more: UNACCEPTABLE).
+RATINGS = ("EXCELLENT", "VERY GOOD", "GOOD", "FAIR", "POOR", "VERY POOR", "UNACCEPTABLE")
+#: The ratings the thesis's summaries count as good (Table 5.6: "VERY GOOD or EXCELLENT").
+GOOD_RATINGS = ("EXCELLENT", "VERY GOOD")
+
+#: Rubric tables: letter -> (thesis table, title). F is cassi-farm's addition, not the thesis's.
+TABLES = {
+    "A": ("5.3", "Teeth, lips and tongue per subject"),
+    "B": ("5.4", "Overall face shape at initialization"),
+    "C": ("5.5", "Lip placement and movement across versions"),
+    "D": ("5.8", "Maximum lip protrusion, task 118"),
+    "E": ("5.9", "Jaw wagging, task 106"),
+    "F": ("", "Fidelity to the recording (cassi-farm's addition, not in the thesis)"),
+}
+#: What each table judges, for the "versions compared" sentences.
+TABLE_TOPICS = {"A": "teeth, lips and tongue", "B": "face shape", "C": "lip placement",
+                "D": "maximum lip protrusion", "E": "jaw wagging", "F": "fidelity to the recording"}
+
+#: Versions in the order the thesis compares them (Table C: "compared with the previous version").
+VERSION_ORDER = ("parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1")
+
+
+def rate(negatives: int) -> str:
+    """The rating for a number of negatives (thesis Table 5.2).
+
+    >>> rate(0), rate(3), rate(6), rate(11)
+    ('EXCELLENT', 'FAIR', 'UNACCEPTABLE', 'UNACCEPTABLE')
+    """
+    n = int(negatives)
+    if n < 0:
+        raise CassiInputError(f"negatives must be >= 0, got {n}")
+    return RATINGS[min(n, len(RATINGS) - 1)]
+
+
+def table_title(table: str) -> str:
+    """``Teeth, lips and tongue, per subject (thesis Table 5.3)``; Table F says it is ours."""
+    thesis, title = TABLES.get(str(table), ("", f"Table {table}"))
+    return f"{title} (thesis Table {thesis})" if thesis else title
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """What a measure returns: the whole-task value, the worst frame and a detail text.
+
+    ``series`` (optional, (F,)) is the per-frame value; ``negatives`` overrides the threshold
+    grading for checks whose thesis rule is not a plain threshold (tongue: upper / lower / both).
+    """
+
+    value: float
+    frame: int = -1
+    detail: str = ""
+    negatives: int | None = None
+    frame_value: float | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class Check:
+    """One rubric criterion.
+
+    Attributes
+    ----------
+    name : str
+        Unique registry key (the ``check`` column).
+    table : str
+        ``A`` .. ``F`` (:data:`TABLES`); ``thesis_table`` the thesis's table number ("" for F).
+    component : str
+        teeth, lips, tongue, palate, jaw, face ...
+    view : str
+        Where the thesis judged it: front, side, half, top (the results' ``view`` column is
+        ``geometry`` for geometric checks, the render view for image checks).
+    unit : str
+    frames : str
+        Which frames it looks at.
+    description : str
+        What it measures.
+    thresholds : tuple of float
+        Values beyond which the fault counts, mildest first.
+    negatives : tuple of int
+        Negatives earned beyond each threshold (same length, non-decreasing).
+    direction : {"higher", "lower"}
+        ``higher``: larger values are worse (fires when value > threshold); ``lower``: smaller
+        values are worse (fires when value < threshold).
+    reason : str
+        Why these threshold values.
+    text : str
+        The negative as the thesis writes it.
+    kind : {"geometry", "image", "fidelity"}
+        What the measure reads: the animation (:class:`~cassi.harness.rubric.measures.GeometryContext`),
+        the rendered masks (:class:`~cassi.harness.rubric.image.ImageContext`) or the animation
+        with the recording it animated (:class:`~cassi.harness.rubric.fidelity.FidelityContext`).
+    measure : str
+        ``"module:function"`` inside this package, ``function(ctx) -> Measurement``; resolved
+        when first called, so the registry imports no measure code.
+    tasks : tuple of int or None
+        Only these tasks (118 for Table D, 106 for Table E); None = every task.
+    counted : bool
+        False for what the thesis measured but did not count (tongue through the palate) and
+        for image cross-checks of a geometric check; such rows always carry 0 negatives.
+    gate_tolerance : int
+        Extra negatives (summed over subjects) the metric gate of ``cassi gate`` allows.
+    charged_with : str or None
+        One fault, one charge: this check earns nothing for a subject and version when the named
+        check already charges the same fault (the aggregation applies it).
+    """
+
+    name: str
+    table: str
+    component: str
+    view: str
+    unit: str
+    frames: str
+    description: str
+    thresholds: tuple[float, ...]
+    negatives: tuple[int, ...]
+    direction: str
+    reason: str
+    text: str
+    kind: str
+    measure: str
+    tasks: tuple[int, ...] | None = None
+    counted: bool = True
+    gate_tolerance: int = 0
+    charged_with: str | None = None
+
+    def __post_init__(self):
+        if self.table not in TABLES:
+            raise ValueError(f"{self.name}: unknown table {self.table!r}")
+        if len(self.thresholds) != len(self.negatives) or not self.thresholds:
+            raise ValueError(f"{self.name}: one negatives count per threshold")
+        if list(self.negatives) != sorted(self.negatives) or min(self.negatives) < 1:
+            raise ValueError(f"{self.name}: negatives must be >= 1 and non-decreasing")
+        step = np.diff(self.thresholds)
+        if self.direction == "higher" and np.any(step <= 0) or \
+           self.direction == "lower" and np.any(step >= 0):
+            raise ValueError(f"{self.name}: thresholds must run from mild to severe")
+        if self.kind not in ("geometry", "image", "fidelity"):
+            raise ValueError(f"{self.name}: kind must be geometry, image or fidelity")
+        if self.direction not in ("higher", "lower"):
+            raise ValueError(f"{self.name}: direction must be higher or lower")
+        if ":" not in self.measure:
+            raise ValueError(f"{self.name}: measure must be 'module:function'")
+
+    @property
+    def func(self):
+        """The measure, ``func(ctx) -> Measurement`` (imported on first use)."""
+        module, name = self.measure.split(":", 1)
+        return getattr(importlib.import_module(f"{__package__}.{module}"), name)
+
+    @property
+    def side(self) -> str:
+        """Which side of the threshold is a fault, in words (evidence pages)."""
+        return "above is a fault" if self.direction == "higher" else "below is a fault"
+
+    @property
+    def thesis_table(self) -> str:
+        return TABLES[self.table][0]
+
+    @property
+    def threshold(self) -> float:
+        """The first (mildest) threshold: where the check starts to fire."""
+        return float(self.thresholds[0])
+
+    def applies_to(self, task: int | None) -> bool:
+        return self.tasks is None or (task is not None and int(task) in self.tasks)
+
+    def grade(self, value: float) -> int:
+        """Negatives for a value by the thresholds (0 when not counted or not measurable)."""
+        if value is None or not np.isfinite(value):
+            return 0
+        n = 0
+        for t, k in zip(self.thresholds, self.negatives):
+            if (value > t) if self.direction == "higher" else (value < t):
+                n = k
+        return n
+
+    def fires(self, value: float) -> bool:
+        return value is not None and np.isfinite(value) and (
+            value > self.threshold if self.direction == "higher" else value < self.threshold)
+

@@ -1,0 +1,968 @@
+"""The check registry: every criterion of the rubric, declared once with its thresholds and reasons.
+
+The thesis's authors watched each animation and wrote down faults ("negatives"), one to three
+per fault, and turned the count into a rating (thesis chapter 5, Table 5.2; restated in
+``shared/spec/rubric.md``). Every criterion of rubric.md's Tables A-E, and cassi-farm's Table F
+(fidelity to the recording), is a :class:`~cassi.harness.rubric.model.Check` declared here with
+what it measures, its unit, view and frames, its thresholds and the negatives each earns, the
+reason for each threshold, and the negative's text as the thesis writes it. ALL THRESHOLDS AND
+WINDOWS LIVE IN THIS FILE, each with its reason; so do the rules that aggregate checks into the
+thesis's tables (:mod:`.tables` applies them). Tables, reports and gates read the registry;
+nothing else decides what a negative is.
+
+No threshold here was tuned by counting how often a check fires on the synthetic corpus: each
+comes from the thesis or from looking at renders, as its reason says.
+
+Tables (``Check.table``): ``A`` teeth/lips/tongue per subject (thesis Table 5.3), ``B`` face
+shape at initialization (5.4), ``C`` lip placement across versions (5.5, summary 5.6), ``D``
+maximum lip protrusion, task 118 (5.8), ``E`` jaw wagging, task 106 (5.9), ``F`` fidelity to
+the recording (not the thesis's).
+"""
+from __future__ import annotations
+
+import difflib
+
+import pandas as pd
+
+from cassi.data.errors import CassiInputError
+
+from .model import Check
+
+__all__ = ["CHECKS", "get_check", "checks_for", "registry_table", "MIN_FRAMES",
+           "TABLE_C_FROM_A", "MARKED_SHARE", "AGGREGATION_RULES"]
+
+# ----------------------------------------------------------------------------------------------
+# Windows: which frames and pixels a measure looks at
+# ----------------------------------------------------------------------------------------------
+
+#: A fault "during the task" must last this many frames (3 x 6.866 ms ~ 20 ms) before it counts:
+#: a single-frame graze is invisible at 146 frames per second, which is why sustained measures
+#: take the MIN_FRAMES-th worst frame. One-frame jumps have their own check (corner_jump_switch).
+MIN_FRAMES = 3
+#: "During the task, especially at its end" (Table 5.3, teeth): the end is the last END_SHARE of
+#: the frames (at least MIN_FRAMES), where the jaw returns to rest and the half view holds still.
+END_SHARE = 0.05
+#: ... and during the task a teeth fault counts when held TEETH_HOLD_FRAMES frames (~100 ms): the
+#: teeth are judged from the half view, where a posture held a tenth of a second is seen while a
+#: passing phase of the jaw is not (a held consonant closure lasts 50-150 ms).
+TEETH_HOLD_FRAMES = 15
+#: A jaw open for speech slants the lower teeth down and parts them: that is the movement, not a
+#: fault. Slope and "too far apart" are therefore judged during the task only in the frames where
+#: the jaw (vertex 258) is within JAW_NEAR_CLOSED_MM of its most closed position in the task,
+#: i.e. where the teeth should sit as at rest; overlap (the jaw closing through the teeth) is a
+#: fault in any frame. 2 mm: a jaw lowered less than that barely parts the incisors.
+JAW_NEAR_CLOSED_MM = 2.0
+#: The lower lip "goes below the bottom of the lower front teeth" when its edge (58) is this far
+#: below the lower gum line (258): half a millimetre is beyond the round-off of the two outlines.
+LIPS_BELOW_TEETH_MM = 0.5
+#: The lips are "open wide" (Table E's shape, image extent) at this share of the task's widest
+#: opening, and at least WIDE_OPEN_MM apart: the shape of a slit is not the shape of the mouth.
+WIDE_OPEN_SHARE = 0.7
+WIDE_OPEN_MM = 3.0
+#: "Often" over a task for protrusion and crossing lips: the value a tenth of the frames reach
+#: (90th percentile), so a few frames at a turning point do not decide and a habit does.
+OFTEN_PERCENTILE = 90
+#: Lip jitter: shake is the distance from a Savitzky-Golay fit over JITTER_WINDOW frames of degree
+#: JITTER_ORDER (9 frames = 62 ms, shorter than a syllable, so speech movements are smooth in it).
+JITTER_WINDOW = 9
+JITTER_ORDER = 2
+
+#: Lips are "open" for the image measures when the mouth opening covers at least this many pixels
+#: in the front view (a sliver between touching lips is not an opening to judge centering in).
+OPEN_MIN_PIXELS = 30
+#: ... and is at least this many pixels tall somewhere. Added after the renders: Parke's neutral
+#: lips part by 1.35 mm, a 1-pixel slit of ~40 pixels at the preview front view that passed the
+#: area rule and had its glint of upper teeth judged as "centered high" (synthetic JW11 task 118).
+OPEN_MIN_HEIGHT = 3
+#: Centering (upper vs lower teeth inside the opening) is judged on frames open at least this
+#: share of the task's widest opening. Added after the renders: Parke's face on synthetic JW11
+#: task 118 showed the lower teeth more than the upper when open (share 0.32) but the median over
+#: every open frame was 0.85 "centered high", carried by 3-pixel slits showing an upper edge only.
+CENTERING_OPEN_SHARE = 0.5
+#: A frame judges centering only when this many teeth pixels show inside the opening (a third of
+#: the smallest opening: fewer is a glint, not "portions of the teeth").
+TEETH_MIN_PIXELS = OPEN_MIN_PIXELS // 3
+#: The lower teeth are "seen" in a frame when this many of their pixels show in the opening.
+LOWER_TEETH_MIN_PIXELS = 5
+#: The tongue "shows" when a connected patch of at least this many pixels of it lies inside the
+#: lip opening. Tuned on renders: at the preview front view (1.3 mm per pixel) the tongue shows
+#: through the 1-pixel gaps between the teeth as vertical slivers of 1-4 pixels, which the eye
+#: does not read as the tongue; 6 px (~10 mm^2) is a visible patch.
+TONGUE_MIN_PIXELS = 6
+
+#: Table F: a tract variable that moves less than this in the recording (5th to 95th percentile)
+#: gives nothing to follow; its correlation would be the correlation of noise (XRMB pellets are
+#: accurate to ~0.5 mm), so it is not measured for that file.
+FIDELITY_MIN_RANGE_MM = 2.0
+#: Table F keeps the tract variables of these tasks as traces (results rows of view ``trace``,
+#: no table, never negatives) for the report's "model vs data" plot: task 106, jaw wagging,
+#: moves the jaw and lips through their whole range. Every TRACE_STEP-th frame (69 ms, 14.6 Hz,
+#: three samples per syllable at 5 syllables a second) keeps the results table small.
+TRACE_TASKS = (106,)
+TRACE_STEP = 10
+
+# ----------------------------------------------------------------------------------------------
+# The aggregation rules (applied by cassi.harness.rubric.tables, tested branch by branch)
+# ----------------------------------------------------------------------------------------------
+
+#: Table C is "the lip criteria of Table A, judged for each version on the same files" plus
+#: Table C's own checks (rubric.md): the Table A rows of these components are judged again in C.
+TABLE_C_FROM_A = ("lips",)
+#: "A marked improvement over the previous version earns fewer negatives; a version that looks
+#: worse earns an extra one" (rubric.md Table C). Both are measured per check on the task files
+#: the two versions share, where the ratings would otherwise be the same:
+#: - looks worse: some check fires in MORE of the shared files than for the previous version;
+#: - marked improvement: no check fires in more files, and some check that fired for the previous
+#:   version now fires in at most MARKED_SHARE of those files (the fault is gone from at least
+#:   half the files that showed it).
+#: Worse earns one extra negative, a marked improvement one fewer (never below zero); a version
+#: both better on one check and worse on another keeps its count. When the ratings differ, the
+#: counts already tell the versions apart and neither rule applies.
+MARKED_SHARE = 0.5
+#: The rules in words, for the report.
+AGGREGATION_RULES = (
+    "A check counts once per subject and version: the most negatives any of the subject's task "
+    "files earned (the thesis judged each subject from its files together).",
+    "One fault, one charge: a check declared as charged with another earns nothing where that "
+    "one fires for the same subject and version (lips separated at the start are not charged "
+    "again when the lips never touch).",
+    "Table C = the lip checks of Table A judged per version + Table C's own checks.",
+    "Table C, compared with the previous version on the same task files, where the ratings would "
+    "be the same: a version that looks worse (a check fires in more of the shared files) earns one "
+    "extra negative; a marked improvement (no check worse, and a check that fired is gone from at "
+    f"least {1 - MARKED_SHARE:.0%} of the files that showed it) earns one fewer.",
+    "Table F (fidelity to the recording) is cassi-farm's addition, not the thesis's: the model's "
+    "pellet sites mapped back into the XRMB frame are compared with the measured pellets.",
+)
+
+# ----------------------------------------------------------------------------------------------
+# The checks
+# ----------------------------------------------------------------------------------------------
+
+_ALL: list[Check] = [
+    # ---------------- Table A (thesis 5.3): teeth ----------------
+    Check(name="teeth_front_overlap",
+          table="A",
+          component="teeth",
+          view="half",
+          unit="mm",
+          frames="during the task (held) and at its end",
+          description="vertical overlap of the upper over the lower front teeth (z of the lower incisor tip "
+                      "minus z of 226)",
+          thresholds=(3.5,),
+          negatives=(1,),
+          direction="higher",
+          reason="the reference is 'a very slight overlap'; an adult overbite of 2-3 mm looks normal, so "
+                 "only more than 3.5 mm counts",
+          text="front teeth overlap top to bottom",
+          kind="geometry",
+          measure="measures:m_teeth_front_overlap"),
+    Check(name="teeth_back_overlap",
+          table="A",
+          component="teeth",
+          view="half",
+          unit="mm",
+          frames="during the task (held) and at its end",
+          description="vertical overlap of the back teeth (lower molar top minus upper molar bottom), beyond "
+                      "Parke's rest face",
+          thresholds=(1.5,),
+          negatives=(1,),
+          direction="higher",
+          reason="Parke's face is the reference alignment; 1.5 mm more overlap than it is visible in the "
+                 "half-face view at its scale",
+          text="back teeth overlap top to bottom",
+          kind="geometry",
+          measure="measures:m_teeth_back_overlap"),
+    Check(name="teeth_slope_up",
+          table="A",
+          component="teeth",
+          view="half",
+          unit="deg",
+          frames="during the task (held) and at its end",
+          description="angle of the lower occlusal line (lower molar -> lower incisor tip) above the upper "
+                      "one, beyond Parke's rest face",
+          thresholds=(5.0, 25.0),
+          negatives=(1, 3),
+          direction="higher",
+          reason="was 8 deg; 5 deg after the renders: CASSI 2.0 on synthetic JW11 task 19 ends at 7 deg "
+                 "and the half view plainly shows the lower row rising toward the front against the "
+                 "horizontal upper row (Parke's 0 deg reads level). The thesis gives a 'very steep "
+                 "slope' three negatives: 25 deg",
+          text="lower teeth slant upward toward the front",
+          kind="geometry",
+          measure="measures:m_teeth_slope_up"),
+    Check(name="teeth_slope_down",
+          table="A",
+          component="teeth",
+          view="half",
+          unit="deg",
+          frames="during the task (held) and at its end",
+          description="angle of the lower occlusal line below the upper one, beyond rest",
+          thresholds=(5.0,),
+          negatives=(1,),
+          direction="higher",
+          reason="as teeth_slope_up (5 deg)",
+          text="lower teeth slant downward toward the front",
+          kind="geometry",
+          measure="measures:m_teeth_slope_down"),
+    Check(name="teeth_too_far_apart",
+          table="A",
+          component="teeth",
+          view="half",
+          unit="mm",
+          frames="during the task (held) and at its end",
+          description="vertical gap between the upper (226) and lower front teeth tips, or between the back "
+                      "teeth beyond Parke's rest face, whichever is larger",
+          thresholds=(5.0,),
+          negatives=(1,),
+          direction="higher",
+          reason="at the end of a task the jaw is near rest, where the incisors nearly meet; a gap over "
+                 "5 mm (about a fingertip's thickness) is clearly open",
+          text="upper and lower teeth too far apart",
+          kind="geometry",
+          measure="measures:m_teeth_apart"),
+    # ---------------- Table A: lips ----------------
+    Check(name="lips_never_touch",
+          table="A",
+          component="lips",
+          view="front",
+          unit="mm",
+          frames="all frames",
+          description="smallest gap between the lips' edges (61 above 58) over the task",
+          thresholds=(1.5, 4.0),
+          negatives=(1, 2),
+          direction="higher",
+          reason="lips that touch have ~0 gap. Was 1 mm; raised to 1.5 mm after the renders: "
+                 "Parke's neutral face parts the lips by 1.35 mm and its front render reads as lips "
+                 "lightly touching (a dark seam with a glint of teeth). 4 mm is the thesis's 'large "
+                 "separation' (two negatives)",
+          text="lips too far apart, never touching",
+          kind="geometry",
+          measure="measures:m_lips_never_touch"),
+    Check(name="lips_apart_at_start",
+          table="A",
+          component="lips",
+          view="front",
+          unit="mm",
+          frames="first frame",
+          description="gap between the lips' edges at the first frame",
+          thresholds=(1.5,),
+          negatives=(1,),
+          direction="higher",
+          reason="desirable: the lips lightly touch at the start; 1.5 mm as lips_never_touch (Parke's "
+                 "1.35 mm still reads as touching on the render)",
+          text="lips separated at the start",
+          kind="geometry",
+          measure="measures:m_lips_apart_start",
+          charged_with="lips_never_touch"),
+    Check(name="lips_pressed",
+          table="A",
+          component="lips",
+          view="front",
+          unit="mm",
+          frames="first frame",
+          description="how far the lips' edges cross at the first frame (tightly pressed)",
+          thresholds=(2.0,),
+          negatives=(1,),
+          direction="higher",
+          reason="lightly touching lips meet at 0. Was 0.5 mm; 2 mm after the renders: CASSI "
+                 "2.0's 0.8 mm crossing at the start (synthetic JW12 task 5) renders as lips lightly "
+                 "closed, not pressed",
+          text="lips too close together, tightly pressed",
+          kind="geometry",
+          measure="measures:m_lips_pressed"),
+    Check(name="lower_lip_below_teeth",
+          table="A",
+          component="lips",
+          view="front",
+          unit="fraction",
+          frames="all frames",
+          description="fraction of frames with the lower lip's edge (58) more than LIPS_BELOW_TEETH_MM below "
+                      "the lower gum line (258)",
+          thresholds=(0.10, 0.50),
+          negatives=(1, 2),
+          direction="higher",
+          reason="'often' = at least a tenth of the task; 'the usual state' (two negatives) = half",
+          text="the lower lip often goes below the bottom of the lower front teeth",
+          kind="geometry",
+          measure="measures:m_lower_lip_below_teeth"),
+    Check(name="lips_centered_high",
+          table="A",
+          component="lips",
+          view="front",
+          unit="fraction",
+          frames="frames with the lips open",
+          description="share of the teeth pixels inside the lip opening that are upper teeth (median over open "
+                      "frames)",
+          thresholds=(0.80,),
+          negatives=(1,),
+          direction="higher",
+          reason="well centered = similar portions (thesis Table 5.3); the same 4:1 split either way: only "
+                 "4:1 or more reads as 'much of the upper and little of the lower' (or the reverse)",
+          text="centered high: much of the upper teeth and little of the lower teeth show",
+          kind="image",
+          measure="image:m_centered_high"),
+    Check(name="lips_centered_low",
+          table="A",
+          component="lips",
+          view="front",
+          unit="fraction",
+          frames="frames with the lips open",
+          description="share of the teeth pixels inside the lip opening that are lower teeth (median over open "
+                      "frames): the mirror of lips_centered_high",
+          thresholds=(0.80,),
+          negatives=(1,),
+          direction="higher",
+          reason="judged symmetrically with lips_centered_high: a 4:1 split toward the lower teeth is as "
+                 "far from 'similar portions' as one toward the upper",
+          text="centered low: much of the lower teeth and little of the upper teeth show",
+          kind="image",
+          measure="image:m_centered_low"),
+    Check(name="lips_through_teeth",
+          table="A",
+          component="lips",
+          view="side",
+          unit="mm",
+          frames="all frames (sustained 3)",
+          description="depth of lip vertices behind the front surface of the front teeth",
+          thresholds=(0.5,),
+          negatives=(1,),
+          direction="higher",
+          reason="0.5 mm is beyond the teeth's shading: the lip visibly sinks in",
+          text="lips pass through the surface of the teeth",
+          kind="geometry",
+          measure="measures:m_lips_through_teeth"),
+    Check(name="lower_lip_protrudes",
+          table="A",
+          component="lips",
+          view="side",
+          unit="mm",
+          frames="all frames (90th percentile)",
+          description="x(49) - x(67): lower lip forward of the upper",
+          thresholds=(1.0, 3.0),
+          negatives=(1, 2),
+          direction="higher",
+          reason="upper lip is normally at or ahead of the lower; 1 mm ahead shows in profile, 3 mm is "
+                 "'marked' (two negatives)",
+          text="lower lip protrudes farther than the upper lip",
+          kind="geometry",
+          measure="measures:m_lower_lip_protrudes"),
+    Check(name="lips_overlap",
+          table="A",
+          component="lips",
+          view="front",
+          unit="mm",
+          frames="all frames (sustained 3)",
+          description="how far the lower lip's edge rises above the upper lip's edge (the lips cross)",
+          thresholds=(0.5,),
+          negatives=(1,),
+          direction="higher",
+          reason="crossing by 0.5 mm shows as one lip through the other",
+          text="the lips overlap during the task",
+          kind="geometry",
+          measure="measures:m_lips_overlap"),
+    # ---------------- Table A: tongue ----------------
+    Check(name="tongue_through_teeth",
+          table="A",
+          component="tongue",
+          view="front",
+          unit="mm",
+          frames="all frames (sustained 3)",
+          description="depth of tongue vertices and edges forward of the back surface of the upper and of the "
+                      "lower front teeth",
+          thresholds=(0.5, 2.0),
+          negatives=(1, 3),
+          direction="higher",
+          reason="0.5 mm through one set: one negative; through both: two; both by more than 2 mm ('very "
+                 "noticeably'): three (graded by m_tongue_teeth)",
+          text="tongue pokes through the front teeth",
+          kind="geometry",
+          measure="measures:m_tongue_teeth"),
+    Check(name="tongue_hidden",
+          table="A",
+          component="tongue",
+          view="front",
+          unit="fraction",
+          frames="frames with the lips open",
+          description="fraction of open-lip front-view frames in which any tongue pixel shows",
+          thresholds=(0.10,),
+          negatives=(1,),
+          direction="lower",
+          reason="barely visible = seen in fewer than one open frame in ten",
+          text="tongue barely visible from the front (hidden by the teeth)",
+          kind="image",
+          measure="image:m_tongue_visible"),
+    Check(name="tongue_in_front_of_teeth",
+          table="A",
+          component="tongue",
+          view="front",
+          unit="px",
+          frames="all rendered frames",
+          description="tongue pixels nearer the camera than the front teeth (image cross-check of "
+                      "tongue_through_teeth)",
+          thresholds=(5.0,),
+          negatives=(1,),
+          direction="higher",
+          reason="5 pixels rules out antialiasing at the teeth's edge; counted by the geometric check",
+          text="tongue shows in front of the teeth",
+          kind="image",
+          measure="image:m_tongue_in_front",
+          counted=False),
+    Check(name="tongue_through_palate",
+          table="A",
+          component="tongue",
+          view="half",
+          unit="mm",
+          frames="all frames (sustained 3)",
+          description="height of tongue vertices and edges above the palatal surface",
+          thresholds=(0.5,),
+          negatives=(1,),
+          direction="higher",
+          reason="measured but, as in the thesis, not counted (most subjects pass the alveolar ridge)",
+          text="tongue passes through the palatal outline",
+          kind="geometry",
+          measure="measures:m_tongue_palate",
+          counted=False),
+    Check(name="tongue_back_v",
+          table="A",
+          component="tongue",
+          view="half",
+          unit="deg",
+          frames="all frames (sustained 3)",
+          description="angle at T4 between T3 and the anchored back of the tongue (the V at the back)",
+          thresholds=(120.0,),
+          negatives=(1,),
+          direction="lower",
+          reason="measured but, as in the thesis, not counted; a bend sharper than 120 deg reads as a V",
+          text="V shape at the back of the tongue (anchored back points)",
+          kind="geometry",
+          measure="measures:m_tongue_back_v",
+          counted=False),
+    # ---------------- Table B (thesis 5.4) ----------------
+    Check(name="palate_below_incisor",
+          table="B",
+          component="palate",
+          view="half",
+          unit="mm",
+          frames="initialization",
+          description="how far the palatal outline reaches below the tip of the upper front teeth (226)",
+          thresholds=(0.25, 2.0),
+          negatives=(1, 2),
+          direction="higher",
+          reason="any reach below the tip shows (0.25 mm rules out round-off); over 2 mm is 'very "
+                 "noticeable' (two negatives)",
+          text="palatal outline extends below the tip of the upper front "
+               "teeth",
+          kind="geometry",
+          measure="measures:m_palate_below_incisor"),
+    Check(name="jaw_long",
+          table="B",
+          component="jaw",
+          view="side",
+          unit="ratio",
+          frames="initialization",
+          description="jaw length (vertices 14-43, x extent) over Parke's neutral face",
+          thresholds=(1.15,),
+          negatives=(1,),
+          direction="higher",
+          reason="15 % longer than Parke's average face reads as 'very long'",
+          text="unusual jaw: very long",
+          kind="geometry",
+          measure="measures:m_jaw_long"),
+    Check(name="jaw_square",
+          table="B",
+          component="jaw",
+          view="side",
+          unit="ratio",
+          frames="initialization",
+          description="jaw squareness (side-view hull area / box) over Parke's neutral",
+          thresholds=(1.10,),
+          negatives=(1,),
+          direction="higher",
+          reason="a square jaw fills its box; 10 % fuller than Parke's is visibly squarer",
+          text="unusual jaw: very square",
+          kind="geometry",
+          measure="measures:m_jaw_square"),
+    Check(name="jaw_large",
+          table="B",
+          component="jaw",
+          view="side",
+          unit="ratio",
+          frames="initialization",
+          description="jaw side-view area over Parke's neutral face",
+          thresholds=(1.25,),
+          negatives=(1,),
+          direction="higher",
+          reason="a quarter larger than Parke's reads as 'too large seen from the side'",
+          text="unusual jaw: too large seen from the side",
+          kind="geometry",
+          measure="measures:m_jaw_large"),
+    # ---------------- Table C (thesis 5.5) ----------------
+    Check(name="lips_too_large_moving",
+          table="C",
+          component="lips",
+          view="front",
+          unit="ratio",
+          frames="frames where the lips cross",
+          description="front-view area inside the outer lip outline over the rest face's, in the frames where "
+                      "the lips overlap (90th percentile)",
+          thresholds=(1.5,),
+          negatives=(1,),
+          direction="higher",
+          reason="the thesis saw overlapping lips look too large; half again the rest face's lip area "
+                 "reads so. Not the crossing depth: on renders a 12 mm crossing the version handles "
+                 "(CASSI 2.0, synthetic JW11 task 5 frame 459) looks like closed lips, not large ones",
+          text="lips appear too large when moving (overlapping)",
+          kind="geometry",
+          measure="measures:m_lips_too_large_moving"),
+    Check(name="lower_lip_too_large",
+          table="C",
+          component="lips",
+          view="front",
+          unit="fraction",
+          frames="frames with the lips open",
+          description="fraction of open-lip front-view frames in which the lower teeth show",
+          thresholds=(0.25,),
+          negatives=(1,),
+          direction="lower",
+          reason="'bottom teeth rarely seen' = in fewer than a quarter of the open frames",
+          text="the lower lip too large (bottom teeth rarely seen)",
+          kind="image",
+          measure="image:m_lower_teeth_seen"),
+    # ---------------- Table D (thesis 5.8), task 118 ----------------
+    Check(name="no_lip_rounding",
+          table="D",
+          component="lips",
+          view="front",
+          unit="ratio",
+          frames="maximum protrusion",
+          description="lip-corner half-width at maximum protrusion over at the start",
+          thresholds=(0.95,),
+          negatives=(3,),
+          direction="higher",
+          reason="rounding draws the corners in; less than 5 % narrowing is no rounding (three negatives)",
+          text="no lip rounding",
+          kind="geometry",
+          measure="measures:m_no_rounding",
+          tasks=(118,)),
+    Check(name="lips_stick_out",
+          table="D",
+          component="lips",
+          view="side",
+          unit="mm",
+          frames="maximum protrusion",
+          description="x(49) - x(chin) at maximum protrusion beyond its value at the first frame",
+          thresholds=(8.0,),
+          negatives=(1,),
+          direction="higher",
+          reason="real maximum protrusion moves the lips 5-8 mm. Was 10 mm; 8 mm after the renders: "
+                 "CASSI 2.1 on synthetic JW11 task 118 at 8.5 mm shows a beak of lips far ahead of the "
+                 "chin in the side view. "
+                 "Measured from the first frame, not Parke's rest face: the initial placement is the "
+                 "data's (survey: against the rest face every CASSI version fired at 12.4 mm)",
+          text="lips stick out too much from the chin at maximum protrusion",
+          kind="geometry",
+          measure="measures:m_lips_from_chin",
+          tasks=(118,)),
+    Check(name="above_lip_cave_in",
+          table="D",
+          component="face",
+          view="side",
+          unit="mm",
+          frames="all frames (sustained 3)",
+          description="vertex 71 behind the chord nose base - 67, beyond rest",
+          thresholds=(1.0,),
+          negatives=(1,),
+          direction="higher",
+          reason="1 mm of new hollow above the lip casts a visible shadow",
+          text="points above the lip cave in",
+          kind="geometry",
+          measure="measures:m_above_lip_cave",
+          tasks=(118,)),
+    Check(name="lips_into_nose",
+          table="D",
+          component="lips",
+          view="side",
+          unit="ratio",
+          frames="all frames (sustained 3)",
+          description="distance from the upper lip's edge (67) to the nose base over its rest value",
+          thresholds=(0.5, 0.2),
+          negatives=(1, 2),
+          direction="lower",
+          reason="half the rest distance squeezes the skin between them; a fifth is 'marked' (two)",
+          text="lips run into the nose at maximum protrusion",
+          kind="geometry",
+          measure="measures:m_lips_into_nose",
+          tasks=(118,)),
+    Check(name="lips_too_big",
+          table="D",
+          component="lips",
+          view="front",
+          unit="ratio",
+          frames="maximum protrusion",
+          description="front-view area inside the outer lip outline at maximum protrusion over at rest",
+          thresholds=(1.5,),
+          negatives=(1,),
+          direction="higher",
+          reason="rounded lips shrink; half again as large is 'too big'",
+          text="lips too big at maximum protrusion",
+          kind="geometry",
+          measure="measures:m_lips_too_big",
+          tasks=(118,)),
+    Check(name="lips_centering_118",
+          table="D",
+          component="lips",
+          view="front",
+          unit="fraction",
+          frames="frames with the lips open",
+          description="distance of the upper-teeth share inside the lip opening from an even split",
+          thresholds=(0.30,),
+          negatives=(1,),
+          direction="higher",
+          reason="an even split is 0; 0.3 means a 4:1 split either way (centered too high or too low)",
+          text="lips centered too high or too low",
+          kind="image",
+          measure="image:m_centering_offset",
+          tasks=(118,)),
+    Check(name="lower_lip_protrudes_start",
+          table="D",
+          component="lips",
+          view="side",
+          unit="mm",
+          frames="first frame",
+          description="x(49) - x(67) at the first frame",
+          thresholds=(1.0,),
+          negatives=(1,),
+          direction="higher",
+          reason="as lower_lip_protrudes",
+          text="the lower lip protrudes in the initial position",
+          kind="geometry",
+          measure="measures:m_lower_lip_protrudes_start",
+          tasks=(118,)),
+    Check(name="upper_protrudes_more",
+          table="D",
+          component="lips",
+          view="side",
+          unit="mm",
+          frames="maximum protrusion",
+          description="x(67) - x(49) at maximum protrusion",
+          thresholds=(4.0,),
+          negatives=(1,),
+          direction="higher",
+          reason="the upper lip normally leads by 1-2 mm; more than 4 mm is marked",
+          text="the top lip protrudes more than the bottom at maximum protrusion",
+          kind="geometry",
+          measure="measures:m_upper_protrudes_more",
+          tasks=(118,)),
+    Check(name="upper_lip_sharp",
+          table="D",
+          component="lips",
+          view="side",
+          unit="deg",
+          frames="maximum protrusion",
+          description="how much sharper the side-profile angle 71-67-61 at the upper lip's edge is at maximum "
+                      "protrusion than on the rest face",
+          thresholds=(10.0,),
+          negatives=(1,),
+          direction="higher",
+          reason="relative to the rest face because Parke's own profile turns sharply there (108 deg on "
+                 "the generated face; an absolute 110 deg limit fired on every version, survey). Was 40 deg; "
+                 "10 deg after the renders: CASSI 2.1 on synthetic JW11 task 118 turns 12.5 deg sharper "
+                 "and its side view shows the upper lip as a pointed wedge",
+          text="the upper lip has a sharp profile",
+          kind="geometry",
+          measure="measures:m_upper_lip_sharp",
+          tasks=(118,)),
+    Check(name="lip_jitter",
+          table="D",
+          component="lips",
+          view="front",
+          unit="mm",
+          frames="all frames (sustained 3)",
+          description="frame-to-frame shake (distance from a 9-frame quadratic fit) of the computed lip "
+                      "vertices beyond the jaw's and the lip pellets'",
+          thresholds=(0.5,),
+          negatives=(1,),
+          direction="higher",
+          reason="jitter the jaw shows equally comes from the data; 0.5 mm of shake beyond it is visible. "
+                 "Was the second difference: that fired on fast but smooth rounding movements (CASSI 2.0, "
+                 "synthetic JW16 task 118, frames 127/536/912: 71 % of files); the fit ignores them",
+          text="the lips jitter more than the jaw",
+          kind="geometry",
+          measure="measures:m_lip_jitter",
+          tasks=(118,)),
+    # ---------------- Table E (thesis 5.9), task 106 ----------------
+    Check(name="lip_shape_triangular",
+          table="E",
+          component="lips",
+          view="front",
+          unit="ratio",
+          frames="wide-open frames",
+          description="area / bounding box of the lip opening (inner outline) when open wide",
+          thresholds=(0.62,),
+          negatives=(1,),
+          direction="lower",
+          reason="an ellipse fills 0.79 of its box, a diamond or triangle 0.5; 0.62 is half way",
+          text="lips very triangular or diamond-shaped when opened wide",
+          kind="geometry",
+          measure="measures:m_lip_shape",
+          tasks=(106,)),
+    Check(name="lip_shape_image",
+          table="E",
+          component="lips",
+          view="front",
+          unit="ratio",
+          frames="wide-open frames",
+          description="area / bounding box of the rendered mouth opening (regionprops extent), cross-check",
+          thresholds=(0.62,),
+          negatives=(1,),
+          direction="lower",
+          reason="as lip_shape_triangular; counted there",
+          text="lips very triangular or diamond-shaped when opened wide",
+          kind="image",
+          measure="image:m_opening_extent",
+          tasks=(106,),
+          counted=False),
+    Check(name="lower_lip_through_teeth",
+          table="E",
+          component="lips",
+          view="front",
+          unit="mm",
+          frames="all frames (sustained 3)",
+          description="depth of lower-lip vertices behind the front surface of the lower front teeth",
+          thresholds=(0.5,),
+          negatives=(1,),
+          direction="higher",
+          reason="as lips_through_teeth",
+          text="the lower lip passes through the bottom set of teeth",
+          kind="geometry",
+          measure="measures:m_lower_lip_through_lower_teeth",
+          tasks=(106,)),
+    Check(name="below_lip_cave_in",
+          table="E",
+          component="face",
+          view="side",
+          unit="mm",
+          frames="all frames (sustained 3)",
+          description="vertex 41 behind the chord 49 - chin, beyond rest",
+          thresholds=(1.0,),
+          negatives=(1,),
+          direction="higher",
+          reason="1 mm of new hollow under the lip casts a visible shadow",
+          text="points under the lip cave in, making unusual shapes and shadows",
+          kind="geometry",
+          measure="measures:m_below_lip_cave",
+          tasks=(106,)),
+    Check(name="corners_misplaced",
+          table="E",
+          component="lips",
+          view="side",
+          unit="mm",
+          frames="all frames (sustained 3)",
+          description="distance of the corner (70) outside the band between 69 and 51",
+          thresholds=(1.0,),
+          negatives=(1,),
+          direction="higher",
+          reason="a corner 1 mm above, below or ahead of its neighbours kinks the outline",
+          text="the lip corners badly placed relative to the other lip points",
+          kind="geometry",
+          measure="measures:m_corners_misplaced",
+          tasks=(106,)),
+    Check(name="chin_cave_in",
+          table="E",
+          component="jaw",
+          view="side",
+          unit="mm",
+          frames="all frames (sustained 3)",
+          description="chin vertex behind the chord 41 - underside of the chin, beyond rest",
+          thresholds=(1.0,),
+          negatives=(1,),
+          direction="higher",
+          reason="1 mm of new hollow in the chin shows in profile",
+          text="the chin or lower jaw caves in",
+          kind="geometry",
+          measure="measures:m_chin_cave",
+          tasks=(106,)),
+    Check(name="corner_jump_switch",
+          table="E",
+          component="lips",
+          view="side",
+          unit="mm",
+          frames="switches between horizontal and vertical ellipse; all frames",
+          description="largest lip-corner step beyond the jaw's at a switch between horizontal and vertical "
+                      "ellipse, or the corners' sustained jitter beyond the jaw's",
+          thresholds=(1.0,),
+          negatives=(1,),
+          direction="higher",
+          reason="a 1 mm jump in one frame (7 ms) is a visible pop",
+          text="the lip corners jitter, or a large frame jump at the ellipse switch",
+          kind="geometry",
+          measure="measures:m_corner_jump",
+          tasks=(106,)),
+    # ---------------- Table F: fidelity to the recording (cassi-farm's addition) ----------------
+    Check(name="fidelity_lips_error",
+          table="F",
+          component="lips",
+          view="side",
+          unit="mm",
+          frames="all frames with valid pellets",
+          description="RMSE of the virtual UL (67) and LL (49) pellets' movement against the measured "
+                      "pellets' (displacement from the first frame, XRMB frame via the 4.1.1 mapping)",
+          thresholds=(2.0, 4.0),
+          negatives=(1, 2),
+          direction="higher",
+          reason="lips that touch are within 1.5 mm (lips_never_touch): a lip 2 mm RMS off its pellet "
+                 "opens where the speaker closed; 4 mm is a third of a speaker's lip aperture range in "
+                 "speech (two negatives)",
+          text="the lips do not follow the recorded lip pellets",
+          kind="fidelity",
+          measure="fidelity:m_lips_error"),
+    Check(name="fidelity_tongue_error",
+          table="F",
+          component="tongue",
+          view="half",
+          unit="mm",
+          frames="all frames with valid pellets",
+          description="RMSE of the virtual T1-T4 pellets' (289-292) movement against the measured pellets'",
+          thresholds=(3.0, 6.0),
+          negatives=(1, 2),
+          direction="higher",
+          reason="places of articulation along the palate lie 5-10 mm apart (dental, alveolar, "
+                 "palatal): a 3 mm RMS miss blurs them in the half view; 6 mm crosses a place "
+                 "(two negatives)",
+          text="the tongue does not follow the recorded tongue pellets",
+          kind="fidelity",
+          measure="fidelity:m_tongue_error"),
+    Check(name="fidelity_jaw_error",
+          table="F",
+          component="jaw",
+          view="side",
+          unit="mm",
+          frames="all frames with valid pellets",
+          description="RMSE of the virtual MNI (258) and MNM (midpoint of 281 and 286) pellets' movement "
+                      "against the measured pellets'",
+          thresholds=(2.0, 4.0),
+          negatives=(1, 2),
+          direction="higher",
+          reason="as the lips: the lower lip rides on the jaw, so a jaw 2 mm off moves the lips off "
+                 "their closures; 4 mm is a third of the jaw's opening range in speech",
+          text="the jaw does not follow the recorded jaw pellets",
+          kind="fidelity",
+          measure="fidelity:m_jaw_error"),
+    Check(name="fidelity_lip_aperture",
+          table="F",
+          component="lips",
+          view="front",
+          unit="r",
+          frames="all frames with valid pellets",
+          description="correlation of the model's lip aperture (UL y - LL y) with the recording's",
+          thresholds=(0.5,),
+          negatives=(1,),
+          direction="lower",
+          reason="below 0.5 the model's opening shares less than a quarter of its variance with the "
+                 "speaker's: openings and closures are seen at the wrong times. A face that does not "
+                 "move at all scores 0",
+          text="the lips open and close out of time with the recording",
+          kind="fidelity",
+          measure="fidelity:m_lip_aperture"),
+    Check(name="fidelity_lip_aperture_range",
+          table="F",
+          component="lips",
+          view="front",
+          unit="ratio",
+          frames="all frames with valid pellets",
+          description="range agreement of the lip aperture: min(r, 1/r), r = model range / data range "
+                      "(5th-95th percentile)",
+          thresholds=(0.5,),
+          negatives=(1,),
+          direction="lower",
+          reason="lips that open less than half (or more than twice) as far as the speaker's are "
+                 "plainly under- or over-articulated on the front view",
+          text="the lips open much less (or much more) than the speaker's",
+          kind="fidelity",
+          measure="fidelity:m_lip_aperture_range"),
+    Check(name="fidelity_lip_protrusion",
+          table="F",
+          component="lips",
+          view="side",
+          unit="r",
+          frames="all frames with valid pellets",
+          description="correlation of the model's lip protrusion (mean x of UL and LL) with the recording's",
+          thresholds=(0.5,),
+          negatives=(1,),
+          direction="lower",
+          reason="as fidelity_lip_aperture: rounding seen at the wrong times",
+          text="the lips protrude and retract out of time with the recording",
+          kind="fidelity",
+          measure="fidelity:m_lip_protrusion"),
+    Check(name="fidelity_jaw_opening",
+          table="F",
+          component="jaw",
+          view="side",
+          unit="r",
+          frames="all frames with valid pellets",
+          description="correlation of the model's jaw opening (-MNI y) with the recording's",
+          thresholds=(0.5,),
+          negatives=(1,),
+          direction="lower",
+          reason="as fidelity_lip_aperture",
+          text="the jaw opens and closes out of time with the recording",
+          kind="fidelity",
+          measure="fidelity:m_jaw_opening"),
+    Check(name="fidelity_jaw_opening_range",
+          table="F",
+          component="jaw",
+          view="side",
+          unit="ratio",
+          frames="all frames with valid pellets",
+          description="range agreement of the jaw opening: min(r, 1/r), r = model range / data range",
+          thresholds=(0.5,),
+          negatives=(1,),
+          direction="lower",
+          reason="as fidelity_lip_aperture_range",
+          text="the jaw opens much less (or much more) than the speaker's",
+          kind="fidelity",
+          measure="fidelity:m_jaw_opening_range"),
+]
+
+#: The registry: check name -> :class:`Check`, in rubric order.
+CHECKS: dict[str, Check] = {}
+for _c in _ALL:
+    if _c.name in CHECKS:
+        raise RuntimeError(f"check {_c.name} registered twice")
+    CHECKS[_c.name] = _c
+for _c in CHECKS.values():
+    if _c.charged_with is not None and _c.charged_with not in CHECKS:
+        raise RuntimeError(f"check {_c.name} is charged with unknown check {_c.charged_with}")
+del _c
+
+
+def get_check(name: str) -> Check:
+    """The registered check ``name``; an unknown name says which names are close."""
+    try:
+        return CHECKS[name]
+    except KeyError:
+        close = difflib.get_close_matches(name, CHECKS, n=3)
+        hint = f"; did you mean {', '.join(close)}?" if close else ""
+        raise CassiInputError(f"unknown rubric check {name!r}{hint}") from None
+
+
+def registry_table() -> pd.DataFrame:
+    """The registry as a table (one row per check): what reports and docs print."""
+    return pd.DataFrame([dict(check=c.name, table=c.table, thesis_table=c.thesis_table,
+                              component=c.component, view=c.view, kind=c.kind, unit=c.unit,
+                              frames=c.frames, thresholds=list(c.thresholds),
+                              negatives=list(c.negatives), direction=c.direction,
+                              counted=c.counted, tasks=None if c.tasks is None else list(c.tasks),
+                              charged_with=c.charged_with, text=c.text,
+                              description=c.description, reason=c.reason)
+                         for c in CHECKS.values()])
+
+
+def checks_for(*, kind: str | None = None, table: str | None = None,
+               task: int | None = None) -> list[Check]:
+    """Registered checks filtered by kind, table and task (a task selects D/E checks)."""
+    return [c for c in CHECKS.values()
+            if (kind is None or c.kind == kind) and (table is None or c.table == table)
+            and (task is None or c.applies_to(task))]
+

@@ -1,0 +1,174 @@
+"""Running checks: one animation (geometry and fidelity) or one view's rendered frames (image)
+into rows of the long results table.
+
+Results are rows of ``cassi.harness.results.COLUMNS``: one whole-task row (``frame == -1``) per
+check with the negatives, plus one evidence row at the worst frame (negatives 0) so the farm can
+render the frame a check points at.
+"""
+from __future__ import annotations
+
+from typing import Any, Iterable, Mapping
+
+import numpy as np
+import pandas as pd
+
+from cassi.data.errors import CassiInputError
+
+from . import geometry as G
+from .measures import GeometryContext
+from .model import Check, Measurement
+from .registry import TRACE_STEP, TRACE_TASKS, checks_for, get_check
+
+__all__ = ["run_geometry_checks", "run_image_checks"]
+
+def _rows(check: Check, m: Measurement, view: str, ids: dict) -> list[dict]:
+    neg = m.negatives if m.negatives is not None else check.grade(m.value)
+    detail = m.detail
+    if not check.counted:
+        if check.fires(m.value):
+            detail = f"fired (not counted); {detail}"
+        neg = 0
+    if m.frame >= 0:
+        detail = f"{detail}; worst frame {m.frame}" if detail else f"worst frame {m.frame}"
+    base = dict(ids, view=view, check=check.name, table=check.table, component=check.component,
+                unit=check.unit, threshold=check.threshold)
+    rows = [dict(base, frame=-1, value=m.value, negatives=int(neg), detail=detail)]
+    if m.frame >= 0 and m.frame_value is not None:
+        rows.append(dict(base, frame=int(m.frame), value=m.frame_value, negatives=0,
+                         detail="evidence: the worst frame"))
+    return rows
+
+
+def _frame_numbers(anim, n: int) -> np.ndarray:
+    frames = getattr(anim, "frames", None)
+    return np.asarray(frames) if frames is not None and len(frames) == n else np.arange(n)
+
+
+def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | None = None,
+                        rep: int = 1, parts: G.MouthParts | None = None,
+                        mm_per_unit: float | None = None, neutral=None, recording=None,
+                        checks: Iterable[str] | None = None) -> pd.DataFrame:
+    """Run every geometric check that applies to ``task`` on one animation, and with
+    ``recording`` the fidelity checks (Table F).
+
+    Parameters
+    ----------
+    anim : cassi.versions.protocol.Animation
+        ``positions`` float32 (F, V, 3) Parke units, ``diagnostics``, ``frames``, ``version``.
+    face : cassi.data.face.FaceModel
+        The face the version animated (its ``vertices`` are the rest shape).
+    profile : cassi.data.profile.SubjectProfile or None
+        Gives the subject and the jaw length (mm per Parke unit).
+    task : int
+        Task number (118 and 106 add Tables D and E).
+    parts, mm_per_unit, neutral : optional
+        Overrides (tests); by default from the face, the profile and ``build_face()``.
+    recording : cassi.data.xrmb.TaskRecording, optional
+        The recording the version animated: its pellets are what Table F compares the face
+        with (needs ``face`` and the profile's jaw length for the 4.1.1 mapping). Without it
+        Table F is not measured.
+    checks : iterable of str, optional
+        Only these checks.
+
+    Returns
+    -------
+    DataFrame
+        Results-table rows (``frame`` are recording rows; -1 = whole task), view ``geometry``.
+    """
+    pos = np.asarray(anim.positions)
+    rest = np.asarray(face.vertices, dtype=np.float64) if face is not None else None
+    if parts is None:
+        if face is None:
+            raise CassiInputError("run_geometry_checks needs a face or explicit parts")
+        parts = G.mouth_parts(face)
+    if mm_per_unit is None:
+        jaw = getattr(profile, "jaw_length_mm", None) if profile is not None else None
+        mm_per_unit = G.mm_per_unit(rest if rest is not None else pos[0], jaw)
+    if neutral is None and face is not None:
+        from cassi.data.face import build_face  # noqa: PLC0415 - Table B's reference only
+
+        neutral = build_face().vertices
+    ctx = GeometryContext(pos, parts, rest=rest, mm_per_unit=mm_per_unit,
+                          diagnostics=getattr(anim, "diagnostics", None), neutral=neutral, task=task)
+    ids = dict(subject=subject or getattr(profile, "subject", None), task=int(task), rep=int(rep),
+               version=getattr(anim, "version", None))
+    wanted = None if checks is None else {get_check(c).name for c in checks}
+    frame_no = _frame_numbers(anim, pos.shape[0])
+    rows: list[dict] = []
+    for c in checks_for(kind="geometry", task=task):
+        if wanted is not None and c.name not in wanted:
+            continue
+        m = c.func(ctx)
+        if m.frame >= 0:
+            m = Measurement(m.value, int(frame_no[m.frame]), m.detail, m.negatives, m.frame_value)
+        rows.extend(_rows(c, m, "geometry", ids))
+    if recording is not None:
+        rows.extend(_fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no))
+    return _frame(rows)
+
+
+def _fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no) -> list[dict]:
+    from cassi.versions.mapping import XrmbToParke  # noqa: PLC0415 - the one 4.1.1 mapping
+
+    from .fidelity import FidelityContext, traces  # noqa: PLC0415
+
+    jaw = getattr(profile, "jaw_length_mm", None)
+    if face is None or jaw is None:
+        raise CassiInputError("fidelity checks need the face and the subject's jaw length "
+                              "(profile.jaw_length_mm) to map the model back to the recording")
+    ctx = FidelityContext.of(anim, recording, XrmbToParke.from_face(face.vertices, jaw))
+    rows: list[dict] = []
+    for c in checks_for(kind="fidelity"):
+        if wanted is not None and c.name not in wanted:
+            continue
+        m = c.func(ctx)
+        if m.frame >= 0:
+            m = Measurement(m.value, int(frame_no[m.frame]), m.detail, m.negatives, m.frame_value)
+        rows.extend(_rows(c, m, "geometry", ids))
+    if ids["task"] in TRACE_TASKS and wanted is None:
+        rows.extend(dict(ids, negatives=0, **r) for r in traces(ctx, step=TRACE_STEP))
+    return rows
+
+
+def _frame(rows: list[dict]) -> pd.DataFrame:
+    cols = ["subject", "task", "rep", "version", "view", "frame", "check", "table", "component",
+            "value", "unit", "threshold", "negatives", "detail"]
+    df = pd.DataFrame(rows, columns=cols)
+    df["negatives"] = df["negatives"].astype("int64")
+    df["frame"] = df["frame"].astype("int64")
+    df["value"] = df["value"].astype("float64")
+    return df
+
+
+def run_image_checks(results_by_view: Mapping[str, Any], *, task: int, subject: str | None = None,
+                     rep: int = 1, version: str | None = None,
+                     checks: Iterable[str] | None = None) -> pd.DataFrame:
+    """Run the image checks that apply to ``task`` on rendered frames.
+
+    Parameters
+    ----------
+    results_by_view : mapping view -> frames
+        Frames as a mapping ``frame -> RenderResult`` or a sequence of ``(frame, RenderResult)``;
+        a RenderResult has ``mask`` int (H, W) part ids, ``part_names`` and ``depth``.
+    task : int
+
+    Returns
+    -------
+    DataFrame of results-table rows (view = the render view each check judges).
+    """
+    from . import image as I  # noqa: PLC0415 - scikit-image only where images are judged
+
+    ids = dict(subject=subject, task=int(task), rep=int(rep), version=version)
+    wanted = None if checks is None else {get_check(c).name for c in checks}
+    rows: list[dict] = []
+    contexts: dict[str, Any] = {}  # one mask analysis per view, shared by its checks
+    for c in checks_for(kind="image", task=task):
+        if wanted is not None and c.name not in wanted:
+            continue
+        frames = results_by_view.get(c.view) if hasattr(results_by_view, "get") else None
+        if not frames:
+            continue
+        if c.view not in contexts:
+            contexts[c.view] = I.ImageContext.of(frames)
+        rows.extend(_rows(c, c.func(contexts[c.view]), c.view, ids))
+    return _frame(rows)

@@ -1,0 +1,140 @@
+"""The one aggregation (cassi.harness.rubric.tables): planted results tables prove every rule
+of rubric.md and thesis 5.3 -- a fault counts once per subject, one fault one charge, Table C
+from Table A's lips, and Table C's comparison with the previous version (worse, marked
+improvement, both, ratings already different)."""
+from __future__ import annotations
+
+import pandas as pd
+
+from cassi.harness import rubric as R
+
+
+def rows(version, items, *, subject="JW11", task=5, rep=1):
+    """Whole-task rows: items = [(check, negatives)] for one task file."""
+    return pd.DataFrame([dict(subject=subject, task=task, rep=rep, version=version, view="geometry",
+                              frame=-1, check=k, table=R.CHECKS[k].table,
+                              component=R.CHECKS[k].component, value=1.0, unit="mm",
+                              threshold=0.0, negatives=n, detail="") for k, n in items])
+
+
+def cell(results, table, version, component="lips", subject="JW11"):
+    cr = R.component_ratings(results).set_index(["table", "version", "subject", "component"])
+    return cr.loc[(table, version, subject, component)]
+
+
+def test_a_fault_counts_once_per_subject_with_its_worst_file():
+    res = pd.concat([rows("cassi-1.0", [("lips_never_touch", 1), ("tongue_through_teeth", 1)]),
+                     rows("cassi-1.0", [("lips_never_touch", 2)], task=21)])
+    # per-frame evidence rows never count
+    ev = rows("cassi-1.0", [("tongue_through_teeth", 3)]).assign(frame=10)
+    res = pd.concat([res, ev])
+    assert cell(res, "A", "cassi-1.0")["negatives"] == 2
+    assert cell(res, "A", "cassi-1.0", "tongue")["negatives"] == 1
+    v = R.verdicts(res).set_index(["table", "check"])
+    assert v.loc[("A", "lips_never_touch"), "tasks"] == "5, 21"
+    assert v.loc[("A", "lips_never_touch"), "fired_files"] == 2
+    assert cell(res, "A", "cassi-1.0")["text"] == "-- lips too far apart, never touching"
+
+
+def test_one_fault_one_charge():
+    # lips that never touch are separated at the start too: the gap is charged once
+    both = rows("cassi-1.0", [("lips_never_touch", 1), ("lips_apart_at_start", 1)])
+    c = cell(both, "A", "cassi-1.0")
+    assert c["negatives"] == 1 and "separated at the start" not in c["text"]
+    v = R.verdicts(both).set_index(["table", "check"])
+    assert v.loc[("A", "lips_apart_at_start"), "raw_negatives"] == 1
+    assert "lips_never_touch" in v.loc[("A", "lips_apart_at_start"), "note"]
+    # ... also when another of the subject's files showed the lips never touching
+    across = pd.concat([rows("cassi-1.0", [("lips_never_touch", 0), ("lips_apart_at_start", 1)]),
+                        rows("cassi-1.0", [("lips_never_touch", 2)], task=21)])
+    assert cell(across, "A", "cassi-1.0")["negatives"] == 2
+    # lips apart at the start only (they touch later): charged
+    alone = rows("cassi-1.0", [("lips_never_touch", 0), ("lips_apart_at_start", 1)])
+    assert cell(alone, "A", "cassi-1.0")["negatives"] == 1
+
+
+def test_table_c_is_table_a_lips_plus_its_own_checks():
+    res = rows("cassi-1.0", [("lips_never_touch", 1), ("tongue_through_teeth", 1),
+                             ("lips_too_large_moving", 1)])
+    c = cell(res, "C", "cassi-1.0")
+    assert c["negatives"] == 2                        # the lip row of A + C's own, not the tongue
+    assert "tongue" not in c["text"] and "never touching" in c["text"]
+    assert cell(res, "A", "cassi-1.0")["negatives"] == 1
+
+
+def _two_files(version, first, second):
+    return pd.concat([rows(version, first, task=5), rows(version, second, task=21)])
+
+
+def test_table_c_looks_worse_on_the_same_files_earns_one_more():
+    # same rating (1 negative each) but 2.1 shows its fault in both shared files, 2.0 in one
+    prev = _two_files("cassi-2.0", [("lips_overlap", 1)], [("lips_overlap", 0)])
+    cur = _two_files("cassi-2.1", [("lips_overlap", 1)], [("lips_overlap", 1)])
+    res = pd.concat([prev, cur])
+    c = cell(res, "C", "cassi-2.1")
+    assert c["negatives"] == 2 and c["adjust"] == 1
+    assert "looks worse than cassi-2.0" in c["text"] and "lips_overlap in 2 of 2" in c["reason"]
+    assert cell(res, "C", "cassi-2.0")["negatives"] == 1      # the first version has no previous
+    # Table A is judged per version alone: no comparison there
+    assert cell(res, "A", "cassi-2.1")["negatives"] == 1
+
+
+def test_table_c_marked_improvement_earns_one_fewer():
+    # same rating (1 negative) but the fault is gone from half the shared files and nothing worse
+    prev = _two_files("cassi-1.0", [("lips_never_touch", 1)], [("lips_never_touch", 1)])
+    cur = _two_files("cassi-2.0", [("lips_never_touch", 1)], [("lips_never_touch", 0)])
+    c = cell(pd.concat([prev, cur]), "C", "cassi-2.0")
+    assert c["negatives"] == 0 and c["adjust"] == -1
+    assert "marked improvement over cassi-1.0" in c["reason"]
+
+
+def test_table_c_better_and_worse_at_once_keeps_the_count():
+    prev = _two_files("cassi-1.0", [("lips_never_touch", 1), ("lips_overlap", 0)],
+                      [("lips_never_touch", 1), ("lips_overlap", 0)])
+    cur = _two_files("cassi-2.0", [("lips_never_touch", 0), ("lips_overlap", 1)],
+                     [("lips_never_touch", 0), ("lips_overlap", 0)])
+    c = cell(pd.concat([prev, cur]), "C", "cassi-2.0")
+    assert c["adjust"] == 0 and c["negatives"] == 1
+
+
+def test_table_c_rule_applies_only_where_the_ratings_are_the_same():
+    prev = _two_files("cassi-1.0", [("lips_never_touch", 2)], [("lips_never_touch", 0)])
+    cur = _two_files("cassi-2.0", [("lips_never_touch", 1)], [("lips_never_touch", 1)])
+    c = cell(pd.concat([prev, cur]), "C", "cassi-2.0")
+    assert c["adjust"] == 0 and c["negatives"] == 1 and "ratings differ" in c["reason"]
+
+
+def test_table_c_compares_only_the_files_both_versions_judged():
+    prev = rows("cassi-1.0", [("lips_overlap", 1)], task=5)
+    cur = _two_files("cassi-2.0", [("lips_overlap", 1)], [("lips_overlap", 1)])
+    c = cell(pd.concat([prev, cur]), "C", "cassi-2.0")
+    assert c["adjust"] == 0      # task 21 was not judged for 1.0: 1 of 1 shared files each
+
+
+def test_summaries_name_the_checks_that_decided():
+    same = pd.concat([rows("cassi-1.0", [("lips_never_touch", 1)]),
+                      rows("cassi-2.0", [("lips_never_touch", 1)])])
+    s = [x for x in R.version_summaries(same) if "lip placement" in x][0]
+    assert "matches" in s and "the same faults decided both: lips_never_touch" in s
+    diff = pd.concat([rows("cassi-1.0", [("lips_never_touch", 2)]),
+                      rows("cassi-2.0", [("lips_never_touch", 0), ("lips_overlap", 1)])])
+    s = [x for x in R.version_summaries(diff) if "lip placement" in x][0]
+    assert s.startswith("cassi-2.0 improves lip placement over cassi-1.0")
+    assert "decided by lips_never_touch (0 against 2 negatives)" in s
+
+
+def test_table_f_summary_names_the_worst_version():
+    res = pd.concat([rows("parke-1974", [("fidelity_tongue_error", 2), ("fidelity_lips_error", 1)]),
+                     rows("cassi-1.0", [("fidelity_tongue_error", 0), ("fidelity_lips_error", 0)])])
+    s = R.version_summaries(res)
+    assert any(x.startswith("Fidelity to the recording (cassi-farm's Table F): worst parke-1974 "
+                            "with 3 negatives; best cassi-1.0 with 0 negatives") for x in s)
+
+
+def test_history_totals_and_empty_inputs():
+    res = pd.concat([rows("cassi-1.0", [("lips_never_touch", 1)]),
+                     rows("cassi-2.0", [("lips_never_touch", 0)])])
+    t = R.version_totals(res).set_index("version")["negatives"]
+    assert t["cassi-1.0"] == 2 and t["cassi-2.0"] == 0       # Table A + Table C
+    assert R.component_ratings(pd.DataFrame()).empty and R.verdicts(pd.DataFrame()).empty
+    assert R.version_summaries(pd.DataFrame()) == []
