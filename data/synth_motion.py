@@ -101,11 +101,13 @@ _SLIDE_DIR = np.array([math.cos(math.radians(-25.0)), math.sin(math.radians(-25.
 PALATE_CLEARANCE_MM = 1.2
 #: Tracking noise per pellet (UL LL T1 T2 T3 T4 MNI MNM): standard deviation (mm) and corner
 #: frequency (Hz) of a slowly wandering error. The real files were resampled with smoothing
-#: splines (thesis 3.2.4), so their error is smooth from row to row: thesis Figure 3.9 (real JW45)
-#: moves 1-6 um per row squared at rest, the upper lip least, the tongue most. Jaw pellets: small,
-#: so the MNI-MNM distance stays within a few tenths of a millimetre (rigid jaw).
-NOISE = {"sd_mm": np.array([0.04, 0.06, 0.10, 0.10, 0.10, 0.10, 0.05, 0.05]),
-         "corner_hz": np.array([2.0, 4.0, 10.0, 10.0, 10.0, 10.0, 3.0, 3.0])}
+#: splines (thesis 3.2.4), so their error is smooth from row to row: at rest, thesis Figure 3.9
+#: (real JW45) has second differences (RMS) of 0.9 um (UL), 5 um (LL), 4-7 um (tongue) and 2-3 um
+#: (jaw), which these reproduce within a factor of about 2 (tests/test_synth_corpus.py). The jaw
+#: pellets' error keeps the MNI-MNM distance within a few tenths of a millimetre (rigid jaw;
+#: real JW45: SD 0.09 mm over its 13 printed rows).
+NOISE = {"sd_mm": np.array([0.04, 0.06, 0.10, 0.10, 0.10, 0.10, 0.08, 0.08]),
+         "corner_hz": np.array([2.0, 4.0, 3.5, 3.5, 3.5, 3.5, 2.5, 2.5])}
 
 # ----------------------------------------------------------------------------- phone targets
 # Spec keys: jaw (deg), prot (fraction of the subject's speech rounding; negative = spreading),

@@ -268,6 +268,26 @@ def test_kinematics_land_in_their_calibrated_ranges(small):
     assert every.scalars["lip_mid_p05"] < every.scalars["lip_mid_first"] - 3.0
 
 
+def test_jw45_at_rest_is_like_the_real_excerpt(small, fixtures_dir):
+    """Real-data check: thesis Figure 3.9 prints the first 13 valid rows of the real JW45 task 13
+    (at rest). The same rows of the synthetic JW45 task 13 have the same lips and jaw within
+    tenths of a millimetre and tracking noise (second differences) within a factor of 3."""
+    from cassi.data.stats import summarise
+    from cassi.data.xrmb import read_txy
+
+    real = read_txy(fixtures_dir / "xrmb" / "JW45" / "JW45_013.TXY")
+    syn = Corpus(small).load("JW45", 13)
+    i, j = real.first_valid_index, syn.first_valid_index
+    n = real.n_frames - i
+    a = summarise(syn.time_us[j:j + n], syn.xy_mm[j:j + n], syn.valid[j:j + n])
+    b = summarise(real.time_us[i:], real.xy_mm[i:], real.valid[i:])
+    ratio = a.pellets["d2_rms_um"] / b.pellets["d2_rms_um"]
+    assert ratio.between(1 / 3, 3).all(), ratio
+    assert a.scalars["lip_mid_first"] == pytest.approx(b.scalars["lip_mid_first"], abs=0.3)
+    assert a.scalars["ul_ll_first"] == pytest.approx(b.scalars["ul_ll_first"], abs=1.0)
+    assert a.scalars["jaw_distance_mean"] == pytest.approx(b.scalars["jaw_distance_mean"], abs=0.3)
+
+
 def test_same_seed_same_stats(small, tmp_path):
     again = make_corpus(tmp_path / "again", subjects=["JW45"], seed=0, workers=1)
     a = corpus_stats(small / "JW45", tasks=[13, 105]).as_dict()
