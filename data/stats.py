@@ -12,9 +12,10 @@ Per pellet (:data:`PELLET_COLUMNS`):
 - ``x_range``, ``y_range`` (mm): the extent (max - min) of the pellet in one file, median over
   files;
 - ``d2_rms_um`` (micrometres): root mean square of the second difference
-  ``p[t+1] - 2 p[t] + p[t-1]`` per coordinate, over triples of consecutive valid rows, pooled.
-  Movement contributes little at 145.6 Hz (a 200 mm/s gesture turning over 50 ms: about
-  4 um per row squared), so this is mostly tracking noise.
+  ``p[t+1] - 2 p[t] + p[t-1]`` per coordinate, over triples of consecutive valid rows, pooled:
+  acceleration times the squared row period plus tracking noise. At rest it is the noise (real
+  JW45, thesis Figure 3.9: 1-7 um); in speech the movement adds to it (an acceleration of
+  1000 mm/s^2 is 47 um at 145.6 Hz).
 
 Whole-recording figures (:data:`SCALARS`):
 
