@@ -41,14 +41,15 @@ MNI peak speed (99th pct.),    150-250 mm/s    same; peak tangential jaw/lip/ton
                                                43:205) and Westbury, Lindstrom & McClean
                                                2002 (JSLHR 45:651, 44 XRMB talkers)
 LL, T1 peak speed, "sa sa"     150-250 mm/s    same
-LL, T1 extent (x or y), "sa"   15-30 mm        same
+LL, T1 vertical extent, "sa"   15-30 mm        same
 UL extent in speech            1-3 mm          same; Loefqvist & Gracco 1994 (ASA 128,
                                                4pSP7): upper-lip heights at /p b/ closure
                                                spread over 3 mm, the lower lip's over 5 mm
 MNI-MNM distance SD            < 0.3 mm        rigid jaw plus tracking noise (issue 10);
                                                thesis Figure 3.9 (real JW45): 0.09 mm
 second difference RMS          UL < 10 um,     issue 10; thesis Figure 3.9 (real JW45, at
-                               tongue largest  rest): UL 0.9, LL 5, tongue 4-7, jaw 2-3 um
+                               tongue above    rest): UL 0.9, LL 5, tongue 4-7, jaw 2-3 um
+                               UL and jaw
 =============================  ==============  ==============================================
 
 Lip pellets sit on the vermilion borders (Westbury & Hashi 1997, J. Phonetics 25:405; Westbury,
@@ -88,8 +89,8 @@ KINEMATIC_TARGETS: tuple[tuple, ...] = (
     ("speed_p99", "T1", (105,), 150.0, 250.0),
     ("y_range", "LL", (105,), 15.0, 30.0),
     ("y_range", "T1", (105,), 15.0, 30.0),
-    ("x_range", "UL", tuple(range(1, 101)), 1.0, 3.0),
-    ("y_range", "UL", tuple(range(1, 101)), 1.0, 3.0),
+    ("x_range", "UL", tuple(range(1, 102)), 1.0, 3.0),
+    ("y_range", "UL", tuple(range(1, 102)), 1.0, 3.0),
     ("jaw_distance_sd", None, tuple(range(1, 119)), 0.0, 0.3),
     ("d2_rms_um", "UL", tuple(range(1, 119)), 0.0, 10.0),
 )
