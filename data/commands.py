@@ -1,4 +1,4 @@
-"""The ``cassi corpus`` command group: ``make``, ``check``, ``preprocess``.
+"""The ``cassi corpus`` command group: ``make``, ``check``, ``preprocess``, ``stats``.
 
 Exit codes follow the CLI: 0 success, 2 bad input (a malformed file: ``file:line: reason`` on
 stderr), 1 other failures.
@@ -10,6 +10,8 @@ import json
 import re
 import sys
 from pathlib import Path
+
+import numpy as np
 
 from cassi.data.errors import CassiInputError
 
@@ -57,6 +59,21 @@ def register(subparsers) -> None:
                     help="comma-separated subjects (default: all)")
     pp.set_defaults(func=cmd_preprocess)
 
+    st = sub.add_parser("stats", help="kinematic statistics of a corpus, subject or task file",
+                        description="Per pellet speed percentiles, x/y ranges and second-"
+                                    "difference RMS (tracking noise); jaw MNI-MNM distance; lip "
+                                    "midpoint height relative to the incisor tip; UL-LL "
+                                    "distance. Task files listed in Mis.dat are left out. With "
+                                    "--compare, side by side with a second path and the ratios. "
+                                    "Exit 2 on a malformed file (file:line: reason).")
+    st.add_argument("path", type=Path, help="a corpus directory, a subject directory or one file")
+    st.add_argument("--compare", type=Path, default=None, metavar="PATH2",
+                    help="a second corpus, subject directory or task file")
+    st.add_argument("--tasks", type=_task_list, default=None,
+                    help="only these tasks, e.g. 105 or 102-105,13")
+    st.add_argument("--json", action="store_true", help="print JSON")
+    st.set_defaults(func=cmd_stats)
+
 
 def _subject_list(text: str) -> list[str]:
     names = [s.strip() for s in text.split(",") if s.strip()]
@@ -64,6 +81,16 @@ def _subject_list(text: str) -> list[str]:
     if not names or bad:
         raise argparse.ArgumentTypeError(f"bad subject list {text!r}")
     return names
+
+
+def _task_list(text: str) -> list[int]:
+    out: list[int] = []
+    for part in (p.strip() for p in text.split(",")):
+        m = re.fullmatch(r"(\d{1,3})(?:-(\d{1,3}))?", part)
+        if not m or int(m.group(2) or m.group(1)) < int(m.group(1)):
+            raise argparse.ArgumentTypeError(f"bad task list {text!r} (e.g. 105 or 102-105,13)")
+        out.extend(range(int(m.group(1)), int(m.group(2) or m.group(1)) + 1))
+    return out
 
 
 # ----------------------------------------------------------------------------- make
@@ -213,6 +240,52 @@ def cmd_preprocess(args) -> int:
         print(f"{name}: {len(prof.selected)} file(s), jaw {prof.jaw_length_mm:.2f} mm, "
               f"REST UL {prof.rest_ul:.6f}, MAX UL {prof.max_ul:.6f}, lipthick {prof.lipthick:.6f}")
     print(f"wrote {out / 'maxprotru.txt'}, {out / 'lipthick.txt'}, {out / 'selected_files.csv'}")
+    return EXIT_OK
+
+
+# ----------------------------------------------------------------------------- stats
+def _fmt(v: float) -> str:
+    if v is None or not np.isfinite(v):
+        return "-"
+    return f"{v:.3g}" if abs(v) < 100 else f"{v:.0f}"
+
+
+def cmd_stats(args) -> int:
+    from cassi.data.corpus import Corpus
+    from cassi.data.stats import PELLET_COLUMNS, SCALARS, UNITS, compare, corpus_stats
+
+    a = corpus_stats(args.path, tasks=args.tasks)
+    b = None if args.compare is None else corpus_stats(args.compare, tasks=args.tasks)
+    if args.json:
+        doc = {"a": a.as_dict()}
+        if b is not None:
+            df = compare(a, b)
+            doc["b"] = b.as_dict()
+            doc["ratio"] = [{"pellet": r.pellet or None, "figure": r.figure,
+                             "ratio": None if not np.isfinite(r.ratio) else round(r.ratio, 6)}
+                            for r in df.itertuples(index=False)]
+        print(json.dumps(doc, indent=1))
+        return EXIT_OK
+    for label, s in (("A", a), ("B", b)):
+        if s is None:
+            continue
+        synth = s.label and Path(s.label).is_dir() and Corpus(s.label).is_synthetic
+        print(f"# {label}: {s.label} ({s.n_files} task file(s))"
+              + (" - synthetic: figures describe the software, not real speakers" if synth
+                 else ""))
+    head = [f"{c} ({UNITS[c]})" for c in PELLET_COLUMNS]
+    print("pellet\t" + "\t".join(head))
+    # one cell per figure: A alone, or "A | B | xA/B" from compare()
+    rows = compare(a, b if b is not None else a).itertuples(index=False)
+    cell = {(r.pellet, r.figure): (_fmt(r.a) if b is None else
+                                   f"{_fmt(r.a)} | {_fmt(r.b)} | x{_fmt(r.ratio)}")
+            for r in rows}
+    for p in a.pellets.index:
+        print(p + "\t" + "\t".join(cell[(p, c)] for c in PELLET_COLUMNS))
+    for k in SCALARS:
+        print(f"{k} ({UNITS[k]})\t{cell[('', k)]}")
+    if b is not None:
+        print("# cells: A | B | A/B")
     return EXIT_OK
 
 

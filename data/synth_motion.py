@@ -12,13 +12,49 @@ Model (pure numpy/scipy, vectorised over frames)
 2. Contact targets (tongue tip on the alveolar ridge, dorsum on the velum) are absolute points on
    the subject's own palate; they are converted to the jaw's frame with the jaw angle targeted at
    that moment, so that the jaw and the tongue share the work as in real speech.
-3. Each channel's step-wise target drives a critically damped second-order system (no overshoot;
-   10-90 % rise time 3.36/omega), targets anticipated by 1/omega. Channel speeds (omega) differ:
-   tongue tip fastest, jaw slowest. Peak pellet speeds land at 50-250 mm/s as in XRMB speech.
+3. Each channel's step-wise target drives a critically damped fourth-order system (two cascaded
+   critically damped second-order stages, no overshoot): the velocity profile is bell-shaped and
+   the acceleration continuous, as in real articulator movements (a second-order system jumps in
+   acceleration at every target change, which the second difference of real XRMB tracks does
+   not show). 10-90 % rise time 3.36/omega, as for a second-order system of natural frequency
+   omega; targets anticipated by the half-rise time. Channel speeds (omega) differ: tongue tip
+   fastest, upper lip slowest.
 4. Kinematics: the jaw rotates about the condyle and slides forward as it opens; MNI and MNM are
    rigid points of it and it carries the lower lip and the tongue. Lips cannot pass through each
-   other (soft contact, compression) and tongue pellets stay below the palate (soft contact).
-5. Tracking noise (white, 0.12 mm lips/jaw, 0.15 mm tongue) is added last.
+   other (soft contact, compression), the lower lip cannot pass behind the upper incisors (its
+   labiodental limit, the subject's MIN LL), and tongue pellets stay below the palate (soft
+   contact).
+5. Tracking noise (:data:`NOISE`, per pellet) is added last.
+
+Calibration (:data:`KINEMATIC_TARGETS`; the tests check the generated corpus against it, and
+``cassi corpus stats`` measures it on any corpus):
+
+=============================  ==============  ==============================================
+figure                         target          source
+=============================  ==============  ==============================================
+MNI vertical range, "sa sa"    15-25 mm        issue 10's XRMB measurement (task "sa sa sa",
+(task 105)                                     JW11, JW45); jaw movement measured at a
+                                               mandibular incisor pellet as in Green et al.
+                                               2007 (JSLHR 50:928)
+MNI peak speed (99th pct.),    150-250 mm/s    same; peak tangential jaw/lip/tongue speeds
+"sa sa"                                        of the same order in McClean 2000 (JSLHR
+                                               43:205) and Westbury, Lindstrom & McClean
+                                               2002 (JSLHR 45:651, 44 XRMB talkers)
+LL, T1 peak speed, "sa sa"     150-250 mm/s    same
+LL, T1 vertical extent, "sa"   15-30 mm        same
+UL extent in speech            1-3 mm          same; Loefqvist & Gracco 1994 (ASA 128,
+                                               4pSP7): upper-lip heights at /p b/ closure
+                                               spread over 3 mm, the lower lip's over 5 mm
+MNI-MNM distance SD            < 0.3 mm        rigid jaw plus tracking noise (issue 10);
+                                               thesis Figure 3.9 (real JW45): 0.09 mm
+second difference RMS          UL < 10 um,     issue 10; thesis Figure 3.9 (real JW45, at
+                               tongue above    rest): UL 0.9, LL 5, tongue 4-7, jaw 2-3 um
+                               UL and jaw
+=============================  ==============  ==============================================
+
+Lip pellets sit on the vermilion borders (Westbury & Hashi 1997, J. Phonetics 25:405; Westbury,
+Severson & Hashi 1999, ICPhS 14:2025); the lower one can be drawn back to the upper incisors in
+/f v/, which is where the thesis's near-zero MIN LL values (Figure 4.16) put it.
 
 Coordinates: XRMB head frame (thesis 3.2.3), millimetres; x forward out of the mouth, y up, origin
 at the tips of the upper central incisors.
@@ -35,15 +71,44 @@ from cassi.data.synth_subjects import SubjectFigures, palate_y
 
 CHANNELS = ("jaw", "ulp", "ull", "llp", "llr", "tipx", "tipy", "bodx", "body")
 _IDX = {c: i for i, c in enumerate(CHANNELS)}
-#: Natural frequency (rad/s) of each channel's critically damped dynamics.
-OMEGA = np.array([26.0, 34.0, 34.0, 36.0, 40.0, 42.0, 42.0, 28.0, 28.0])
+#: Natural frequency (rad/s) of each channel's critically damped dynamics (the 10-90 % rise time
+#: is 3.36/omega): tongue tip fastest, upper lip slowest.
+OMEGA = np.array([26.0, 20.0, 20.0, 36.0, 40.0, 42.0, 42.0, 28.0, 28.0])
+#: Each of the two cascaded stages runs at this multiple of omega, so that the fourth-order
+#: system's 10-90 % rise time (4.94 stage time constants) equals a second-order one's (3.36/omega).
+STAGE_FACTOR = 4.94 / 3.36
+#: Targets are anticipated by the fourth-order system's half-rise time (3.67 stage time constants),
+#: so a gesture is half-way at its segment's start.
+ANTICIPATION = 3.67 / STAGE_FACTOR
+#: Calibration targets of the generated corpus: (figure, pellet or None, tasks, low, high). The
+#: figures are those of :mod:`cassi.data.stats`; see the module docstring for the sources.
+KINEMATIC_TARGETS: tuple[tuple, ...] = (
+    ("y_range", "MNI", (105,), 15.0, 25.0),
+    ("speed_p99", "MNI", (105,), 150.0, 250.0),
+    ("speed_p99", "LL", (105,), 150.0, 250.0),
+    ("speed_p99", "T1", (105,), 150.0, 250.0),
+    ("y_range", "LL", (105,), 15.0, 30.0),
+    ("y_range", "T1", (105,), 15.0, 30.0),
+    ("x_range", "UL", tuple(range(1, 102)), 1.0, 3.0),
+    ("y_range", "UL", tuple(range(1, 102)), 1.0, 3.0),
+    ("jaw_distance_sd", None, tuple(range(1, 119)), 0.0, 0.3),
+    ("d2_rms_um", "UL", tuple(range(1, 119)), 0.0, 10.0),
+)
 PERIOD_S = 6866e-6
 #: Jaw slide forward (mm) per degree of opening, along the articular eminence.
 JAW_SLIDE_MM_PER_DEG = 0.12
 _SLIDE_DIR = np.array([math.cos(math.radians(-25.0)), math.sin(math.radians(-25.0))])
 #: Tongue pellets stay this far below the palatal outline (pellet radius plus tissue), mm.
 PALATE_CLEARANCE_MM = 1.2
-NOISE_MM = np.array([0.12, 0.12, 0.15, 0.15, 0.15, 0.15, 0.10, 0.10])
+#: Tracking noise per pellet (UL LL T1 T2 T3 T4 MNI MNM): standard deviation (mm) and corner
+#: frequency (Hz) of a slowly wandering error. The real files were resampled with smoothing
+#: splines (thesis 3.2.4), so their error is smooth from row to row: at rest, thesis Figure 3.9
+#: (real JW45) has second differences (RMS) of 0.9 um (UL), 5 um (LL), 4-7 um (tongue) and 2-3 um
+#: (jaw), which these reproduce within a factor of about 2 (tests/test_synth_corpus.py). The jaw
+#: pellets' error keeps the MNI-MNM distance within a few tenths of a millimetre (rigid jaw;
+#: real JW45: SD 0.09 mm over its 13 printed rows).
+NOISE = {"sd_mm": np.array([0.04, 0.06, 0.10, 0.10, 0.10, 0.10, 0.08, 0.08]),
+         "corner_hz": np.array([2.0, 4.0, 3.5, 3.5, 3.5, 3.5, 2.5, 2.5])}
 
 # ----------------------------------------------------------------------------- phone targets
 # Spec keys: jaw (deg), prot (fraction of the subject's speech rounding; negative = spreading),
@@ -103,6 +168,7 @@ class Anatomy:
     round_ul: float         # speech lip rounding of UL (mm forward)
     round_ll: float
     spread_ul: float        # speech lip spreading of UL (mm back)
+    ll_floor_x: float       # the lower lip pellet cannot pass behind this x (upper incisors), mm
 
     @classmethod
     def of(cls, fig: SubjectFigures) -> "Anatomy":
@@ -115,10 +181,13 @@ class Anatomy:
         tongue = np.column_stack([xs, palate_y(pal, xs) - gaps])
         rest = np.vstack([ul, ll, tongue, fig.mni_mm, fig.mnm_mm])
         dist = float(np.hypot(*(ul - ll)))
+        # speech moves the upper lip 1-3 mm (KINEMATIC_TARGETS): rounding and spreading stay
+        # well short of the subject's extremes, which the oral-motor tasks reach
         return cls(fig, rest, np.array(fig.condyle_mm, float), d_closed=0.8 * dist,
-                   round_ul=min(4.0, 0.6 * fig.max_protrusion_ul_mm),
+                   round_ul=min(1.5, 0.3 * fig.max_protrusion_ul_mm),
                    round_ll=min(4.0, 0.6 * fig.max_protrusion_ll_mm),
-                   spread_ul=min(2.0, fig.spread_ul_mm))
+                   spread_ul=min(0.8, fig.spread_ul_mm),
+                   ll_floor_x=fig.min_ll * fig.jaw_length_mm)
 
 
 def jaw_transform(anat: Anatomy, theta_deg: np.ndarray, pts: np.ndarray) -> np.ndarray:
@@ -191,8 +260,12 @@ def _point(anat: Anatomy, spec) -> np.ndarray | None:
 
 
 def segment_targets(anat: Anatomy, segs: list[tuple[float, float, dict]],
-                    rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+                    rng: np.random.Generator, *, jaw_gain: float = 1.0
+                    ) -> tuple[np.ndarray, np.ndarray]:
     """Channel targets per segment.
+
+    ``jaw_gain`` scales the phones' jaw angles (the task type's speaking style, see
+    :data:`cassi.data.synth_program.JAW_GAIN`).
 
     Returns
     -------
@@ -206,11 +279,12 @@ def segment_targets(anat: Anatomy, segs: list[tuple[float, float, dict]],
     ts = anat.fig.tongue_scale
     jit = rng.normal(0.0, 1.0, size=(n, 4))
     jaw = np.array([s[2].get("jaw", np.nan) for s in segs], float)
-    jaw = jaw * (1.0 + 0.08 * jit[:, 0])
+    jaw = jaw * jaw_gain * (1.0 + 0.08 * jit[:, 0])
     jaw = _fill(mids, jaw)
     tg[:, 0] = jaw
     rest = anat.rest
-    ll_jaw_y = jaw_transform(anat, jaw, rest[1])[:, 0, 1]   # LL carried by the targeted jaw
+    ll_jaw = jaw_transform(anat, jaw, rest[1])[:, 0]        # LL carried by the targeted jaw
+    ll_jaw_y = ll_jaw[:, 1]
     for i, (_, _, spec) in enumerate(segs):
         if not spec:
             continue
@@ -232,8 +306,9 @@ def segment_targets(anat: Anatomy, segs: list[tuple[float, float, dict]],
             if lips == "close":       # pellets closer than at contact: the lips press together
                 tg[i, 4] = ul_y - 0.93 * anat.d_closed - ll_jaw_y[i]
             elif lips == "labiodental":
+                # lower lip up and drawn back onto the upper incisors (its floor)
                 tg[i, 4] = ul_y - 1.05 * anat.d_closed - ll_jaw_y[i]
-                tg[i, 3] = -1.5
+                tg[i, 3] = min(-1.5, anat.ll_floor_x - 0.5 - ll_jaw[i, 0])
             elif lips == "round":
                 tg[i, 4] = max(0.0, ul_y - 1.15 * anat.d_closed - ll_jaw_y[i])
             else:
@@ -266,18 +341,20 @@ def smooth(starts: np.ndarray, targets: np.ndarray, n_frames: int, *,
            period_s: float = PERIOD_S) -> np.ndarray:
     """Frame-wise channel trajectories (F, 9) from step targets, critically damped per channel.
 
-    The state starts at rest on the first segment's targets; each channel sees its targets
-    1/omega early (anticipation compensating the system's lag).
+    Each channel is two cascaded critically damped second-order stages at
+    ``STAGE_FACTOR * omega`` (no overshoot, continuous acceleration). The state starts at rest on
+    the first segment's targets; each channel sees its targets :data:`ANTICIPATION` / omega early.
     """
     t = np.arange(n_frames) * period_s
     out = np.empty((n_frames, targets.shape[1]))
     for c, om in enumerate(OMEGA):
-        idx = np.searchsorted(starts, t + 1.0 / om, side="right") - 1
+        idx = np.searchsorted(starts, t + ANTICIPATION / om, side="right") - 1
         u = targets[np.clip(idx, 0, len(starts) - 1), c]
-        a = math.exp(-om * period_s)
+        a = math.exp(-STAGE_FACTOR * om * period_s)
         b, den = [(1.0 - a) ** 2], [1.0, -2.0 * a, a * a]
         zi = np.array([u[0] * (2 * a - a * a), -a * a * u[0]])  # steady state at u[0]
-        out[:, c] = lfilter(b, den, u, zi=zi)[0]
+        y = lfilter(b, den, u, zi=zi)[0]
+        out[:, c] = lfilter(b, den, y, zi=zi)[0]
     return out
 
 
@@ -304,6 +381,8 @@ def pellets(anat: Anatomy, ch: np.ndarray) -> np.ndarray:
     out[:, 1:] = carried
     out[:, 1, 0] += ch[:, 3]
     out[:, 1, 1] += ch[:, 4]
+    # the upper incisors stop the lower lip going further back (soft contact)
+    out[:, 1, 0] = -_soft_ceiling(-out[:, 1, 0], -anat.ll_floor_x, 0.25)
     # lips meet: LL stays at least 0.88 d_closed below UL (pressed lips; soft contact)
     out[:, 1, 1] = _soft_ceiling(out[:, 1, 1], out[:, 0, 1] - 0.88 * anat.d_closed, 0.6)
     # tongue pellets under the palate where the palate is above them
@@ -316,18 +395,14 @@ def pellets(anat: Anatomy, ch: np.ndarray) -> np.ndarray:
 
 
 def add_noise(xy: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """Tracking noise, per pellet :data:`NOISE_MM` (standard deviation, mm).
-
-    The real files were resampled with smoothing splines (thesis 3.2.4), so their noise is smooth
-    from row to row (Figure 3.9 moves by tens of micrometres per row): the noise is low-passed
-    (critically damped, about 12 Hz) and scaled back to NOISE_MM, plus 5 um of white noise.
-    """
-    n = xy.shape[0]
+    """Tracking noise, per pellet :data:`NOISE`: white noise low-passed by a critically damped
+    second-order filter at the pellet's corner frequency, scaled to its standard deviation."""
     raw = rng.normal(0.0, 1.0, size=xy.shape)
-    a = math.exp(-2.0 * math.pi * 12.0 * PERIOD_S)
-    smooth_noise = lfilter([(1.0 - a) ** 2], [1.0, -2.0 * a, a * a], raw, axis=0)
-    # stationary variance of the two-pole filter driven by unit white noise
-    var = (1.0 - a) ** 4 * (1.0 + a * a) / ((1.0 - a * a) * ((1.0 + a * a) ** 2 - 4.0 * a * a))
-    smooth_noise /= math.sqrt(var)
-    white = rng.normal(0.0, 0.005, size=xy.shape)
-    return xy + smooth_noise * NOISE_MM[None, :, None] + white
+    out = xy.copy()
+    for p, (sd, fc) in enumerate(zip(NOISE["sd_mm"], NOISE["corner_hz"])):
+        a = math.exp(-2.0 * math.pi * fc * PERIOD_S)
+        noise = lfilter([(1.0 - a) ** 2], [1.0, -2.0 * a, a * a], raw[:, p], axis=0)
+        # stationary variance of the two-pole filter driven by unit white noise
+        var = (1.0 - a) ** 4 * (1.0 + a * a) / ((1.0 - a * a) * ((1.0 + a * a) ** 2 - 4.0 * a * a))
+        out[:, p] += noise * (sd / math.sqrt(var))
+    return out

@@ -19,6 +19,18 @@ from cassi.data.synth_tasks import PHONE_DURATION_S, TaskSpec, word_phones
 
 Segment = tuple[float, float, dict]
 
+#: Jaw opening per task type, as a gain on the phones' jaw angles (oral-motor programmes set their
+#: own). Calibrated to KINEMATIC_TARGETS of :mod:`cassi.data.synth_motion`: in syllable
+#: repetitions the jaw (MNI) opens 15-25 mm at 150-250 mm/s; connected speech opens it less.
+JAW_GAIN: dict[str, float] = {"speech": 1.4, "syllable repetition": 2.0}
+
+
+def jaw_gain(task: TaskSpec) -> float:
+    """The task type's jaw gain (:data:`JAW_GAIN`); 1 for oral-motor programmes."""
+    if task.motor is not None:
+        return 1.0
+    return JAW_GAIN.get(task.category, JAW_GAIN["speech"])
+
 
 def spoken_phones(task: TaskSpec, rng: np.random.Generator) -> tuple[list, float]:
     """Timed phones ``[(start_s, end_s, label)]`` and the recording length (s) of a spoken task."""
@@ -147,8 +159,9 @@ def motor_segments(task: TaskSpec, anat: Anatomy, rng: np.random.Generator) -> l
         while t < end - 1.0:
             t = _hold(seq, t, u(1.0, 2.0), {"jaw": u(-0.3, 0.8), "lips": "open"})
     elif m == "max_protrusion":
-        lips = {"ulp_mm": fig.max_protrusion_ul_mm - 0.25, "llp_mm":
-                fig.max_protrusion_ll_mm - 0.25, "lips": "round", "jaw": 1.0,
+        # jaw closed: its opening would carry the lower lip back (about 0.35 mm per degree)
+        lips = {"ulp_mm": fig.max_protrusion_ul_mm - 0.1, "llp_mm":
+                fig.max_protrusion_ll_mm - 0.1, "lips": "round", "jaw": 0.0,
                 "tip": ("own", 0.0, 0.0), "body": ("own", 0.0, 0.0)}
         t = _hold(seq, t, 1.8, lips)
         t = _hold(seq, t, 1.0, REST_SPEC)

@@ -24,10 +24,16 @@ from cassi.data.errors import CassiInputError
 from cassi.data.profile import preprocess, read_lipthick, read_maxprotru
 from cassi.data.synth import (GENERATOR_VERSION, JW32_MNM_LOST_FROM_TASK, PROTECTED_TASKS,
                               TABLE_5_1_TASKS, default_corpus, generate_task, make_corpus)
+from cassi.data.stats import corpus_stats
+from cassi.data.synth_motion import KINEMATIC_TARGETS
 from cassi.data.synth_subjects import SUBJECTS
 from cassi.data.xrmb import PELLETS, read_head_measures, read_mis
 
 TOL = 0.03          # the issue's calibration tolerance (profile units: divided by jaw length)
+TOL_MIN = 0.05      # MIN UL / MIN LL (issue 10)
+#: Published MIN UL above 0.1 of the jaw length: reproduced; the others are near-zero values no
+#: gesture reaches (cassi.data.synth_subjects' docstring gives the numbers).
+MIN_UL_REPRODUCED = ("JW18", "JW19", "JW32", "JW41", "JW502")
 
 
 def _digest(root: Path) -> dict[str, str]:
@@ -56,6 +62,11 @@ def _check_profiles(profiles, fixtures_dir, names):
         assert p.lipthick == pytest.approx(lt[name], abs=TOL), name
         assert p.rest_ll == pytest.approx(ref.rest_ll, abs=TOL), name
         assert p.max_ll == pytest.approx(ref.max_ll, abs=TOL), name
+        assert p.min_ll == pytest.approx(ref.min_ll, abs=TOL_MIN), name
+        if name in MIN_UL_REPRODUCED:
+            assert p.min_ul == pytest.approx(ref.min_ul, abs=TOL_MIN), name
+        else:       # a typical 1.5 mm spreading: well above the published near-zero value
+            assert ref.min_ul < 0.02 and 0.25 < p.min_ul < ref.rest_ul, name
 
 
 # ----------------------------------------------------------------------------- layout, metadata
@@ -232,9 +243,57 @@ def test_error_free_files_stay_in_physiological_ranges(corpus):
     peaks = np.array(peaks)
     assert peaks.max() < 600.0
     med = np.median(peaks, axis=0)
-    # typical per-file peak speeds, mm/s: lips and jaw slower than the tongue tip
-    assert 20.0 < med[0] < 120.0 and 80.0 < med[1] < 300.0 and 120.0 < med[2] < 350.0
+    # typical per-file peak speeds, mm/s: the upper lip almost still, the tongue tip fastest
+    assert 2.0 < med[0] < 40.0 and 80.0 < med[1] < 300.0 and 120.0 < med[2] < 350.0
     assert 40.0 < med[6] < 160.0 and med[7] < med[6]
+
+
+def test_kinematics_land_in_their_calibrated_ranges(small):
+    """Every figure of KINEMATIC_TARGETS (real-data ranges, sources in synth_motion), measured by
+    `cassi corpus stats` on JW45, JW32 and JW12 (synthetic: describes the generator)."""
+    measured = {}
+    for figure, pellet, tasks, low, high in KINEMATIC_TARGETS:
+        if tasks not in measured:
+            measured[tasks] = corpus_stats(small, tasks=tasks)
+        st = measured[tasks]
+        value = st.scalars[figure] if pellet is None else st.pellets.at[pellet, figure]
+        assert low <= value <= high, (figure, pellet, tasks[:3], value)
+    every = corpus_stats(small)
+    d2 = every.pellets["d2_rms_um"]
+    # tracking noise differs by pellet: tongue pellets noisiest, the upper lip stillest
+    assert d2[["T1", "T2", "T3", "T4"]].min() > d2[["UL", "MNI", "MNM"]].max()
+    assert d2["UL"] == d2.min()
+    # the lips rest at and below the incisor tip and go lower while speaking
+    assert -3.0 < every.scalars["lip_mid_first"] < 1.5
+    assert every.scalars["lip_mid_p05"] < every.scalars["lip_mid_first"] - 3.0
+
+
+def test_jw45_at_rest_is_like_the_real_excerpt(small, fixtures_dir):
+    """Real-data check: thesis Figure 3.9 prints the first 13 valid rows of the real JW45 task 13
+    (at rest). The same rows of the synthetic JW45 task 13 have the same lips and jaw within
+    tenths of a millimetre and tracking noise (second differences) within a factor of 3."""
+    from cassi.data.stats import summarise
+    from cassi.data.xrmb import read_txy
+
+    real = read_txy(fixtures_dir / "xrmb" / "JW45" / "JW45_013.TXY")
+    syn = Corpus(small).load("JW45", 13)
+    i, j = real.first_valid_index, syn.first_valid_index
+    n = real.n_frames - i
+    a = summarise(syn.time_us[j:j + n], syn.xy_mm[j:j + n], syn.valid[j:j + n])
+    b = summarise(real.time_us[i:], real.xy_mm[i:], real.valid[i:])
+    ratio = a.pellets["d2_rms_um"] / b.pellets["d2_rms_um"]
+    assert ratio.between(1 / 3, 3).all(), ratio
+    assert a.scalars["lip_mid_first"] == pytest.approx(b.scalars["lip_mid_first"], abs=0.3)
+    assert a.scalars["ul_ll_first"] == pytest.approx(b.scalars["ul_ll_first"], abs=1.0)
+    assert a.scalars["jaw_distance_mean"] == pytest.approx(b.scalars["jaw_distance_mean"], abs=0.3)
+
+
+def test_same_seed_same_stats(small, tmp_path):
+    again = make_corpus(tmp_path / "again", subjects=["JW45"], seed=0, workers=1)
+    a = corpus_stats(small / "JW45", tasks=[13, 105]).as_dict()
+    b = corpus_stats(again / "JW45", tasks=[13, 105]).as_dict()
+    a.pop("label"), b.pop("label")
+    assert a == b
 
 
 def test_unlogged_lost_pellets_are_caught_by_usability(small, corpus):

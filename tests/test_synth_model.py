@@ -13,9 +13,10 @@ from hypothesis import strategies as st
 
 from cassi.data.profile import read_lipthick, read_maxprotru
 from cassi.data.synth import PERIOD_S, generate_task
-from cassi.data.synth_motion import (DIPHTHONGS, PHONE_SPECS, Anatomy, expand_phones, jaw_transform,
+from cassi.data.synth_motion import (DIPHTHONGS, OMEGA, PHONE_SPECS, Anatomy, expand_phones, jaw_transform,
                                      pellets, segment_targets, smooth)
-from cassi.data.synth_subjects import SUBJECTS, palate_y, subject_figures
+from cassi.data.synth_subjects import (LOW_LIP_LIPTHICK, LOW_LIP_SUBJECTS, SUBJECTS, palate_y,
+                                      subject_figures)
 from cassi.data.synth_tasks import LEXICON, TASKS, word_phones
 from cassi.data.xrmb import read_pal, read_txy
 
@@ -127,6 +128,28 @@ def test_head_measures_vary_by_subject_and_long_faces_are_steeper():
     assert body[male].mean() > body[~male].mean()
 
 
+def test_only_the_low_lip_subjects_meet_the_cassi_2_1_criterion():
+    """Thesis 4.3.1, as cassi.versions applies it: with 2.0's equal lips (Thick = lipthick p / 2,
+    Parke units), the upper lip's inside edge starts more than 20 units below vertex 226 (the
+    incisor tip, where the XRMB origin maps). Checked on each subject's Table 5.1 files."""
+    from cassi.data.face import build_face
+    from cassi.data.synth import TABLE_5_1_TASKS
+    from cassi.versions.lips_thickness import is_low_lips, thick_from_lipthick
+
+    p = build_face().jaw_length
+    assert {n for n, f in SUBJECTS.items() if f.lipthick >= LOW_LIP_LIPTHICK} == \
+        set(LOW_LIP_SUBJECTS)
+    for name, fig in SUBJECTS.items():
+        for task in TABLE_5_1_TASKS[name]:
+            _, xy = generate_task(fig, task)
+            d = np.hypot(*(xy[0, 6] - xy[0, 7]))
+            z61 = xy[0, 0, 1] * p / d - thick_from_lipthick(fig.lipthick, p)
+            low = is_low_lips(z61, 0.0)
+            assert low == (name in LOW_LIP_SUBJECTS), (name, task, z61)
+            # clear of the threshold: posture and noise cannot flip a subject
+            assert abs(-z61 - 20.0) > 4.0, (name, task, z61)
+
+
 def test_unknown_subject_names_the_known_ones():
     with pytest.raises(KeyError, match="JW11"):
         subject_figures("JW29")
@@ -169,9 +192,13 @@ def test_critically_damped_smoothing_has_no_overshoot_and_reaches_targets():
     targets[1] = 10.0
     out = smooth(starts, targets, n_frames=int(2.5 / PERIOD_S))
     assert out.max() <= 10.0 + 1e-9 and out.min() >= -1e-9
-    hold = out[int(1.4 / PERIOD_S)]
+    hold = out[int(1.3 / PERIOD_S)]
     assert np.allclose(hold, 10.0, atol=0.05)
     assert np.allclose(out[-1], 0.0, atol=0.05)
+    # continuous acceleration (bell-shaped speed): a second-order system's peak acceleration is
+    # omega^2 * step at the step; the fourth-order cascade's is 0.28 of that
+    d2 = np.abs(np.diff(out, n=2, axis=0)).max(axis=0) / PERIOD_S ** 2
+    assert (d2 < 0.3 * OMEGA ** 2 * 10.0).all() and (d2 > 0.2 * OMEGA ** 2 * 10.0).all()
 
 
 def test_jaw_carries_rigid_pellets():
