@@ -128,7 +128,9 @@ def extreme_frames(rows: pd.DataFrame, *, limit: int = MAX_EXTREMES) -> list[int
     rows = rows.copy()
     rows["negatives"] = pd.to_numeric(rows["negatives"], errors="coerce").fillna(0)
     fired = rows[rows["frame"] == -1].groupby("check")["negatives"].max()
-    evidence = rows[rows["frame"] >= 0].copy()
+    # Evidence rows only: the fidelity traces (view "trace") are per-frame data, not a fault.
+    traces = rows["view"] == "trace" if "view" in rows else False
+    evidence = rows[(rows["frame"] >= 0) & ~traces].copy()
     if evidence.empty:
         return []
     evidence["fired"] = evidence["check"].map(fired).fillna(0)

@@ -136,3 +136,13 @@ def test_bench_headline_keys_come_from_the_entries_that_have_them():
                     "render": {"render_per_s": {"front/preview": 2.0},
                                "render_pipeline_efficiency": 0.8, "render_rss_growth_mb": 1.0}})
     assert set(out) == {"render_per_s", "render_pipeline_efficiency", "render_rss_growth_mb"}
+
+
+def test_extreme_frames_ignore_the_fidelity_traces():
+    rows = pd.DataFrame([
+        dict(check="lip_gap", frame=-1, negatives=1, view="geometry"),
+        dict(check="lip_gap", frame=40, negatives=0, view="geometry"),
+        dict(check="lip_aperture", frame=10, negatives=0, view="trace"),
+        dict(check="lip_aperture", frame=20, negatives=0, view="trace"),
+    ])
+    assert P.extreme_frames(rows, limit=8) == [40]
