@@ -94,17 +94,24 @@ def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | N
                version=getattr(anim, "version", None))
     wanted = None if checks is None else {get_check(c).name for c in checks}
     frame_no = _frame_numbers(anim, pos.shape[0])
+    rows = _measured_rows(checks_for(kind="geometry", task=task), ctx, ids, wanted, frame_no)
+    if recording is not None:
+        rows.extend(_fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no))
+    return _frame(rows)
+
+
+def _measured_rows(checks, ctx, ids: dict, wanted, frame_no) -> list[dict]:
+    """Rows of ``checks`` measured on ``ctx`` (those in ``wanted`` when given); a measure's
+    frame index becomes the recording row."""
     rows: list[dict] = []
-    for c in checks_for(kind="geometry", task=task):
+    for c in checks:
         if wanted is not None and c.name not in wanted:
             continue
         m = c.func(ctx)
         if m.frame >= 0:
             m = Measurement(m.value, int(frame_no[m.frame]), m.detail, m.negatives, m.frame_value)
         rows.extend(_rows(c, m, "geometry", ids))
-    if recording is not None:
-        rows.extend(_fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no))
-    return _frame(rows)
+    return rows
 
 
 def _fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no) -> list[dict]:
@@ -117,14 +124,7 @@ def _fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no) -> lis
         raise CassiInputError("fidelity checks need the face and the subject's jaw length "
                               "(profile.jaw_length_mm) to map the model back to the recording")
     ctx = FidelityContext.of(anim, recording, XrmbToParke.from_face(face.vertices, jaw))
-    rows: list[dict] = []
-    for c in checks_for(kind="fidelity"):
-        if wanted is not None and c.name not in wanted:
-            continue
-        m = c.func(ctx)
-        if m.frame >= 0:
-            m = Measurement(m.value, int(frame_no[m.frame]), m.detail, m.negatives, m.frame_value)
-        rows.extend(_rows(c, m, "geometry", ids))
+    rows = _measured_rows(checks_for(kind="fidelity"), ctx, ids, wanted, frame_no)
     if ids["task"] in TRACE_TASKS and wanted is None:
         rows.extend(dict(ids, negatives=0, **r) for r in traces(ctx, step=TRACE_STEP))
     return rows
