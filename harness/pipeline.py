@@ -9,7 +9,6 @@ jobs the process runs, instead of rebuilding them per job.
 from __future__ import annotations
 
 import os
-import tempfile
 import threading
 from pathlib import Path
 from typing import Mapping
@@ -192,12 +191,10 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
 
 
 def _png_bytes(rgb: np.ndarray, metadata: dict | None = None) -> bytes:
-    from cassi.renderer.images import write_png  # noqa: PLC0415
+    """The frame's sRGB PNG, encoded in memory (no temporary file per frame)."""
+    from cassi.renderer.images import png_bytes  # noqa: PLC0415
 
-    with tempfile.TemporaryDirectory(prefix="cassi-png-") as tmp:
-        path = Path(tmp) / "frame.png"
-        write_png(path, rgb, metadata=metadata)
-        return path.read_bytes()
+    return png_bytes(rgb, metadata=metadata)
 
 
 class StoredFrame:
@@ -229,7 +226,7 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
         meta = {"subject": job.subject, "task": job.task, "rep": job.rep,
                 "version": job.version, "view": job.view, "frame": f,
                 "synthetic": ctx.synthetic}
-        files[f"render-{f:06d}"] = (_png_bytes(res.rgb, meta), ".png")
+        files[f"render-{f:06d}"] = (_png_bytes(res.rgb, {**res.metadata(), **meta}), ".png")
         mask = np.asarray(res.mask)
         if mask.max(initial=0) > 255:
             raise ValueError("more than 255 parts: masks are stored as uint8")

@@ -6,9 +6,11 @@ writing ``mesh_<part>.vertex_positions`` through ``mi.traverse`` and calling ``p
 once keeps the scene, the film, the sensors and hence the compiled kernels fixed, so a frame costs
 a BVH refit plus the render itself.
 
-Each frame gives the colour image (linear RGB) and, from a second pass with the ``aov``
-integrator through the pixel centres, the part shown at each pixel and its distance from the
-camera (exact, aligned with the colour image: same camera, same pixel grid).
+Each frame gives the colour image (linear RGB), the part shown at each pixel and its distance
+from the camera, from one pass of the ``aov`` integrator through the pixel centres (part id,
+depth, surface normal). The ``preview`` preset shades its colour from that pass
+(:mod:`cassi.renderer.shading`): one ray per pixel, no noise, the same bytes in every process.
+The ``final`` preset path-traces the colour in a second pass (same camera, same pixel grid).
 """
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ import numpy as np
 
 from cassi.data.errors import CassiInputError
 
-from . import scenes
+from . import scenes, shading
 from .variant import activate_variant, choose_variant
 from .views import Preset, View, preset as _preset, view as _view
 
@@ -189,7 +191,7 @@ class FaceRenderer:
         sensors = {s.id(): s for s in self._scene.sensors()}
         self._sensor_colour = sensors[scenes.SENSOR_COLOUR]
         self._sensor_mask = sensors[scenes.SENSOR_MASK]
-        self._mask_integrator = mi.load_dict(scenes.mask_integrator_dict())
+        self._mask_integrator = mi.load_dict(scenes.mask_integrator_dict(look=self.preset.look))
         params = mi.traverse(self._scene)
         self._keys = {part: scenes.mesh_id(part) + ".vertex_positions" for part in meshes}
         params.keep(list(self._keys.values()))
@@ -211,6 +213,7 @@ class FaceRenderer:
             lut[r] = k
         self._lut = lut
         self._near_offset = _near_offset(self.view, self.preset)
+        self._tables = shading.shading_tables(self.view, self.preset, self.part_names)
 
     # -- per frame -------------------------------------------------------------------------
     def update(self, positions: np.ndarray) -> None:
@@ -230,15 +233,27 @@ class FaceRenderer:
                 np.ascontiguousarray(expanded[part], np.float32).ravel())
         self._params.update()
 
-    def render_colour(self) -> np.ndarray:
-        """float32 (H, W, 3) linear RGB of the current geometry (the bare ``mi.render``)."""
+    def render_pass(self) -> np.ndarray:
+        """The preset's one colour-giving ``mi.render`` of the current geometry, as Mitsuba
+        returns it (the bare call ``cassi bench`` compares the pipeline with): the aov pass for
+        raycast presets, the path-traced image for path presets."""
         import mitsuba as mi
-        img = mi.render(self._scene, sensor=self._sensor_colour, seed=self.preset.seed,
-                        spp=self.preset.spp)
-        return np.asarray(img, dtype=np.float32)[..., :3]
+        if self.preset.shading == "raycast":
+            return mi.render(self._scene, integrator=self._mask_integrator,
+                             sensor=self._sensor_mask, seed=0, spp=1)
+        return mi.render(self._scene, sensor=self._sensor_colour, seed=self.preset.seed,
+                         spp=self.preset.spp)
 
-    def render_mask(self) -> tuple[np.ndarray, np.ndarray]:
-        """(mask int32 (H, W), depth float32 (H, W)) of the current geometry."""
+    def render_colour(self) -> np.ndarray:
+        """float32 (H, W, 3) linear RGB of the current geometry."""
+        if self.preset.shading == "raycast":
+            return self.render_aov()[2]
+        return np.asarray(self.render_pass(), dtype=np.float32)[..., :3]
+
+    def render_aov(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(mask int32 (H, W), depth float32 (H, W), colour) of the current geometry from the
+        one aov pass; colour is the raycast shading (float32 (H, W, 3) linear RGB), or None
+        for path presets."""
         import mitsuba as mi
         aov = np.asarray(mi.render(self._scene, integrator=self._mask_integrator,
                                    sensor=self._sensor_mask, seed=0, spp=1), dtype=np.float32)
@@ -249,18 +264,28 @@ class FaceRenderer:
         # stretch from the eye to that plane: near_clip / cos(angle to the optical axis).
         depth = aov[..., 0] + self._near_offset
         depth[mask == 0] = np.inf
+        colour = None
+        if self.preset.shading == "raycast":
+            colour = shading.shade(self._tables, mask, aov[..., 2:5])
+        return mask, depth, colour
+
+    def render_mask(self) -> tuple[np.ndarray, np.ndarray]:
+        """(mask int32 (H, W), depth float32 (H, W)) of the current geometry."""
+        mask, depth, _ = self.render_aov()
         return mask, depth
 
     def render(self, positions: np.ndarray) -> RenderResult:
-        """Render one frame: colour, mask and depth."""
+        """Render one frame: colour, mask and depth (one pass for raycast presets)."""
         t0 = time.perf_counter()
         self.update(positions)
-        rgb = self.render_colour()
-        mask, depth = self.render_mask()
+        mask, depth, rgb = self.render_aov()
+        if rgb is None:
+            rgb = self.render_colour()
         return RenderResult(rgb=rgb, mask=mask, depth=depth, part_names=self.part_names,
                             view=self.view.name, preset=self.preset.name, variant=self.variant,
                             spp=self.preset.spp, seed=self.preset.seed,
-                            render_s=time.perf_counter() - t0)
+                            render_s=time.perf_counter() - t0,
+                            extra={"shading": self.preset.shading, "look": self.preset.look})
 
     def render_to_files(self, positions: np.ndarray, stem: str | Path, *, exr: bool = True,
                         png: bool = True, mask_png: bool = True, sidecar: bool = True,

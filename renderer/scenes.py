@@ -11,7 +11,8 @@ The ids chosen here become the keys of ``mi.traverse``; they are fixed on purpos
   the mask and depth it gives are exact per pixel and aligned with the colour image (same camera,
   same pixel grid);
 - ``light_key``, ``light_fill``, ``light_rim``: rectangular area lights; ``ambient``: a dim
-  constant environment (also the image background).
+  constant environment (also the image background). The raycast preview shades with the same
+  lights as directional ones (:mod:`cassi.renderer.shading`).
 
 All functions need Mitsuba's variant to be set already (``variant.activate_variant``).
 """
@@ -19,9 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .views import DEFAULT_MATERIAL, MATERIALS, Preset, View
+from .views import Preset, View, material_for
 
-__all__ = ["mesh_id", "material_for", "part_mesh", "sensor_dict", "emitter_dicts",
+__all__ = ["mesh_id", "part_mesh", "sensor_dict", "emitter_dicts",
            "colour_integrator_dict", "mask_integrator_dict", "scene_dict", "SENSOR_COLOUR",
            "SENSOR_MASK"]
 
@@ -33,17 +34,6 @@ _MESH_PREFIX = "mesh_"
 def mesh_id(part: str) -> str:
     """The scene id (and ``mi.traverse`` key prefix) of a part's mesh."""
     return _MESH_PREFIX + part
-
-
-def material_for(part: str) -> dict:
-    """The BSDF dict of a part: exact name, else the longest material name the part starts
-    with (``teeth_upper`` -> ``teeth``), else a neutral grey."""
-    if part in MATERIALS:
-        return MATERIALS[part]
-    prefixes = [m for m in MATERIALS if part.startswith(m)]
-    if prefixes:
-        return MATERIALS[max(prefixes, key=len)]
-    return DEFAULT_MATERIAL
 
 
 def part_mesh(part: str, positions: np.ndarray, triangles: np.ndarray):
@@ -61,7 +51,7 @@ def part_mesh(part: str, positions: np.ndarray, triangles: np.ndarray):
     import mitsuba as mi
 
     props = mi.Properties()
-    props["bsdf"] = mi.load_dict(material_for(part))
+    props["bsdf"] = mi.load_dict(material_for(part).bsdf())
     mesh = mi.Mesh(mesh_id(part), int(len(positions)), int(len(triangles)), props=props,
                    has_vertex_normals=True)
     params = mi.traverse(mesh)
@@ -122,10 +112,16 @@ def colour_integrator_dict(preset: Preset) -> dict:
     return {"type": "path", "max_depth": preset.max_depth}
 
 
-def mask_integrator_dict() -> dict:
-    """AOV integrator: channel 0 = distance along the ray (``depth``), 1 = shape index
-    (a registry id in JIT variants, scene order + 1 in scalar ones; 0 = no hit)."""
-    return {"type": "aov", "aovs": "dd.y:depth,si:shape_index"}
+#: Channels of the aov pass, in order: distance along the ray, shape index (a registry id in
+#: JIT variants, scene order + 1 in scalar ones; 0 = no hit), surface normal x, y, z (world).
+AOV_CHANNELS = ("depth", "shape_index", "nx", "ny", "nz")
+
+
+def mask_integrator_dict(*, look: str = "smooth") -> dict:
+    """The aov integrator of the one pass through the pixel centres: depth, shape index and the
+    shading normal (``look="smooth"``) or the geometric one (``"flat"``); see AOV_CHANNELS."""
+    normal = "sh_normal" if look == "smooth" else "geo_normal"
+    return {"type": "aov", "aovs": f"dd.y:depth,si:shape_index,n:{normal}"}
 
 
 def scene_dict(meshes: dict[str, object], view: View, preset: Preset) -> dict:
