@@ -24,9 +24,9 @@ from .runner import Pipeline
 #: At most this many "extreme" frames per geometry job (the worst frame of the checks that
 #: fired, most negatives first), so renders stay bounded on long tasks.
 MAX_EXTREMES = 8
-#: Tasks whose front view is also rendered at ``animate_stride`` for side-by-side animations.
-ANIMATED_TASKS = (106, 118)
-ANIMATION_VIEW = "front"
+#: The views a task file's video shows side by side; with ``animate_stride`` each of them is
+#: rendered at that stride (views a run leaves out are not rendered).
+VIDEO_VIEWS = ("front", "side", "half", "top")
 
 _lock = threading.Lock()
 _corpora: dict[str, object] = {}
@@ -172,20 +172,21 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
     animated = set(frames.tolist())
     pick = [f for f in pick if f in animated]
     meta = {"render_frames": pick, "n_frames": int(frames.size)}
-    # Tasks 106 and 118 are shown as animations of all versions side by side: the front view
-    # also gets every `animate_stride`-th frame (the same frames for every version).
+    # Every task file is also shown as a video (four views side by side, cassi.reports.media):
+    # every view also gets every `animate_stride`-th frame, the same frames for every version,
+    # so the versions' videos of a task compare frame for frame.
     step = int(ctx.option("animate_stride", 0) or 0)
-    if step > 0 and job.task in ANIMATED_TASKS:
-        flip = select_frames(int(frames[0]), int(frames[-1]), stride=step)
-        meta["render_frames_by_view"] = {
-            ANIMATION_VIEW: sorted(set(pick) | {f for f in flip if f in animated})}
+    if step > 0:
+        video = {f for f in select_frames(int(frames[0]), int(frames[-1]), stride=step)
+                 if f in animated}
+        meta["render_frames_by_view"] = {view: sorted(set(pick) | video) for view in VIDEO_VIEWS}
     keep = sorted(set(pick).union(*meta.get("render_frames_by_view", {}).values()))
     idx = np.searchsorted(frames, keep)
     keyframes = npz_bytes(frames=np.asarray(keep, np.int64),
                           positions=np.asarray(anim.positions[idx], np.float32))
     log = [f"frames {frames[0]}..{frames[-1]} ({frames.size}); render {len(pick)}: {pick}"]
     if len(keep) > len(pick):
-        log.append(f"animation frames ({ANIMATION_VIEW} view): {len(keep) - len(pick)} more")
+        log.append(f"video frames (every {step}th row, all views): {len(keep) - len(pick)} more")
     log += [f"recording warning: {w}" for w in getattr(rec, "warnings", ())]
     return StageOutput(rows=rows, files={"keyframes": (keyframes, ".npz")}, meta=meta, log=log)
 

@@ -23,10 +23,11 @@ from cassi.reports.tables import (RATINGS, component_ratings, markdown_table, ra
 
 #: How many frames per check and version get thumbnails on a subject page.
 MAX_SHEETS_PER_VERSION = 6
-ANIMATED_TASKS = (106, 118)
-#: Renders of an animation are sparse (every ~100th recording row of 145.6 Hz data), so a slow
-#: flip-book rate keeps each frame readable.
-ANIMATION_FPS = 4
+#: Tasks whose versions are also compared side by side in one video (front view).
+COMPARED_TASKS = (106, 118)
+COMPARISON_VIEW = "front"
+#: The order of a task video's panels.
+VIDEO_VIEWS = ("front", "side", "half", "top")
 
 
 def slug(text: str) -> str:
@@ -157,19 +158,59 @@ def _subject_page(run: Run, subject: str, frames_by_check: pd.DataFrame, out: Pa
     return page.relative_to(out).as_posix()
 
 
-def _animations(run: Run, out: Path) -> list[dict]:
-    if not len(run.renders):
+def _audio_for(run: Run):
+    """``(subject, task, rep) -> WAV path or None`` from the run's corpus (None when the corpus
+    cannot be opened: the videos are then silent, and say so)."""
+    root = run.meta.get("corpus_resolved")
+    try:
+        from cassi.data.corpus import Corpus  # noqa: PLC0415
+
+        corpus = Corpus(root) if root else None
+    except Exception:  # noqa: BLE001 - a moved corpus must not stop the report
+        corpus = None
+
+    def find(subject: str, task: int, rep: int):
+        if corpus is None:
+            return None
+        try:
+            return corpus.subject(subject).audio_path(task, rep)
+        except Exception:  # noqa: BLE001
+            return None
+    return find
+
+
+def _videos(run: Run, out: Path) -> list[dict]:
+    """A four-view video per task file and version, and the versions side by side for tasks
+    106 and 118, from the renders on the run's ``animate_stride`` grid."""
+    stride = int(run.meta.get("animate_stride") or 0)
+    if not len(run.renders) or stride < 1:
         return []
-    anims = []
-    sel = run.renders[run.renders["task"].isin(ANIMATED_TASKS)]
-    for (subject, task, rep, view), g in sel.groupby(["subject", "task", "rep", "view"]):
-        if g["version"].nunique() < 2:
-            continue
-        dest = out / "animations" / f"{slug(subject)}_{int(task):03d}_{int(rep)}_{slug(view)}.mp4"
-        if media.side_by_side_animation(g, dest, fps=ANIMATION_FPS) is not None:
-            anims.append({"label": f"{subject} task {task}, {view} view ({', '.join(order_versions(g['version'].unique()))})",
-                          "href": dest.relative_to(out).as_posix()})
-    return anims
+    audio_for = _audio_for(run)
+    videos = []
+
+    def add(kind, label, result, dest):
+        if result is not None:
+            videos.append({"kind": kind, "label": label, "href": dest.relative_to(out).as_posix(),
+                           "fps": result["fps"], "frames": result["frames"],
+                           "seconds": result["seconds"], "audio": result["audio"]})
+
+    for (subject, task, rep), g in run.renders.groupby(["subject", "task", "rep"]):
+        task, rep = int(task), int(rep)
+        audio = audio_for(subject, task, rep)
+        stem = f"{slug(subject)}_{task:03d}_{rep}"
+        versions = order_versions(g["version"].unique())
+        views = [v for v in VIDEO_VIEWS if v in set(g["view"])]
+        for version in versions:
+            dest = out / "videos" / f"{stem}_{slug(version)}.mp4"
+            add("task", f"{subject} task {task}" + (f" rep {rep}" if rep != 1 else "")
+                + f", {version}", media.task_video(g, dest, stride=stride, audio=audio,
+                                                   columns=[(version, v) for v in views]), dest)
+        if task in COMPARED_TASKS and len(versions) > 1 and COMPARISON_VIEW in views:
+            dest = out / "animations" / f"{stem}_{COMPARISON_VIEW}.mp4"
+            add("comparison", f"{subject} task {task}, {COMPARISON_VIEW} view ({', '.join(versions)})",
+                media.task_video(g, dest, stride=stride, audio=audio,
+                                 columns=[(v, COMPARISON_VIEW) for v in versions]), dest)
+    return videos
 
 
 def _meta_items(run: Run) -> list[tuple[str, str]]:
@@ -215,7 +256,7 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
     html = env.get_template("index.html.j2").render(
         run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
         summaries=version_summaries(run.results), comparison=_comparison(run, previous, out),
-        tables=_table_sections(run, out), animations=_animations(run, out),
+        tables=_table_sections(run, out), videos=_videos(run, out),
         subjects=subject_links, trend=trend, gate=gate)
     index = out / "index.html"
     atomic_write_text(index, html)
