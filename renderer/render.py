@@ -26,7 +26,7 @@ from cassi.data.errors import CassiInputError
 
 from . import scenes, shading
 from .variant import activate_variant, choose_variant
-from .views import Preset, View, preset as _preset, view as _view
+from .views import Preset, View, mouth_box, preset as _preset, view as _view
 
 __all__ = ["RenderResult", "FaceRenderer", "part_triangles", "BACKGROUND"]
 
@@ -285,7 +285,8 @@ class FaceRenderer:
                             view=self.view.name, preset=self.preset.name, variant=self.variant,
                             spp=self.preset.spp, seed=self.preset.seed,
                             render_s=time.perf_counter() - t0,
-                            extra={"shading": self.preset.shading, "look": self.preset.look})
+                            extra={"shading": self.preset.shading, "look": self.preset.look,
+                                   "mouth_box": list(mouth_box(self.view, self.preset))})
 
     def render_to_files(self, positions: np.ndarray, stem: str | Path, *, exr: bool = True,
                         png: bool = True, mask_png: bool = True, sidecar: bool = True,

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["Camera", "Light", "View", "Preset", "Material", "VIEWS", "PRESETS", "MATERIALS",
-           "DEFAULT_MATERIAL", "material_for", "view", "preset", "VIEW_NAMES", "PRESET_NAMES"]
+           "DEFAULT_MATERIAL", "material_for", "mouth_box", "project", "view", "preset", "VIEW_NAMES", "PRESET_NAMES"]
 
 Vec3 = tuple[float, float, float]
 
@@ -225,6 +225,36 @@ def material_for(part: str) -> Material:
     if prefixes:
         return MATERIALS[max(prefixes, key=len)]
     return DEFAULT_MATERIAL
+
+
+#: The mouth region the image gates look at: a box around the mouth (lips, teeth, front of the
+#: tongue and palate), centre and half extents in Parke units (140 units = 35 mm).
+MOUTH_CENTER = (270.0, 0.0, -265.0)
+MOUTH_HALF_EXTENT = (140.0, 120.0, 110.0)
+
+
+def project(view: View, preset: Preset, points) -> np.ndarray:
+    """float (N, 2) pixel coordinates (column, row; 0 = the left/top edge) of world ``points``
+    (N, 3) in ``view``'s camera at ``preset``'s film size."""
+    right, up, back = view.camera.basis()
+    d = np.asarray(points, float) - np.asarray(view.camera.origin, float)
+    z = -(d @ back)
+    tan = math.tan(math.radians(view.camera.fov) / 2.0)
+    x = (d @ right) / (z * tan * preset.width / preset.height)
+    y = (d @ up) / (z * tan)
+    return np.stack([(x + 1) / 2 * preset.width, (1 - y) / 2 * preset.height], axis=1)
+
+
+def mouth_box(view: View, preset: Preset) -> tuple[int, int, int, int]:
+    """(row0, row1, col0, col1), end-exclusive: the image rectangle of the mouth region
+    (the projected MOUTH box, clipped to the film). The same for every subject and frame."""
+    c, e = np.asarray(MOUTH_CENTER, float), np.asarray(MOUTH_HALF_EXTENT, float)
+    corners = c + e * np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    px = project(view, preset, corners)
+    col0, row0 = np.floor(px.min(axis=0)).astype(int)
+    col1, row1 = np.ceil(px.max(axis=0)).astype(int)
+    return (int(max(0, row0)), int(min(preset.height, row1)),
+            int(max(0, col0)), int(min(preset.width, col1)))
 
 
 def view(name: str) -> View:
