@@ -6,6 +6,7 @@ locked) before the first job starts, so bad input never leaves a half-done batch
 from __future__ import annotations
 
 import json
+import sys
 import time
 
 from cassi.data.atomic import atomic_write_text
@@ -54,13 +55,23 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
     corpus, tasks, versions, views = plan(cfg)
     synthetic = bool(getattr(corpus, "is_synthetic", False))
     pipeline = pipeline or cassi_pipeline(render=bool(views))
+    if progress:
+        from .pipeline import render_budget  # noqa: PLC0415
+
+        n = render_budget(corpus, tasks, versions, views, stride=cfg.stride,
+                          extremes=cfg.extremes, animate_stride=cfg.animate_stride,
+                          video_versions=cfg.video_versions)
+        print(f"cassi run: {sum(t.usable for t in tasks)} task file(s) x {len(versions)} "
+              f"version(s) x {len(views)} view(s): at most {n} frame(s) to render "
+              f"({cfg.preset}, {cfg.workers} worker(s))", file=sys.stderr, flush=True)
     store = OutputStore(cfg.out)
     store.prepare()
     ctx = StageContext(out_dir=store.root.resolve(), corpus=corpus.root.resolve(),
                        stride=cfg.stride, chunk_size=cfg.chunk, preset=cfg.preset,
                        variant=cfg.variant, synthetic=synthetic,
                        options=(("extremes", cfg.extremes),
-                                ("animate_stride", cfg.animate_stride)))
+                                ("animate_stride", cfg.animate_stride),
+                                ("video_versions", cfg.video_versions)))
     meta = C.resolved(cfg, corpus_resolved=str(ctx.corpus), synthetic=synthetic,
                       versions_resolved=versions, views_resolved=views,
                       tasks_resolved=[[t.subject, t.task, t.rep, t.usable, t.reason] for t in tasks],

@@ -27,6 +27,9 @@ MAX_EXTREMES = 8
 #: The views a task file's video shows side by side; with ``animate_stride`` each of them is
 #: rendered at that stride (views a run leaves out are not rendered).
 VIDEO_VIEWS = ("front", "side", "half", "top")
+#: Tasks whose versions are compared side by side (front view) in the nightly report.
+COMPARED_TASKS = (106, 118)
+COMPARISON_VIEW = "front"
 
 _lock = threading.Lock()
 _corpora: dict[str, object] = {}
@@ -132,6 +135,29 @@ def extreme_frames(rows: pd.DataFrame, *, limit: int = MAX_EXTREMES) -> list[int
     return sorted(picked)
 
 
+def render_budget(corpus, tasks, versions, views, *, stride: int, extremes: int,
+                  animate_stride: int, video_versions=None) -> int:
+    """At most how many frames a run renders (said before any work starts).
+
+    Per usable task file of R rows, version and view: the first frame, every ``stride``-th
+    row and up to ``extremes`` check frames; plus every ``animate_stride``-th row where
+    :func:`geometry_stage` renders video frames (overlaps counted twice: an upper bound).
+    """
+    total = 0
+    for t in tasks:
+        if not t.usable:
+            continue
+        rows = len(corpus.subject(t.subject).load(t.task, t.rep).time_us)
+        base = 1 + (rows // stride if stride > 0 else 0) + max(0, extremes)
+        video = rows // animate_stride + 1 if animate_stride > 0 else 0
+        for version in versions:
+            for view in views:
+                shows = (video_versions is None or version in video_versions
+                         or (t.task in COMPARED_TASKS and view == COMPARISON_VIEW))
+                total += base + (video if shows else 0)
+    return total
+
+
 def _usable_or_skip(subject_data, job: Job) -> None:
     try:
         u = subject_data.usability(job.task, job.rep)
@@ -173,20 +199,28 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
     pick = [f for f in pick if f in animated]
     meta = {"render_frames": pick, "n_frames": int(frames.size)}
     # Every task file is also shown as a video (four views side by side, cassi.reports.media):
-    # every view also gets every `animate_stride`-th frame, the same frames for every version,
-    # so the versions' videos of a task compare frame for frame.
+    # the video versions get every `animate_stride`-th frame in every view, the others in the
+    # front view of tasks 106 and 118 (the version comparisons); the same frames for every
+    # version, so videos of a task compare frame for frame.
     step = int(ctx.option("animate_stride", 0) or 0)
+    video_versions = ctx.option("video_versions")
     if step > 0:
-        video = {f for f in select_frames(int(frames[0]), int(frames[-1]), stride=step)
-                 if f in animated}
-        meta["render_frames_by_view"] = {view: sorted(set(pick) | video) for view in VIDEO_VIEWS}
+        grid = {f for f in select_frames(int(frames[0]), int(frames[-1]), stride=step)
+                if f in animated}
+        if video_versions is None or job.version in video_versions:
+            views = VIDEO_VIEWS
+        else:
+            views = (COMPARISON_VIEW,) if job.task in COMPARED_TASKS else ()
+        if views:
+            meta["render_frames_by_view"] = {view: sorted(set(pick) | grid) for view in views}
     keep = sorted(set(pick).union(*meta.get("render_frames_by_view", {}).values()))
     idx = np.searchsorted(frames, keep)
     keyframes = npz_bytes(frames=np.asarray(keep, np.int64),
                           positions=np.asarray(anim.positions[idx], np.float32))
     log = [f"frames {frames[0]}..{frames[-1]} ({frames.size}); render {len(pick)}: {pick}"]
     if len(keep) > len(pick):
-        log.append(f"video frames (every {step}th row, all views): {len(keep) - len(pick)} more")
+        log.append(f"video frames (every {step}th row, {', '.join(views)}): "
+                   f"{len(keep) - len(pick)} more")
     log += [f"recording warning: {w}" for w in getattr(rec, "warnings", ())]
     return StageOutput(rows=rows, files={"keyframes": (keyframes, ".npz")}, meta=meta, log=log)
 
