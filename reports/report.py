@@ -23,8 +23,8 @@ from cassi.reports.tables import (RATINGS, component_ratings, markdown_table, ra
 
 #: How many frames per check and version get thumbnails on a subject page.
 MAX_SHEETS_PER_VERSION = 6
-#: Tasks whose versions are also compared side by side in one video (front view).
-COMPARED_TASKS = (106, 118)
+#: The view in which versions are compared side by side (where the farm rendered the video
+#: frames of several versions in it: tasks 106 and 118 in a nightly).
 COMPARISON_VIEW = "front"
 #: The order of a task video's panels.
 VIDEO_VIEWS = ("front", "side", "half", "top")
@@ -180,8 +180,9 @@ def _audio_for(run: Run):
 
 
 def _videos(run: Run, out: Path) -> list[dict]:
-    """A four-view video per task file and version, and the versions side by side for tasks
-    106 and 118, from the renders on the run's ``animate_stride`` grid."""
+    """From the renders on the run's ``animate_stride`` grid: a four-view video per task file
+    and version that was rendered in every view, and the versions side by side wherever
+    several versions were rendered in the comparison view."""
     stride = int(run.meta.get("animate_stride") or 0)
     if not len(run.renders) or stride < 1:
         return []
@@ -198,18 +199,26 @@ def _videos(run: Run, out: Path) -> list[dict]:
         task, rep = int(task), int(rep)
         audio = audio_for(subject, task, rep)
         stem = f"{slug(subject)}_{task:03d}_{rep}"
-        versions = order_versions(g["version"].unique())
-        views = [v for v in VIDEO_VIEWS if v in set(g["view"])]
+        name = f"{subject} task {task}" + (f" rep {rep}" if rep != 1 else "")
+        all_views = [v for v in VIDEO_VIEWS if v in set(g["view"])]
+        on_grid = {}
+        for (version, view), p in g.groupby(["version", "view"]):
+            if len(media.video_frames(p, stride=stride)) >= 2:
+                on_grid.setdefault(version, set()).add(view)
+        versions = order_versions(on_grid)
         for version in versions:
+            if on_grid[version] != set(all_views):
+                continue  # rendered for the comparisons only
             dest = out / "videos" / f"{stem}_{slug(version)}.mp4"
-            add("task", f"{subject} task {task}" + (f" rep {rep}" if rep != 1 else "")
-                + f", {version}", media.task_video(g, dest, stride=stride, audio=audio,
-                                                   columns=[(version, v) for v in views]), dest)
-        if task in COMPARED_TASKS and len(versions) > 1 and COMPARISON_VIEW in views:
-            dest = out / "animations" / f"{stem}_{COMPARISON_VIEW}.mp4"
-            add("comparison", f"{subject} task {task}, {COMPARISON_VIEW} view ({', '.join(versions)})",
+            add("task", f"{name}, {version}",
                 media.task_video(g, dest, stride=stride, audio=audio,
-                                 columns=[(v, COMPARISON_VIEW) for v in versions]), dest)
+                                 columns=[(version, v) for v in all_views]), dest)
+        compared = [v for v in versions if COMPARISON_VIEW in on_grid[v]]
+        if len(compared) > 1:
+            dest = out / "animations" / f"{stem}_{COMPARISON_VIEW}.mp4"
+            add("comparison", f"{name}, {COMPARISON_VIEW} view ({', '.join(compared)})",
+                media.task_video(g, dest, stride=stride, audio=audio,
+                                 columns=[(v, COMPARISON_VIEW) for v in compared]), dest)
     return videos
 
 
