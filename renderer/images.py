@@ -233,11 +233,11 @@ def write_contact_sheet(path: str | os.PathLike, images: Sequence[np.ndarray], *
     return write_png(path, contact_sheet(images, columns=columns), metadata=metadata, linear=False)
 
 
-def write_result(result, stem: str | os.PathLike, *, exr: bool = True, png: bool = True,
+def write_result(result, stem: str | os.PathLike, *, exr: bool = False, png: bool = True,
                  mask_png: bool = True, sidecar: bool = True) -> list[Path]:
-    """Write one ``RenderResult``: ``<stem>.exr`` (linear RGB + ``Z`` depth + ``part`` index),
-    ``<stem>.png`` (sRGB), ``<stem>.mask.png`` (part indices) and ``<stem>.json`` (metadata).
-    Returns the paths written."""
+    """Write one ``RenderResult``: ``<stem>.png`` (sRGB), ``<stem>.mask.png`` (part indices),
+    ``<stem>.json`` (metadata) and, only when asked (``exr=True``), ``<stem>.exr`` (linear RGB
+    + ``Z`` depth + ``part`` index). Returns the paths written."""
     meta = result.metadata()
     written = []
     if exr:
@@ -266,7 +266,7 @@ class FrameWriter:
     ...         writer.submit(renderer.render(pos), out / f"front_{n:05d}")
     """
 
-    def __init__(self, *, exr: bool = True, png: bool = True, mask_png: bool = True,
+    def __init__(self, *, exr: bool = False, png: bool = True, mask_png: bool = True,
                  sidecar: bool = True, background: bool = True, max_pending: int = 2):
         from concurrent.futures import ThreadPoolExecutor
 

@@ -288,11 +288,11 @@ class FaceRenderer:
                             extra={"shading": self.preset.shading, "look": self.preset.look,
                                    "mouth_box": list(mouth_box(self.view, self.preset))})
 
-    def render_to_files(self, positions: np.ndarray, stem: str | Path, *, exr: bool = True,
+    def render_to_files(self, positions: np.ndarray, stem: str | Path, *, exr: bool = False,
                         png: bool = True, mask_png: bool = True, sidecar: bool = True,
                         extra: dict | None = None) -> RenderResult:
         """Render one frame and write it (synchronously) with :func:`images.write_result`:
-        ``<stem>.exr``, ``<stem>.png``, ``<stem>.mask.png``, ``<stem>.json``."""
+        ``<stem>.png``, ``<stem>.mask.png``, ``<stem>.json`` and, with ``exr=True``, ``<stem>.exr``."""
         from .images import write_result
 
         res = self.render(positions)
