@@ -151,6 +151,7 @@ class FaceRenderer:
         self.topology = topology
         self._triangles = part_triangles(topology)
         self._scene = None
+        self._uploaded: dict[str, np.ndarray] = {}  # float32 positions per part now in the scene
         self.loads = 0  # how many times a scene was loaded (stays 1: tests check it)
 
     # -- scene ---------------------------------------------------------------------------
@@ -194,7 +195,11 @@ class FaceRenderer:
         self._mask_integrator = mi.load_dict(scenes.mask_integrator_dict(look=self.preset.look))
         params = mi.traverse(self._scene)
         self._keys = {part: scenes.mesh_id(part) + ".vertex_positions" for part in meshes}
-        params.keep(list(self._keys.values()))
+        self._normal_keys = {part: scenes.mesh_id(part) + ".vertex_normals" for part in meshes}
+        self._mesh_triangles = {part: tris[part] for part in meshes}
+        self._uploaded = {part: np.ascontiguousarray(expanded[part], np.float32).ravel()
+                          for part in meshes}
+        params.keep([*self._keys.values(), *self._normal_keys.values()])
         self._params = params
         self._buffer_type = {part: type(params[key]) for part, key in self._keys.items()}
         # The aov integrator's shape_index is the scene order + 1 in scalar variants and the
@@ -228,10 +233,20 @@ class FaceRenderer:
             self._load(expanded)
             return
         activate_variant(self.variant)
+        changed = False
         for part, key in self._keys.items():
-            self._params[key] = self._buffer_type[part](
-                np.ascontiguousarray(expanded[part], np.float32).ravel())
-        self._params.update()
+            flat = np.ascontiguousarray(expanded[part], np.float32).ravel()
+            # Parts that did not move (eyes, palate, upper teeth in speech) are not re-uploaded:
+            # fewer meshes to refit and re-normal per frame.
+            if np.array_equal(flat, self._uploaded.get(part)):
+                continue
+            self._params[key] = self._buffer_type[part](flat)
+            self._params[self._normal_keys[part]] = self._buffer_type[part](
+                scenes.vertex_normals(expanded[part], self._mesh_triangles[part]).ravel())
+            self._uploaded[part] = flat
+            changed = True
+        if changed:
+            self._params.update()
 
     def render_pass(self) -> np.ndarray:
         """The preset's one colour-giving ``mi.render`` of the current geometry, as Mitsuba

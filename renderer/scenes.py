@@ -22,7 +22,7 @@ import numpy as np
 
 from .views import Preset, View, material_for
 
-__all__ = ["mesh_id", "part_mesh", "sensor_dict", "emitter_dicts",
+__all__ = ["mesh_id", "part_mesh", "vertex_normals", "sensor_dict", "emitter_dicts",
            "colour_integrator_dict", "mask_integrator_dict", "scene_dict", "SENSOR_COLOUR",
            "SENSOR_MASK"]
 
@@ -36,8 +36,27 @@ def mesh_id(part: str) -> str:
     return _MESH_PREFIX + part
 
 
+def vertex_normals(positions: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """float32 (W, 3) unit vertex normals: the area-weighted mean of the adjacent triangles'
+    normals; (0, 0, 1) for a vertex no triangle uses.
+
+    Computed here rather than by Mitsuba, whose recomputation in JIT variants sums in parallel
+    and varies in the last bits from frame to frame; this sum has a fixed order, so a frame
+    renders to the same bits however often and in whatever order it is rendered.
+    """
+    p = np.asarray(positions, np.float64)
+    t = np.asarray(triangles, np.int64)
+    face = np.cross(p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]])  # length = 2 x area
+    idx = t.ravel()
+    w = np.repeat(face, 3, axis=0)
+    n = np.stack([np.bincount(idx, weights=w[:, k], minlength=len(p)) for k in range(3)], axis=1)
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    out = np.where(length > 0, n / np.where(length > 0, length, 1.0), (0.0, 0.0, 1.0))
+    return out.astype(np.float32)
+
+
 def part_mesh(part: str, positions: np.ndarray, triangles: np.ndarray):
-    """A Mitsuba mesh for one part, with smooth vertex normals.
+    """A Mitsuba mesh for one part, with smooth vertex normals (:func:`vertex_normals`).
 
     Parameters
     ----------
@@ -46,7 +65,7 @@ def part_mesh(part: str, positions: np.ndarray, triangles: np.ndarray):
     triangles : int (T, 3)
         Zero-based indices into ``positions``; T >= 1.
 
-    Vertex normals are recomputed by Mitsuba whenever ``vertex_positions`` is updated.
+    The renderer writes the normals with the positions every frame (``mesh_<part>.vertex_normals``).
     """
     import mitsuba as mi
 
@@ -55,9 +74,10 @@ def part_mesh(part: str, positions: np.ndarray, triangles: np.ndarray):
     mesh = mi.Mesh(mesh_id(part), int(len(positions)), int(len(triangles)), props=props,
                    has_vertex_normals=True)
     params = mi.traverse(mesh)
-    vp, fc = params["vertex_positions"], params["faces"]
+    vp, fc, vn = params["vertex_positions"], params["faces"], params["vertex_normals"]
     params["vertex_positions"] = type(vp)(np.ascontiguousarray(positions, np.float32).ravel())
     params["faces"] = type(fc)(np.ascontiguousarray(triangles, np.uint32).ravel())
+    params["vertex_normals"] = type(vn)(vertex_normals(positions, triangles).ravel())
     params.update()
     return mesh
 

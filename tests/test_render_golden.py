@@ -104,7 +104,8 @@ def test_neutral_face_matches_golden(neutral, view, tmp_path):
 
 
 def test_render_is_reproducible(neutral):
-    """A new renderer, and the same renderer after another frame, give the same bytes."""
+    """A new renderer, and the same renderer after another frame, give the same bits (vertex
+    normals are summed in a fixed order, see scenes.vertex_normals)."""
     from cassi.data.face import render_topology
     from cassi.renderer.render import FaceRenderer
 
