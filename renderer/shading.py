@@ -120,23 +120,24 @@ def shade(tables: ShadingTables, mask: np.ndarray, normals: np.ndarray) -> np.nd
         Linear RGB radiance, the background at mask 0.
     """
     h, w = mask.shape
+    flat = mask.ravel()
     out = np.empty((h * w, 3), np.float32)
     out[...] = tables.background
-    hit = np.flatnonzero(mask.ravel())
+    hit = np.flatnonzero(flat)
     if not hit.size:
         return out.reshape(h, w, 3)
-    part = mask.ravel()[hit]
+    part = flat[hit]
     n = normals.reshape(-1, 3)[hit]
-    v = tables.view_dirs.reshape(-1, 3)[hit]
-    ndv = np.einsum("ij,ij->i", n, v)
-    n = n * np.where(ndv < 0, -1.0, 1.0).astype(np.float32)[:, None]  # two-sided
+    ndv = (n * tables.view_dirs.reshape(-1, 3)[hit]).sum(axis=1)
+    # two-sided: a normal facing away from the camera is flipped (n -> -n flips every n . x)
+    sign = np.where(ndv < 0, np.float32(-1.0), np.float32(1.0))
+    ndl = (n @ tables.light_dirs.T) * sign[:, None]                      # (N, L)
     ndv = np.abs(ndv)
-    ndl = n @ tables.light_dirs.T                                       # (N, L)
-    ndh = (ndl + ndv[:, None]) * tables.half_norm.reshape(h * w, -1)[hit]
     lit = np.maximum(ndl, 0.0)
-    glossy = np.power(np.clip(ndh, 0.0, 1.0), tables.shininess[part][:, None]) * lit
-    # (N, L) x (L, 3) with tiny L: einsum beats a BLAS call here
-    colour = tables.ambient_rgb[part] + tables.diffuse[part] * np.einsum("nl,lc->nc", lit, tables.light_rgb)
-    colour += tables.specular[part][:, None] * np.einsum("nl,lc->nc", glossy, tables.light_rgb)
+    ndh = (ndl + ndv[:, None]) * tables.half_norm.reshape(h * w, -1)[hit]
+    np.clip(ndh, 0.0, 1.0, out=ndh)
+    glossy = np.power(ndh, tables.shininess[part][:, None]) * lit
+    colour = tables.ambient_rgb[part] + tables.diffuse[part] * (lit @ tables.light_rgb)
+    colour += tables.specular[part][:, None] * (glossy @ tables.light_rgb)
     out[hit] = colour
     return out.reshape(h, w, 3)
