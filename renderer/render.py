@@ -2,7 +2,7 @@
 vertex positions change.
 
 Why: ``mi.load_dict`` per frame leaks memory and recompiles kernels (mitsuba issues 1890, 703);
-writing ``mesh_<part>.vertex_positions`` through ``mi.traverse`` and calling ``params.update()``
+writing ``<mesh id>.vertex_positions`` (and normals) through ``mi.traverse`` and calling ``params.update()``
 once keeps the scene, the film, the sensors and hence the compiled kernels fixed, so a frame costs
 a BVH refit plus the render itself.
 
@@ -184,9 +184,27 @@ class FaceRenderer:
         if missing:
             raise ValueError(f"topology.expand gave no positions for parts {sorted(missing)}")
         tris = self._clip(expanded)
-        meshes = {part: scenes.part_mesh(part, expanded[part], t)
-                  for part, t in tris.items() if len(t)}
-        self.part_names = (BACKGROUND, *meshes)
+        parts = [part for part, t in tris.items() if len(t)]
+        self.part_names = (BACKGROUND, *parts)
+        # Path presets: one mesh per part (each its own material). Raycast presets never
+        # evaluate a BSDF, so every part goes into one mesh and the triangle index says the
+        # part: one mesh to refit per frame, and scalar_rgb's aov pass costs per shape.
+        if self.preset.shading == "raycast":
+            groups = {scenes.MERGED: parts}
+        else:
+            groups = {part: [part] for part in parts}
+        self._groups = groups
+        self._group_triangles = {}
+        tri_part = []
+        for name, members in groups.items():
+            offsets = np.cumsum([0] + [len(expanded[m]) for m in members])
+            self._group_triangles[name] = np.concatenate(
+                [tris[m] + off for m, off in zip(members, offsets)])
+            tri_part += [np.full(len(tris[m]), self.part_names.index(m), np.int32) for m in members]
+        self._tri_part = np.concatenate(tri_part)  # part index of each merged triangle
+        meshes = {name: scenes.part_mesh(name, self._group_positions(name, expanded),
+                                         self._group_triangles[name])
+                  for name in groups}
         self._scene = mi.load_dict(scenes.scene_dict(meshes, self.view, self.preset))
         self.loads += 1
         sensors = {s.id(): s for s in self._scene.sensors()}
@@ -194,21 +212,21 @@ class FaceRenderer:
         self._sensor_mask = sensors[scenes.SENSOR_MASK]
         self._mask_integrator = mi.load_dict(scenes.mask_integrator_dict(look=self.preset.look))
         params = mi.traverse(self._scene)
-        self._keys = {part: scenes.mesh_id(part) + ".vertex_positions" for part in meshes}
-        self._normal_keys = {part: scenes.mesh_id(part) + ".vertex_normals" for part in meshes}
-        self._mesh_triangles = {part: tris[part] for part in meshes}
-        self._uploaded = {part: np.ascontiguousarray(expanded[part], np.float32).ravel()
-                          for part in meshes}
+        self._keys = {name: scenes.mesh_id(name) + ".vertex_positions" for name in groups}
+        self._normal_keys = {name: scenes.mesh_id(name) + ".vertex_normals" for name in groups}
+        self._uploaded = {name: self._group_positions(name, expanded).ravel() for name in groups}
         params.keep([*self._keys.values(), *self._normal_keys.values()])
         self._params = params
-        self._buffer_type = {part: type(params[key]) for part, key in self._keys.items()}
+        self._buffer_type = {name: type(params[key]) for name, key in self._keys.items()}
         # The aov integrator's shape_index is the scene order + 1 in scalar variants and the
-        # shape's registry id in JIT variants; map either to our part index via a lookup table.
+        # shape's registry id in JIT variants; map either to our part index via a lookup table
+        # (for the merged mesh: to -1, "a hit: read the triangle's part").
         shapes = list(self._scene.shapes())
         by_id = {s.id(): s for s in shapes}
         raw = {}
-        for k, part in enumerate(meshes, start=1):
-            shape = by_id[scenes.mesh_id(part)]
+        for name in groups:
+            shape = by_id[scenes.mesh_id(name)]
+            k = -1 if name == scenes.MERGED else self.part_names.index(name)
             if mi.variant().startswith("scalar"):
                 raw[k] = shapes.index(shape) + 1
             else:
@@ -219,6 +237,13 @@ class FaceRenderer:
         self._lut = lut
         self._near_offset = _near_offset(self.view, self.preset)
         self._tables = shading.shading_tables(self.view, self.preset, self.part_names)
+
+    def _group_positions(self, name: str, expanded: dict[str, np.ndarray]) -> np.ndarray:
+        """float32 (W, 3): the vertices of one scene mesh (its parts' vertices in order)."""
+        members = self._groups[name]
+        if len(members) == 1:
+            return np.ascontiguousarray(expanded[members[0]], np.float32)
+        return np.concatenate([expanded[m] for m in members]).astype(np.float32)
 
     # -- per frame -------------------------------------------------------------------------
     def update(self, positions: np.ndarray) -> None:
@@ -234,16 +259,17 @@ class FaceRenderer:
             return
         activate_variant(self.variant)
         changed = False
-        for part, key in self._keys.items():
-            flat = np.ascontiguousarray(expanded[part], np.float32).ravel()
-            # Parts that did not move (eyes, palate, upper teeth in speech) are not re-uploaded:
-            # fewer meshes to refit and re-normal per frame.
-            if np.array_equal(flat, self._uploaded.get(part)):
+        for name, key in self._keys.items():
+            verts = self._group_positions(name, expanded)
+            flat = verts.ravel()
+            # Meshes that did not move (eyes, palate, upper teeth in speech) are not
+            # re-uploaded: fewer meshes to refit and re-normal per frame.
+            if np.array_equal(flat, self._uploaded.get(name)):
                 continue
-            self._params[key] = self._buffer_type[part](flat)
-            self._params[self._normal_keys[part]] = self._buffer_type[part](
-                scenes.vertex_normals(expanded[part], self._mesh_triangles[part]).ravel())
-            self._uploaded[part] = flat
+            self._params[key] = self._buffer_type[name](flat)
+            self._params[self._normal_keys[name]] = self._buffer_type[name](
+                scenes.vertex_normals(verts, self._group_triangles[name]).ravel())
+            self._uploaded[name] = flat
             changed = True
         if changed:
             self._params.update()
@@ -275,6 +301,10 @@ class FaceRenderer:
         raw = np.rint(aov[..., 1]).astype(np.int64)
         raw[(raw < 0) | (raw >= len(self._lut))] = len(self._lut) - 1  # unknown -> background
         mask = self._lut[raw]
+        merged = mask < 0
+        if merged.any():
+            prim = np.rint(aov[..., 5][merged]).astype(np.int64)
+            mask[merged] = self._tri_part[np.clip(prim, 0, len(self._tri_part) - 1)]
         # Mitsuba starts camera rays on the near-clip plane, so the aov distance lacks the
         # stretch from the eye to that plane: near_clip / cos(angle to the optical axis).
         depth = aov[..., 0] + self._near_offset

@@ -2,8 +2,10 @@
 
 The ids chosen here become the keys of ``mi.traverse``; they are fixed on purpose:
 
-- ``mesh_<part>``: one triangle mesh per face part (``mesh_skin.vertex_positions`` is what the
-  renderer rewrites each frame);
+- ``mesh_<part>``: one triangle mesh per face part in path-traced presets (each with its
+  material), or one ``mesh_parts`` holding every part in raycast presets (no BSDF is evaluated
+  there; the aov pass's triangle index says the part); ``.vertex_positions`` and
+  ``.vertex_normals`` are what the renderer rewrites each frame;
 - ``sensor_colour``: the camera with the preset's film and an ``multijitter`` sampler (its seed
   is the preset's, so a render is reproducible);
 - ``sensor_mask``: the same camera and film size with a ``stratified`` sampler, one sample per
@@ -27,6 +29,8 @@ __all__ = ["mesh_id", "part_mesh", "vertex_normals", "sensor_dict", "emitter_dic
            "SENSOR_MASK"]
 
 SENSOR_COLOUR = "sensor_colour"
+#: The one mesh of the raycast presets, holding every part (the triangle index says which).
+MERGED = "parts"
 SENSOR_MASK = "sensor_mask"
 _MESH_PREFIX = "mesh_"
 
@@ -65,7 +69,7 @@ def part_mesh(part: str, positions: np.ndarray, triangles: np.ndarray):
     triangles : int (T, 3)
         Zero-based indices into ``positions``; T >= 1.
 
-    The renderer writes the normals with the positions every frame (``mesh_<part>.vertex_normals``).
+    The renderer writes the normals with the positions every frame (``<mesh id>.vertex_normals``).
     """
     import mitsuba as mi
 
@@ -133,15 +137,16 @@ def colour_integrator_dict(preset: Preset) -> dict:
 
 
 #: Channels of the aov pass, in order: distance along the ray, shape index (a registry id in
-#: JIT variants, scene order + 1 in scalar ones; 0 = no hit), surface normal x, y, z (world).
-AOV_CHANNELS = ("depth", "shape_index", "nx", "ny", "nz")
+#: JIT variants, scene order + 1 in scalar ones; 0 = no hit), surface normal x, y, z (world),
+#: triangle index within the shape.
+AOV_CHANNELS = ("depth", "shape_index", "nx", "ny", "nz", "prim_index")
 
 
 def mask_integrator_dict(*, look: str = "smooth") -> dict:
     """The aov integrator of the one pass through the pixel centres: depth, shape index and the
     shading normal (``look="smooth"``) or the geometric one (``"flat"``); see AOV_CHANNELS."""
     normal = "sh_normal" if look == "smooth" else "geo_normal"
-    return {"type": "aov", "aovs": f"dd.y:depth,si:shape_index,n:{normal}"}
+    return {"type": "aov", "aovs": f"dd.y:depth,si:shape_index,n:{normal},pi:prim_index"}
 
 
 def scene_dict(meshes: dict[str, object], view: View, preset: Preset) -> dict:
