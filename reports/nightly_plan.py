@@ -8,6 +8,6 @@
 #: estimated from measured per-frame costs.
 NIGHTLY_STRIDE = 0
 NIGHTLY_EXTREMES = 2
-NIGHTLY_ANIMATE_STRIDE = 60
+NIGHTLY_ANIMATE_STRIDE = 24
 #: The thesis's final version gets a four-view video of every task file.
 NIGHTLY_VIDEO_VERSIONS = ("cassi-2.1",)
