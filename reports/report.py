@@ -201,9 +201,12 @@ def _videos(run: Run, out: Path) -> list[dict]:
         stem = f"{slug(subject)}_{task:03d}_{rep}"
         name = f"{subject} task {task}" + (f" rep {rep}" if rep != 1 else "")
         all_views = [v for v in VIDEO_VIEWS if v in set(g["view"])]
+        # A (version, view) was rendered for a video when its grid frames run unbroken (a
+        # first frame and a check frame that happen to fall on the grid are no video).
         on_grid = {}
         for (version, view), p in g.groupby(["version", "view"]):
-            if len(media.video_frames(p, stride=stride)) >= 2:
+            grid = media.video_frames(p, stride=stride)
+            if len(grid) >= 3 and all(b - a == stride for a, b in zip(grid, grid[1:])):
                 on_grid.setdefault(version, set()).add(view)
         versions = order_versions(on_grid)
         for version in versions:
