@@ -249,6 +249,7 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
 
     data = np.load(io.BytesIO(inputs["keyframes"]))
     all_frames = data["frames"].tolist()
+    positions = data["positions"]  # read once: each data[...] access decodes the array again
     corpus = get_corpus(ctx.corpus)
     profile = get_profile(corpus, job.subject)
     face = get_face(corpus, job.subject, profile)
@@ -256,7 +257,7 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
     files = {}
     seconds = 0.0
     for f in job.frames:
-        res = renderer.render(data["positions"][all_frames.index(f)])
+        res = renderer.render(positions[all_frames.index(f)])
         seconds += float(getattr(res, "render_s", 0.0))
         meta = {"subject": job.subject, "task": job.task, "rep": job.rep,
                 "version": job.version, "view": job.view, "frame": f,
