@@ -161,6 +161,11 @@ class SubjectData:
         stem = f"tp{task:03d}" if rep == 1 else f"tp{task:03d}_{rep}"
         return self._file(stem + ".TextGrid", required=False)
 
+    def audio_path(self, task: int, rep: int = 1) -> Path | None:
+        """The task's audio recording (``tpNNN.wav`` as XRMB distributes it, any case) or None."""
+        stem = f"tp{task:03d}" if rep == 1 else f"tp{task:03d}_{rep}"
+        return self._file(stem + ".wav", required=False)
+
     def alignment(self, task: int, rep: int = 1) -> Alignment | None:
         """The task's phone/word TextGrid if the subject directory has one."""
         path = self.alignment_path(task, rep)

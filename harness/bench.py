@@ -4,6 +4,11 @@
 - ``render``: :func:`cassi.renderer.bench.bench_render` (owned by the renderer package);
 - ``geometry_memory``: peak RSS of one worker on a 100,000-row task
   (:mod:`.bench_memory`, ``geometry_peak_rss_mb``);
+- ``farm_preview``: preview frames per second end to end in the farm (one worker, one core:
+  render jobs reading their keyframes, rendering, encoding the PNG in memory, storing PNG and
+  masks), per view and the mean over the four views (``farm_preview_frames_per_s``, goal >= 60
+  with llvm), beside a bare Mitsuba frame (vertex upload + the one ``mi.render``) of the same
+  subject's scene in the same run;
 - ``farm``: the same batch run with 1 and 2 local worker processes side by side
   (``farm_speedup_2_workers``, goal >= 1.6) and through a local Ray cluster (its overhead
   against the 2-worker local pool).
@@ -207,6 +212,99 @@ def bench_farm(quick: bool = False, *, workload: str = "auto", ray: bool = True,
     return out
 
 
+FARM_PREVIEW_GOAL = 60.0
+
+
+def bench_farm_preview(quick: bool = False, *, subject: str = "JW11", task: int = 118,
+                       version: str = "cassi-2.1") -> dict:
+    """Preview frames per second end to end in the farm, one worker, per view.
+
+    One task file is animated by one version; its render jobs render every ``stride``-th frame
+    (quick: ~40 per view, else ~300) in all four views with the farm's own chunking. The time
+    of a view is the sum of its render jobs' wall times as the worker measured them (inputs
+    read, frames rendered and encoded, outputs stored), so geometry and image checks do not
+    count. In the same run and process kind (one core), a bare Mitsuba frame of the same scene:
+    :func:`cassi.renderer.bench.bare_frame` on the same keyframes.
+    """
+    import io  # noqa: PLC0415
+
+    from cassi.renderer.bench import bare_frame  # noqa: PLC0415
+    from cassi.renderer.views import VIEW_NAMES  # noqa: PLC0415
+
+    from .config import RunConfig  # noqa: PLC0415
+    from .farm import plan  # noqa: PLC0415
+    from .pipeline import (cassi_pipeline, get_corpus, get_face, get_profile,  # noqa: PLC0415
+                           get_renderer, warm_worker, worker_env)
+    from .store import OutputStore  # noqa: PLC0415
+
+    cfg = RunConfig(subjects=(subject,), tasks=(task,), versions=(version,), views=VIEW_NAMES)
+    corpus, tasks, versions, views = plan(cfg)
+    tasks = [t for t in tasks if t.usable][:1]
+    if not tasks:
+        return {"error": f"{subject} task {task} is not usable in the default corpus"}
+    n_rows = len(corpus.subject(subject).load(task, tasks[0].rep).time_us)
+    stride = max(1, n_rows // (40 if quick else 300))
+    tmp = Path(tempfile.mkdtemp(prefix="cassi-bench-preview-"))
+    out: dict = {"subject": subject, "task": task, "version": version, "stride": stride,
+                 "threads_per_worker": 1, "goal": FARM_PREVIEW_GOAL}
+    try:
+        ctx = StageContext(out_dir=tmp / "run", corpus=Path(corpus.root), stride=stride,
+                           chunk_size=RunConfig().chunk, preset="preview", synthetic=True,
+                           options=(("extremes", 0),))
+        OutputStore(ctx.out_dir).prepare()
+        init = (warm_worker, (str(corpus.root), subject, tuple(views), "preview", None, 1))
+        with LocalExecutor(1, initializer=init[0], initargs=init[1], env=thread_env(1)) as ex:
+            ex.submit("warm", _noop)
+            while ex.pending():
+                ex.wait(timeout=1.0)
+            res = run_batch(tasks, versions, views, cassi_pipeline(render=True), ctx, ex,
+                            progress=False)
+        renders = pd.read_parquet(ctx.out_dir / "renders.parquet")
+        seconds: dict[str, float] = {}
+        for key, rec in res.records.items():
+            if rec.stage == "render" and rec.state.value == "done":
+                view = key.split("/")[3]
+                seconds[view] = seconds.get(view, 0.0) + rec.seconds
+        per_view = {}
+        for view in views:
+            n = int((renders["view"] == view).sum())
+            if n and seconds.get(view):
+                per_view[view] = {"frames": n, "seconds": round(seconds[view], 3),
+                                  "frames_per_s": round(n / seconds[view], 2)}
+        out["by_view"] = per_view
+        if len(per_view) == len(views):
+            out["farm_preview_frames_per_s"] = round(
+                float(np.mean([v["frames_per_s"] for v in per_view.values()])), 2)
+        else:
+            out["error"] = f"render jobs failed: {sorted(res.summary.to_dict()['failed'].items())[:2]}"
+
+        # The bare Mitsuba frame on the same keyframes, one core, in this process.
+        worker_env(1)
+        c = get_corpus(corpus.root)
+        profile = get_profile(c, subject)
+        face = get_face(c, subject, profile)
+        geo = [k for k in res.records if k.endswith("/geometry")][0]
+        keyframes = OutputStore(ctx.out_dir).get(
+            OutputStore(ctx.out_dir).read_manifest(geo)["outputs"]["keyframes"])
+        positions = np.load(io.BytesIO(keyframes))["positions"]
+        bare = {}
+        for view in views:
+            r = get_renderer(c, subject, face, view, "preview", None)
+            bare_frame(r, positions[0])
+            t0 = time.perf_counter()
+            for pos in positions:
+                bare_frame(r, pos)
+            bare[view] = round(len(positions) / (time.perf_counter() - t0), 2)
+        out["bare_mi_render_frames_per_s"] = bare
+        out["bare_mi_render_mean_frames_per_s"] = round(float(np.mean(list(bare.values()))), 2)
+        if "farm_preview_frames_per_s" in out:
+            out["farm_efficiency_vs_bare"] = round(
+                out["farm_preview_frames_per_s"] / out["bare_mi_render_mean_frames_per_s"], 3)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return out
+
+
 def _variant() -> str:
     try:
         from cassi.renderer.variant import choose_variant  # noqa: PLC0415
@@ -219,7 +317,9 @@ def _variant() -> str:
 #: Figures copied to the top of the document, under the keys the issues name.
 HEADLINE = {"geometry": ("geometry_frames_per_s",),
             "geometry_memory": ("geometry_peak_rss_mb",),
-            "render": ("render_per_s", "render_pipeline_efficiency", "render_rss_growth_mb")}
+            "render": ("render_per_s", "render_pipeline_efficiency", "render_rss_growth_mb",
+                       "bare_mi_render_frames_per_s"),
+            "farm_preview": ("farm_preview_frames_per_s",)}
 
 
 def headline(benchmarks: dict) -> dict:
@@ -243,6 +343,8 @@ def run_benchmarks(*, quick: bool = False) -> dict:
     report["benchmarks"]["render"] = _registered("cassi.renderer.bench", "bench_render", quick)
     report["benchmarks"]["geometry_memory"] = _registered("cassi.harness.bench_memory",
                                                           "bench_geometry_memory", quick)
+    report["benchmarks"]["farm_preview"] = _registered("cassi.harness.bench", "bench_farm_preview",
+                                                       quick)
     try:
         farm = bench_farm(quick, repeats=1 if quick else 2)  # --quick: under a minute in all
     except Exception as err:  # noqa: BLE001

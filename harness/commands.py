@@ -27,18 +27,19 @@ def _add_run(sub) -> None:
     p.add_argument("--versions", nargs="+", metavar="NAME", help="default: every version")
     p.add_argument("--views", nargs="+", metavar="NAME",
                    help="front side half top (default: all four); 'geometry' alone: no renders")
-    p.add_argument("--stride", help="also render every Nth frame (0: first + extremes only)")
+    p.add_argument("--stride", help="also render every Nth frame (default 50; 0: first + "
+                                    "extremes only)")
     p.add_argument("--extremes", help="render at most N frames the checks point at, per task "
-                                      "file and version (default 8)")
+                                      "file and version (default 4)")
     p.add_argument("--animate-stride", dest="animate_stride",
-                   help="also render the front view of tasks 106 and 118 every N frames, for "
-                        "side-by-side animations of the versions (default 0: off)")
+                   help="also render every Nth frame in every view, for each task file's video "
+                        "(default 0: off)")
     p.add_argument("--chunk", help="frames per render job (default 16)")
     p.add_argument("--preset", help="render preset (default preview)")
     p.add_argument("--variant", help="Mitsuba variant (default: the renderer's choice)")
     p.add_argument("--executor", choices=C.EXECUTORS, help="local processes (default) or ray")
     p.add_argument("--address", help="Ray cluster address (default: start a local cluster)")
-    p.add_argument("--workers", help="worker processes (default 1)")
+    p.add_argument("--workers", help="worker processes (default: one per usable core)")
     p.add_argument("--threads", help="CPU threads per worker process (default 1)")
     p.add_argument("--retries", help="retries of a job whose worker died (default 1)")
     p.add_argument("--out", type=Path, help="output directory (required here or in --config)")
@@ -78,7 +79,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     from .farm import run  # noqa: PLC0415 - heavy imports only for this command
 
     cfg = config_from_args(args)
-    result = run(cfg, progress=not args.no_progress and sys.stderr.isatty())
+    # On a terminal: bars; in a log (cron, CI): a line per stage every few seconds.
+    result = run(cfg, progress=not args.no_progress)
     print(result.summary.text())
     print(f"results: {cfg.out / 'results.parquet'} (and .csv); ratings: "
           f"{cfg.out / 'ratings.parquet'}")

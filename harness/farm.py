@@ -96,13 +96,23 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
     workers, warning = worker_count(cfg.workers, max(1, sum(t.usable for t in tasks) * len(versions)))
     if warning:
         _warn([warning])
+    if progress:
+        from .pipeline import render_budget  # noqa: PLC0415
+
+        n = render_budget(corpus, tasks, versions, views, stride=cfg.stride,
+                          extremes=cfg.extremes, animate_stride=cfg.animate_stride,
+                          video_versions=cfg.video_versions)
+        print(f"cassi run: {sum(t.usable for t in tasks)} task file(s) x {len(versions)} "
+              f"version(s) x {len(views)} view(s): at most {n} frame(s) to render "
+              f"({cfg.preset}, {workers} worker(s))", file=sys.stderr, flush=True)
     store = OutputStore(cfg.out)
     store.prepare()
     ctx = StageContext(out_dir=store.root.resolve(), corpus=corpus.root.resolve(),
                        stride=cfg.stride, chunk_size=cfg.chunk, preset=cfg.preset,
                        variant=variant, synthetic=synthetic,
                        options=(("extremes", cfg.extremes),
-                                ("animate_stride", cfg.animate_stride)),
+                                ("animate_stride", cfg.animate_stride),
+                                ("video_versions", cfg.video_versions)),
                        provenance=json.dumps(provenance, sort_keys=True),
                        ship=cfg.executor == "ray")
     meta = C.resolved(cfg, corpus_resolved=str(ctx.corpus), synthetic=synthetic,

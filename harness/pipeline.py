@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import os
 import platform
-import tempfile
 import threading
 from pathlib import Path
 from typing import Mapping
@@ -26,9 +25,12 @@ from .runner import Pipeline
 #: At most this many "extreme" frames per geometry job (the worst frame of the checks that
 #: fired, most negatives first), so renders stay bounded on long tasks.
 MAX_EXTREMES = 8
-#: Tasks whose front view is also rendered at ``animate_stride`` for side-by-side animations.
-ANIMATED_TASKS = (106, 118)
-ANIMATION_VIEW = "front"
+#: The views a task file's video shows side by side; with ``animate_stride`` each of them is
+#: rendered at that stride (views a run leaves out are not rendered).
+VIDEO_VIEWS = ("front", "side", "half", "top")
+#: Tasks whose versions are compared side by side (front view) in the nightly report.
+COMPARED_TASKS = (106, 118)
+COMPARISON_VIEW = "front"
 
 _lock = threading.Lock()
 _corpora: dict[str, object] = {}
@@ -144,6 +146,29 @@ def extreme_frames(rows: pd.DataFrame, *, limit: int = MAX_EXTREMES) -> list[int
     return sorted(picked)
 
 
+def render_budget(corpus, tasks, versions, views, *, stride: int, extremes: int,
+                  animate_stride: int, video_versions=None) -> int:
+    """At most how many frames a run renders (said before any work starts).
+
+    Per usable task file of R rows, version and view: the first frame, every ``stride``-th
+    row and up to ``extremes`` check frames; plus every ``animate_stride``-th row where
+    :func:`geometry_stage` renders video frames (overlaps counted twice: an upper bound).
+    """
+    total = 0
+    for t in tasks:
+        if not t.usable:
+            continue
+        rows = len(corpus.subject(t.subject).load(t.task, t.rep).time_us)
+        base = 1 + (rows // stride if stride > 0 else 0) + max(0, extremes)
+        video = rows // animate_stride + 1 if animate_stride > 0 else 0
+        for version in versions:
+            for view in views:
+                shows = (video_versions is None or version in video_versions
+                         or (t.task in COMPARED_TASKS and view == COMPARISON_VIEW))
+                total += base + (video if shows else 0)
+    return total
+
+
 def load_usable(subject_data, job: Job):
     """The job's recording, parsed once; SkipJob with the reason when it cannot be animated."""
     try:
@@ -185,31 +210,38 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
     animated = set(frames.tolist())
     pick = [f for f in pick if f in animated]
     meta = {"render_frames": pick, "n_frames": int(frames.size)}
-    # Tasks 106 and 118 are shown as animations of all versions side by side: the front view
-    # also gets every `animate_stride`-th frame (the same frames for every version).
+    # Every task file is also shown as a video (four views side by side, cassi.reports.media):
+    # the video versions get every `animate_stride`-th frame in every view, the others in the
+    # front view of tasks 106 and 118 (the version comparisons); the same frames for every
+    # version, so videos of a task compare frame for frame.
     step = int(ctx.option("animate_stride", 0) or 0)
-    if step > 0 and job.task in ANIMATED_TASKS:
-        flip = select_frames(int(frames[0]), int(frames[-1]), stride=step)
-        meta["render_frames_by_view"] = {
-            ANIMATION_VIEW: sorted(set(pick) | {f for f in flip if f in animated})}
+    video_versions = ctx.option("video_versions")
+    if step > 0:
+        grid = {f for f in select_frames(int(frames[0]), int(frames[-1]), stride=step)
+                if f in animated}
+        if video_versions is None or job.version in video_versions:
+            views = VIDEO_VIEWS
+        else:
+            views = (COMPARISON_VIEW,) if job.task in COMPARED_TASKS else ()
+        if views:
+            meta["render_frames_by_view"] = {view: sorted(set(pick) | grid) for view in views}
     keep = sorted(set(pick).union(*meta.get("render_frames_by_view", {}).values()))
     idx = np.searchsorted(frames, keep)
     keyframes = npz_bytes(frames=np.asarray(keep, np.int64),
                           positions=np.asarray(anim.positions[idx], np.float32))
     log = [f"frames {frames[0]}..{frames[-1]} ({frames.size}); render {len(pick)}: {pick}"]
     if len(keep) > len(pick):
-        log.append(f"animation frames ({ANIMATION_VIEW} view): {len(keep) - len(pick)} more")
+        log.append(f"video frames (every {step}th row, {', '.join(views)}): "
+                   f"{len(keep) - len(pick)} more")
     log += [f"recording warning: {w}" for w in getattr(rec, "warnings", ())]
     return StageOutput(rows=rows, files={"keyframes": (keyframes, ".npz")}, meta=meta, log=log)
 
 
 def _png_bytes(rgb: np.ndarray, metadata: dict | None = None) -> bytes:
-    from cassi.renderer.images import write_png  # noqa: PLC0415
+    """The frame's sRGB PNG, encoded in memory (no temporary file per frame)."""
+    from cassi.renderer.images import png_bytes  # noqa: PLC0415
 
-    with tempfile.TemporaryDirectory(prefix="cassi-png-") as tmp:
-        path = Path(tmp) / "frame.png"
-        write_png(path, rgb, metadata=metadata)
-        return path.read_bytes()
+    return png_bytes(rgb, metadata=metadata)
 
 
 class StoredFrame:
@@ -229,6 +261,7 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
 
     data = np.load(io.BytesIO(inputs["keyframes"]))
     all_frames = data["frames"].tolist()
+    positions = data["positions"]  # read once: each data[...] access decodes the array again
     corpus = get_corpus(ctx.corpus)
     profile = get_profile(corpus, job.subject)
     face = get_face(corpus, job.subject, profile)
@@ -236,12 +269,12 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
     files = {}
     seconds = 0.0
     for f in job.frames:
-        res = renderer.render(data["positions"][all_frames.index(f)])
+        res = renderer.render(positions[all_frames.index(f)])
         seconds += float(getattr(res, "render_s", 0.0))
         meta = {"subject": job.subject, "task": job.task, "rep": job.rep,
                 "version": job.version, "view": job.view, "frame": f,
                 "synthetic": ctx.synthetic}
-        files[f"render-{f:06d}"] = (_png_bytes(res.rgb, meta), ".png")
+        files[f"render-{f:06d}"] = (_png_bytes(res.rgb, {**res.metadata(), **meta}), ".png")
         mask = np.asarray(res.mask)
         if mask.max(initial=0) > 255:
             raise ValueError("more than 255 parts: masks are stored as uint8")

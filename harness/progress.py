@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import json
+import sys
+import time
 from collections import Counter
 from dataclasses import dataclass, field
 
@@ -68,32 +70,74 @@ class Summary:
 
 
 class Progress:
-    """One tqdm bar per stage (totals grow as jobs are planned); silent when disabled."""
+    """Progress per stage: tqdm bars on a terminal; elsewhere (a cron log, CI) one plain line
+    per stage at most every ``interval`` seconds, so a log gets a readable trace instead of
+    thousands of carriage-return updates. Silent when disabled.
 
-    def __init__(self, stages=("geometry", "render"), *, enabled: bool = True):
+    Totals grow as jobs are planned.
+    """
+
+    def __init__(self, stages=("geometry", "render"), *, enabled: bool = True,
+                 terminal: bool | None = None, interval: float = 10.0, stream=None):
         self.enabled = enabled
+        self.stream = stream if stream is not None else sys.stderr
+        isatty = getattr(self.stream, "isatty", lambda: False)
+        self.terminal = isatty() if terminal is None else terminal
+        self.interval = float(interval)
+        self.stages = tuple(stages)
+        self.totals = {s: 0 for s in self.stages}
+        self.done = {s: 0 for s in self.stages}
+        self.failed = {s: 0 for s in self.stages}
+        self.t0 = self._last = time.monotonic()
         self.bars = {}
-        if enabled:
+        if enabled and self.terminal:
             for i, stage in enumerate(stages):
                 self.bars[stage] = tqdm(total=0, desc=f"{stage:>9}", unit="job", position=i,
-                                        leave=True, dynamic_ncols=True)
+                                        leave=True, dynamic_ncols=True, file=self.stream)
 
     def planned(self, stage: str, n: int = 1) -> None:
+        self.totals[stage] = self.totals.get(stage, 0) + n
         bar = self.bars.get(stage)
         if bar is not None:
             bar.total += n
             bar.refresh()
 
     def finished(self, stage: str, state: State) -> None:
+        self.done[stage] = self.done.get(stage, 0) + 1
+        if state is State.FAILED:
+            self.failed[stage] = self.failed.get(stage, 0) + 1
         bar = self.bars.get(stage)
         if bar is not None:
             bar.update(1)
             if state is State.FAILED:
                 bar.set_postfix_str("failures!", refresh=False)
+        elif self.enabled and not self.terminal and time.monotonic() - self._last >= self.interval:
+            self.write_lines()
+
+    def lines(self) -> list[str]:
+        """One line per stage: jobs done of planned, rate and failures so far."""
+        elapsed = time.monotonic() - self.t0
+        out = []
+        for stage in self.totals:
+            done, total = self.done.get(stage, 0), self.totals[stage]
+            if not total:
+                continue
+            rate = done / elapsed if elapsed > 0 else 0.0
+            fail = f", {self.failed[stage]} failed" if self.failed.get(stage) else ""
+            out.append(f"[{elapsed:7.1f} s] {stage}: {done}/{total} jobs "
+                       f"({100.0 * done / total:.0f}%), {rate:.2f} jobs/s{fail}")
+        return out
+
+    def write_lines(self) -> None:
+        self._last = time.monotonic()
+        for line in self.lines():
+            print(line, file=self.stream, flush=True)
 
     def close(self) -> None:
         for bar in self.bars.values():
             bar.close()
+        if self.enabled and not self.terminal:
+            self.write_lines()
 
 
 def write_job_log(store: OutputStore, record: JobRecord) -> None:

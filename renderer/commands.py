@@ -1,21 +1,16 @@
-"""``cassi render`` and ``cassi animate``.
+"""The ``cassi render`` and ``cassi animate`` command lines, given where positions come from.
 
-Where the vertex positions come from: the renderer may import only ``cassi.data``, so it cannot
-call ``cassi.versions`` directly. A *positions provider* answers
-``(corpus, subject, task, rep, version) -> (face, frames int64 (F,), positions float32 (F, V, 3))``.
-The default provider knows the name ``neutral`` (the subject's neutral face, the same for every
-frame of the task) and every version published in the ``cassi.versions`` entry-point group
-(the project's plug-in mechanism, also open to third-party versions): it loads the version there,
-preprocesses the subject (``cassi.data.profile``) and animates the task. A package that may import
-the versions (the harness) can pass its own provider to :func:`register`.
+The renderer takes vertex positions only: it may import ``cassi.data`` but not the versions or
+the harness. The harness registers these commands (:mod:`cassi.harness.render_commands`) with a
+*positions provider* that answers
+``(corpus, subject, task, rep, version) -> (face, frames int64 (F,), positions float32 (F, V, 3))``
+through the same corpus -> profile -> face -> version path as ``cassi run``.
 """
 from __future__ import annotations
 
 import argparse
-import inspect
 import logging
 from collections.abc import Callable
-from importlib.metadata import entry_points
 from pathlib import Path
 
 import numpy as np
@@ -24,64 +19,13 @@ from cassi.data.errors import CassiInputError
 
 from .views import PRESET_NAMES, VIEW_NAMES
 
-__all__ = ["register", "default_positions", "NEUTRAL", "version_names"]
+__all__ = ["register", "NEUTRAL"]
 
 log = logging.getLogger(__name__)
+#: The version name that stands for the subject's neutral face in every frame.
 NEUTRAL = "neutral"
 
 PositionsProvider = Callable[..., tuple[object, np.ndarray, np.ndarray]]
-
-
-def version_names() -> list[str]:
-    """``neutral`` and the versions published in the ``cassi.versions`` entry-point group."""
-    return [NEUTRAL, *sorted(ep.name for ep in entry_points(group="cassi.versions"))]
-
-
-def _load_version(name: str):
-    eps = {ep.name: ep for ep in entry_points(group="cassi.versions")}
-    if name not in eps:
-        raise CassiInputError(f"unknown version {name!r}; this command knows "
-                              f"{', '.join(version_names())}")
-    obj = eps[name].load()
-    if inspect.isclass(obj) or (callable(obj) and not hasattr(obj, "animate")):
-        obj = obj()
-    if not hasattr(obj, "animate"):
-        raise CassiInputError(f"version {name!r} has no animate(profile, face, rec) method")
-    return obj
-
-
-def _face_for(subject_data, profile):
-    from cassi.data.face import build_face
-
-    # The palate is scaled by p/d like the pellets (thesis 4.1.1), so the face needs d.
-    return build_face(palate_mm=subject_data.palate_mm, head_measures=subject_data.head_measures,
-                      jaw_length_mm=profile.jaw_length_mm)
-
-
-def default_positions(corpus_dir: str | Path, subject: str, task: int, rep: int, version: str):
-    """Face, recording rows and positions (F, V, 3) of ``version`` animating a task.
-
-    ``neutral``: every row of the recording, each with the neutral face's vertices.
-    """
-    from cassi.data.corpus import Corpus
-    from cassi.data.profile import preprocess
-
-    if corpus_dir is None:
-        from cassi.data.synth import default_corpus
-
-        corpus_dir = default_corpus()
-    corpus = Corpus(corpus_dir)
-    sd = corpus.subject(subject)
-    rec = sd.load(task, rep)
-    profile = preprocess(corpus, [subject])[subject]
-    face = _face_for(sd, profile)
-    if version == NEUTRAL:
-        n = len(rec.time_us)
-        verts = np.asarray(face.vertices, np.float32)
-        return face, np.arange(n, dtype=np.int64), np.broadcast_to(verts, (n, *verts.shape))
-    ver = _load_version(version)
-    anim = ver.animate(profile, face, rec)
-    return face, np.asarray(anim.frames, np.int64), np.asarray(anim.positions, np.float32)
 
 
 def _frame_index(frames: np.ndarray, frame: int) -> int:
@@ -149,17 +93,18 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--task", required=True, type=int, help="task number")
     p.add_argument("--rep", type=int, default=1, help="repetition (default 1)")
     p.add_argument("--version", required=True,
-                   help=f"'{NEUTRAL}' (the neutral face) or a version from the cassi.versions "
-                        "entry points")
+                   help=f"'{NEUTRAL}' (the subject's neutral face) or a registered version "
+                        "(cassi versions)")
     p.add_argument("--preset", default="preview", choices=PRESET_NAMES, help="quality preset")
     p.add_argument("--variant", default=None,
                    help="Mitsuba variant (cuda_ad_rgb, llvm_ad_rgb, scalar_rgb; default: "
                         "$CASSI_VARIANT or the fastest usable)")
 
 
-def register(sub, *, positions_provider: PositionsProvider | None = None) -> None:
-    """Add ``render`` and ``animate`` to the ``cassi`` subcommands."""
-    provider = positions_provider or default_positions
+def register(sub, *, positions_provider: PositionsProvider) -> None:
+    """Add ``render`` and ``animate`` to the ``cassi`` subcommands, animating through
+    ``positions_provider``."""
+    provider = positions_provider
 
     p = sub.add_parser("render", help="render one frame of a task in one view (PNG or EXR)",
                        description="Render one frame with Mitsuba 3; writes the image, a JSON "

@@ -11,20 +11,23 @@ from pathlib import Path
 
 import numpy as np
 
-from cassi.data.atomic import atomic_tmp_path, atomic_write_text
+from cassi.data.atomic import atomic_tmp_path, atomic_write_bytes, atomic_write_text
 from cassi.data.errors import CassiInputError
 
-__all__ = ["srgb_encode", "srgb_decode", "to_srgb8", "write_exr", "write_png", "write_mask_png",
+__all__ = ["srgb_encode", "srgb_decode", "to_srgb8", "png_bytes", "write_exr", "write_png",
+           "write_mask_png",
            "write_sidecar", "read_image", "read_metadata", "contact_sheet", "write_contact_sheet",
            "METADATA_PREFIX"]
 
 #: Metadata keys are written as ``cassi:<key>`` attributes (EXR header / PNG text chunks).
 METADATA_PREFIX = "cassi:"
-PNG_COMPRESSION = 3
+#: zlib level 1: the fastest of the levels measured (3.8 ms for a 256² preview against 4.9 ms
+#: at 3), files about 10% larger.
+PNG_COMPRESSION = 1
 # mkstemp creates 0600 files; give written images the usual umask-based mode instead.
 _UMASK = os.umask(0o022)
 os.umask(_UMASK)
-FILE_MODE = 0o666 & ~_UMASK  # zlib level: small files, a few ms per 512^2 image
+FILE_MODE = 0o666 & ~_UMASK
 
 
 def srgb_encode(linear: np.ndarray) -> np.ndarray:
@@ -39,9 +42,18 @@ def srgb_decode(encoded: np.ndarray) -> np.ndarray:
     return np.where(x <= 0.04045, x / 12.92, np.power((x + 0.055) / 1.055, 2.4)).astype(np.float32)
 
 
+#: Linear values are quantised to 1/_LUT_STEPS before the sRGB table lookup: the steepest part of
+#: the curve (slope 12.92 near 0) then moves at most 0.05 of an 8-bit level, and the lookup is
+#: several times faster than evaluating the power law per pixel.
+_LUT_STEPS = 65535
+_SRGB8_LUT = np.rint(srgb_encode(np.arange(_LUT_STEPS + 1, dtype=np.float64) / _LUT_STEPS)
+                     * 255.0).astype(np.uint8)
+
+
 def to_srgb8(linear: np.ndarray) -> np.ndarray:
-    """uint8 sRGB image from linear float RGB (H, W, 3)."""
-    return np.rint(srgb_encode(linear) * 255.0).astype(np.uint8)
+    """uint8 sRGB image from linear float RGB (H, W, 3) (deterministic table lookup)."""
+    x = np.clip(np.asarray(linear, np.float32), 0.0, 1.0)
+    return _SRGB8_LUT[np.rint(x * _LUT_STEPS).astype(np.int32)]
 
 
 def _meta_attrs(spec, metadata: dict | None) -> None:
@@ -104,37 +116,53 @@ def write_exr(path: str | os.PathLike, rgb: np.ndarray, *, depth: np.ndarray | N
     return Path(path)
 
 
+def png_bytes(pixels: np.ndarray, *, metadata: dict | None = None, linear: bool = True,
+              compression: int = PNG_COMPRESSION) -> bytes:
+    """An 8-bit PNG in memory (no temporary file): sRGB colour (H, W, 3) or one channel (H, W).
+
+    ``pixels`` is linear float (sRGB-encoded here) when ``linear``, else uint8. The metadata
+    become ``cassi:<key>`` text chunks, which :func:`read_metadata` reads back. The same pixels
+    and metadata always give the same bytes.
+    """
+    import imageio.v3 as iio
+    from PIL.PngImagePlugin import PngInfo
+
+    arr = np.asarray(pixels)
+    if arr.ndim == 3:
+        arr = _check_rgb(arr)
+        arr = to_srgb8(arr) if linear else arr.astype(np.uint8)
+    elif arr.ndim == 2:
+        if linear or arr.min(initial=0) < 0 or arr.max(initial=0) > 255:
+            raise CassiInputError("a one-channel PNG takes uint8 values (linear=False)")
+        arr = arr.astype(np.uint8)
+    else:
+        raise CassiInputError(f"image must be (H, W, 3) or (H, W), not {arr.shape}")
+    info = PngInfo()
+    for key, value in (metadata or {}).items():
+        if not isinstance(value, str):
+            value = json.dumps(value, sort_keys=True)
+        info.add_text(METADATA_PREFIX + str(key), value)
+    return iio.imwrite("<bytes>", np.ascontiguousarray(arr), extension=".png", plugin="pillow",
+                       pnginfo=info, compress_level=int(compression))
+
+
 def write_png(path: str | os.PathLike, rgb: np.ndarray, *, metadata: dict | None = None,
               linear: bool = True) -> Path:
     """Write an 8-bit sRGB PNG. ``rgb`` is linear float (encoded here) when ``linear``, else
-    already-encoded uint8."""
-    import OpenImageIO as oiio
-
-    rgb = _check_rgb(rgb)
-    pixels = to_srgb8(rgb) if linear else np.asarray(rgb, np.uint8)
-    h, w = pixels.shape[:2]
-    spec = oiio.ImageSpec(w, h, 3, oiio.UINT8)
-    spec.attribute("png:compressionLevel", PNG_COMPRESSION)
-    spec.attribute("oiio:ColorSpace", "sRGB")
-    _meta_attrs(spec, metadata)
-    _write(Path(path), pixels, spec)
+    already-encoded uint8. Same bytes as :func:`png_bytes`."""
+    atomic_write_bytes(path, png_bytes(_check_rgb(rgb), metadata=metadata, linear=linear))
+    os.chmod(path, FILE_MODE)
     return Path(path)
 
 
 def write_mask_png(path: str | os.PathLike, mask: np.ndarray, *, metadata: dict | None = None) -> Path:
     """Write part indices (int (H, W), < 256) as a one-channel 8-bit PNG; the part names
     are in the metadata (``cassi:part_names``)."""
-    import OpenImageIO as oiio
-
     mask = np.asarray(mask)
     if mask.ndim != 2 or mask.min() < 0 or mask.max() > 255:
         raise CassiInputError("mask must be (H, W) with part indices 0..255")
-    h, w = mask.shape
-    spec = oiio.ImageSpec(w, h, 1, oiio.UINT8)
-    spec.attribute("png:compressionLevel", PNG_COMPRESSION)
-    _meta_attrs(spec, metadata)
-    # (H, W, 1): OpenImageIO misreads a 2-D array's layout for one-channel images
-    _write(Path(path), mask.astype(np.uint8)[..., None], spec)
+    atomic_write_bytes(path, png_bytes(mask, metadata=metadata, linear=False))
+    os.chmod(path, FILE_MODE)
     return Path(path)
 
 
@@ -207,11 +235,11 @@ def write_contact_sheet(path: str | os.PathLike, images: Sequence[np.ndarray], *
     return write_png(path, contact_sheet(images, columns=columns), metadata=metadata, linear=False)
 
 
-def write_result(result, stem: str | os.PathLike, *, exr: bool = True, png: bool = True,
+def write_result(result, stem: str | os.PathLike, *, exr: bool = False, png: bool = True,
                  mask_png: bool = True, sidecar: bool = True) -> list[Path]:
-    """Write one ``RenderResult``: ``<stem>.exr`` (linear RGB + ``Z`` depth + ``part`` index),
-    ``<stem>.png`` (sRGB), ``<stem>.mask.png`` (part indices) and ``<stem>.json`` (metadata).
-    Returns the paths written."""
+    """Write one ``RenderResult``: ``<stem>.png`` (sRGB), ``<stem>.mask.png`` (part indices),
+    ``<stem>.json`` (metadata) and, only when asked (``exr=True``), ``<stem>.exr`` (linear RGB
+    + ``Z`` depth + ``part`` index). Returns the paths written."""
     meta = result.metadata()
     written = []
     if exr:
@@ -240,7 +268,7 @@ class FrameWriter:
     ...         writer.submit(renderer.render(pos), out / f"front_{n:05d}")
     """
 
-    def __init__(self, *, exr: bool = True, png: bool = True, mask_png: bool = True,
+    def __init__(self, *, exr: bool = False, png: bool = True, mask_png: bool = True,
                  sidecar: bool = True, background: bool = True, max_pending: int = 2):
         from concurrent.futures import ThreadPoolExecutor
 

@@ -2,13 +2,15 @@
 vertex positions change.
 
 Why: ``mi.load_dict`` per frame leaks memory and recompiles kernels (mitsuba issues 1890, 703);
-writing ``mesh_<part>.vertex_positions`` through ``mi.traverse`` and calling ``params.update()``
+writing ``<mesh id>.vertex_positions`` (and normals) through ``mi.traverse`` and calling ``params.update()``
 once keeps the scene, the film, the sensors and hence the compiled kernels fixed, so a frame costs
 a BVH refit plus the render itself.
 
-Each frame gives the colour image (linear RGB) and, from a second pass with the ``aov``
-integrator through the pixel centres, the part shown at each pixel and its distance from the
-camera (exact, aligned with the colour image: same camera, same pixel grid).
+Each frame gives the colour image (linear RGB), the part shown at each pixel and its distance
+from the camera, from one pass of the ``aov`` integrator through the pixel centres (part id,
+depth, surface normal). The ``preview`` preset shades its colour from that pass
+(:mod:`cassi.renderer.shading`): one ray per pixel, no noise, the same bytes in every process.
+The ``final`` preset path-traces the colour in a second pass (same camera, same pixel grid).
 """
 from __future__ import annotations
 
@@ -22,9 +24,9 @@ import numpy as np
 
 from cassi.data.errors import CassiInputError
 
-from . import scenes
+from . import scenes, shading
 from .variant import activate_variant, choose_variant
-from .views import Preset, View, preset as _preset, view as _view
+from .views import Preset, View, mouth_box, preset as _preset, view as _view
 
 __all__ = ["RenderResult", "FaceRenderer", "part_triangles", "BACKGROUND"]
 
@@ -149,6 +151,7 @@ class FaceRenderer:
         self.topology = topology
         self._triangles = part_triangles(topology)
         self._scene = None
+        self._uploaded: dict[str, np.ndarray] = {}  # float32 positions per part now in the scene
         self.loads = 0  # how many times a scene was loaded (stays 1: tests check it)
 
     # -- scene ---------------------------------------------------------------------------
@@ -181,27 +184,49 @@ class FaceRenderer:
         if missing:
             raise ValueError(f"topology.expand gave no positions for parts {sorted(missing)}")
         tris = self._clip(expanded)
-        meshes = {part: scenes.part_mesh(part, expanded[part], t)
-                  for part, t in tris.items() if len(t)}
-        self.part_names = (BACKGROUND, *meshes)
+        parts = [part for part, t in tris.items() if len(t)]
+        self.part_names = (BACKGROUND, *parts)
+        # Path presets: one mesh per part (each its own material). Raycast presets never
+        # evaluate a BSDF, so every part goes into one mesh and the triangle index says the
+        # part: one mesh to refit per frame, and scalar_rgb's aov pass costs per shape.
+        if self.preset.shading == "raycast":
+            groups = {scenes.MERGED: parts}
+        else:
+            groups = {part: [part] for part in parts}
+        self._groups = groups
+        self._group_triangles = {}
+        tri_part = []
+        for name, members in groups.items():
+            offsets = np.cumsum([0] + [len(expanded[m]) for m in members])
+            self._group_triangles[name] = np.concatenate(
+                [tris[m] + off for m, off in zip(members, offsets)])
+            tri_part += [np.full(len(tris[m]), self.part_names.index(m), np.int32) for m in members]
+        self._tri_part = np.concatenate(tri_part)  # part index of each merged triangle
+        meshes = {name: scenes.part_mesh(name, self._group_positions(name, expanded),
+                                         self._group_triangles[name])
+                  for name in groups}
         self._scene = mi.load_dict(scenes.scene_dict(meshes, self.view, self.preset))
         self.loads += 1
         sensors = {s.id(): s for s in self._scene.sensors()}
         self._sensor_colour = sensors[scenes.SENSOR_COLOUR]
         self._sensor_mask = sensors[scenes.SENSOR_MASK]
-        self._mask_integrator = mi.load_dict(scenes.mask_integrator_dict())
+        self._mask_integrator = mi.load_dict(scenes.mask_integrator_dict(look=self.preset.look))
         params = mi.traverse(self._scene)
-        self._keys = {part: scenes.mesh_id(part) + ".vertex_positions" for part in meshes}
-        params.keep(list(self._keys.values()))
+        self._keys = {name: scenes.mesh_id(name) + ".vertex_positions" for name in groups}
+        self._normal_keys = {name: scenes.mesh_id(name) + ".vertex_normals" for name in groups}
+        self._uploaded = {name: self._group_positions(name, expanded).ravel() for name in groups}
+        params.keep([*self._keys.values(), *self._normal_keys.values()])
         self._params = params
-        self._buffer_type = {part: type(params[key]) for part, key in self._keys.items()}
+        self._buffer_type = {name: type(params[key]) for name, key in self._keys.items()}
         # The aov integrator's shape_index is the scene order + 1 in scalar variants and the
-        # shape's registry id in JIT variants; map either to our part index via a lookup table.
+        # shape's registry id in JIT variants; map either to our part index via a lookup table
+        # (for the merged mesh: to -1, "a hit: read the triangle's part").
         shapes = list(self._scene.shapes())
         by_id = {s.id(): s for s in shapes}
         raw = {}
-        for k, part in enumerate(meshes, start=1):
-            shape = by_id[scenes.mesh_id(part)]
+        for name in groups:
+            shape = by_id[scenes.mesh_id(name)]
+            k = -1 if name == scenes.MERGED else self.part_names.index(name)
             if mi.variant().startswith("scalar"):
                 raw[k] = shapes.index(shape) + 1
             else:
@@ -211,6 +236,14 @@ class FaceRenderer:
             lut[r] = k
         self._lut = lut
         self._near_offset = _near_offset(self.view, self.preset)
+        self._tables = shading.shading_tables(self.view, self.preset, self.part_names)
+
+    def _group_positions(self, name: str, expanded: dict[str, np.ndarray]) -> np.ndarray:
+        """float32 (W, 3): the vertices of one scene mesh (its parts' vertices in order)."""
+        members = self._groups[name]
+        if len(members) == 1:
+            return np.ascontiguousarray(expanded[members[0]], np.float32)
+        return np.concatenate([expanded[m] for m in members]).astype(np.float32)
 
     # -- per frame -------------------------------------------------------------------------
     def update(self, positions: np.ndarray) -> None:
@@ -225,48 +258,86 @@ class FaceRenderer:
             self._load(expanded)
             return
         activate_variant(self.variant)
-        for part, key in self._keys.items():
-            self._params[key] = self._buffer_type[part](
-                np.ascontiguousarray(expanded[part], np.float32).ravel())
-        self._params.update()
+        changed = False
+        for name, key in self._keys.items():
+            verts = self._group_positions(name, expanded)
+            flat = verts.ravel()
+            # Meshes that did not move (eyes, palate, upper teeth in speech) are not
+            # re-uploaded: fewer meshes to refit and re-normal per frame.
+            if np.array_equal(flat, self._uploaded.get(name)):
+                continue
+            self._params[key] = self._buffer_type[name](flat)
+            self._params[self._normal_keys[name]] = self._buffer_type[name](
+                scenes.vertex_normals(verts, self._group_triangles[name]).ravel())
+            self._uploaded[name] = flat
+            changed = True
+        if changed:
+            self._params.update()
+
+    def render_pass(self) -> np.ndarray:
+        """The preset's one colour-giving ``mi.render`` of the current geometry, as Mitsuba
+        returns it (the bare call ``cassi bench`` compares the pipeline with): the aov pass for
+        raycast presets, the path-traced image for path presets."""
+        import mitsuba as mi
+        if self.preset.shading == "raycast":
+            return mi.render(self._scene, integrator=self._mask_integrator,
+                             sensor=self._sensor_mask, seed=0, spp=1)
+        return mi.render(self._scene, sensor=self._sensor_colour, seed=self.preset.seed,
+                         spp=self.preset.spp)
 
     def render_colour(self) -> np.ndarray:
-        """float32 (H, W, 3) linear RGB of the current geometry (the bare ``mi.render``)."""
-        import mitsuba as mi
-        img = mi.render(self._scene, sensor=self._sensor_colour, seed=self.preset.seed,
-                        spp=self.preset.spp)
-        return np.asarray(img, dtype=np.float32)[..., :3]
+        """float32 (H, W, 3) linear RGB of the current geometry."""
+        if self.preset.shading == "raycast":
+            return self.render_aov()[2]
+        return np.asarray(self.render_pass(), dtype=np.float32)[..., :3]
 
-    def render_mask(self) -> tuple[np.ndarray, np.ndarray]:
-        """(mask int32 (H, W), depth float32 (H, W)) of the current geometry."""
+    def render_aov(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(mask int32 (H, W), depth float32 (H, W), colour) of the current geometry from the
+        one aov pass; colour is the raycast shading (float32 (H, W, 3) linear RGB), or None
+        for path presets."""
         import mitsuba as mi
         aov = np.asarray(mi.render(self._scene, integrator=self._mask_integrator,
                                    sensor=self._sensor_mask, seed=0, spp=1), dtype=np.float32)
         raw = np.rint(aov[..., 1]).astype(np.int64)
         raw[(raw < 0) | (raw >= len(self._lut))] = len(self._lut) - 1  # unknown -> background
         mask = self._lut[raw]
+        merged = mask < 0
+        if merged.any():
+            prim = np.rint(aov[..., 5][merged]).astype(np.int64)
+            mask[merged] = self._tri_part[np.clip(prim, 0, len(self._tri_part) - 1)]
         # Mitsuba starts camera rays on the near-clip plane, so the aov distance lacks the
         # stretch from the eye to that plane: near_clip / cos(angle to the optical axis).
         depth = aov[..., 0] + self._near_offset
         depth[mask == 0] = np.inf
+        colour = None
+        if self.preset.shading == "raycast":
+            colour = shading.shade(self._tables, mask, aov[..., 2:5])
+        return mask, depth, colour
+
+    def render_mask(self) -> tuple[np.ndarray, np.ndarray]:
+        """(mask int32 (H, W), depth float32 (H, W)) of the current geometry."""
+        mask, depth, _ = self.render_aov()
         return mask, depth
 
     def render(self, positions: np.ndarray) -> RenderResult:
-        """Render one frame: colour, mask and depth."""
+        """Render one frame: colour, mask and depth (one pass for raycast presets)."""
         t0 = time.perf_counter()
         self.update(positions)
-        rgb = self.render_colour()
-        mask, depth = self.render_mask()
+        mask, depth, rgb = self.render_aov()
+        if rgb is None:
+            rgb = self.render_colour()
         return RenderResult(rgb=rgb, mask=mask, depth=depth, part_names=self.part_names,
                             view=self.view.name, preset=self.preset.name, variant=self.variant,
                             spp=self.preset.spp, seed=self.preset.seed,
-                            render_s=time.perf_counter() - t0)
+                            render_s=time.perf_counter() - t0,
+                            extra={"shading": self.preset.shading, "look": self.preset.look,
+                                   "mouth_box": list(mouth_box(self.view, self.preset))})
 
-    def render_to_files(self, positions: np.ndarray, stem: str | Path, *, exr: bool = True,
+    def render_to_files(self, positions: np.ndarray, stem: str | Path, *, exr: bool = False,
                         png: bool = True, mask_png: bool = True, sidecar: bool = True,
                         extra: dict | None = None) -> RenderResult:
         """Render one frame and write it (synchronously) with :func:`images.write_result`:
-        ``<stem>.exr``, ``<stem>.png``, ``<stem>.mask.png``, ``<stem>.json``."""
+        ``<stem>.png``, ``<stem>.mask.png``, ``<stem>.json`` and, with ``exr=True``, ``<stem>.exr``."""
         from .images import write_result
 
         res = self.render(positions)

@@ -2,8 +2,10 @@
 
 The ids chosen here become the keys of ``mi.traverse``; they are fixed on purpose:
 
-- ``mesh_<part>``: one triangle mesh per face part (``mesh_skin.vertex_positions`` is what the
-  renderer rewrites each frame);
+- ``mesh_<part>``: one triangle mesh per face part in path-traced presets (each with its
+  material), or one ``mesh_parts`` holding every part in raycast presets (no BSDF is evaluated
+  there; the aov pass's triangle index says the part); ``.vertex_positions`` and
+  ``.vertex_normals`` are what the renderer rewrites each frame;
 - ``sensor_colour``: the camera with the preset's film and an ``multijitter`` sampler (its seed
   is the preset's, so a render is reproducible);
 - ``sensor_mask``: the same camera and film size with a ``stratified`` sampler, one sample per
@@ -11,7 +13,8 @@ The ids chosen here become the keys of ``mi.traverse``; they are fixed on purpos
   the mask and depth it gives are exact per pixel and aligned with the colour image (same camera,
   same pixel grid);
 - ``light_key``, ``light_fill``, ``light_rim``: rectangular area lights; ``ambient``: a dim
-  constant environment (also the image background).
+  constant environment (also the image background). The raycast preview shades with the same
+  lights as directional ones (:mod:`cassi.renderer.shading`).
 
 All functions need Mitsuba's variant to be set already (``variant.activate_variant``).
 """
@@ -19,13 +22,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from .views import DEFAULT_MATERIAL, MATERIALS, Preset, View
+from .views import Preset, View, material_for
 
-__all__ = ["mesh_id", "material_for", "part_mesh", "sensor_dict", "emitter_dicts",
+__all__ = ["mesh_id", "part_mesh", "vertex_normals", "sensor_dict", "emitter_dicts",
            "colour_integrator_dict", "mask_integrator_dict", "scene_dict", "SENSOR_COLOUR",
            "SENSOR_MASK"]
 
 SENSOR_COLOUR = "sensor_colour"
+#: The one mesh of the raycast presets, holding every part (the triangle index says which).
+MERGED = "parts"
 SENSOR_MASK = "sensor_mask"
 _MESH_PREFIX = "mesh_"
 
@@ -35,19 +40,27 @@ def mesh_id(part: str) -> str:
     return _MESH_PREFIX + part
 
 
-def material_for(part: str) -> dict:
-    """The BSDF dict of a part: exact name, else the longest material name the part starts
-    with (``teeth_upper`` -> ``teeth``), else a neutral grey."""
-    if part in MATERIALS:
-        return MATERIALS[part]
-    prefixes = [m for m in MATERIALS if part.startswith(m)]
-    if prefixes:
-        return MATERIALS[max(prefixes, key=len)]
-    return DEFAULT_MATERIAL
+def vertex_normals(positions: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """float32 (W, 3) unit vertex normals: the area-weighted mean of the adjacent triangles'
+    normals; (0, 0, 1) for a vertex no triangle uses.
+
+    Computed here rather than by Mitsuba, whose recomputation in JIT variants sums in parallel
+    and varies in the last bits from frame to frame; this sum has a fixed order, so a frame
+    renders to the same bits however often and in whatever order it is rendered.
+    """
+    p = np.asarray(positions, np.float64)
+    t = np.asarray(triangles, np.int64)
+    face = np.cross(p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]])  # length = 2 x area
+    idx = t.ravel()
+    w = np.repeat(face, 3, axis=0)
+    n = np.stack([np.bincount(idx, weights=w[:, k], minlength=len(p)) for k in range(3)], axis=1)
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    out = np.where(length > 0, n / np.where(length > 0, length, 1.0), (0.0, 0.0, 1.0))
+    return out.astype(np.float32)
 
 
 def part_mesh(part: str, positions: np.ndarray, triangles: np.ndarray):
-    """A Mitsuba mesh for one part, with smooth vertex normals.
+    """A Mitsuba mesh for one part, with smooth vertex normals (:func:`vertex_normals`).
 
     Parameters
     ----------
@@ -56,18 +69,19 @@ def part_mesh(part: str, positions: np.ndarray, triangles: np.ndarray):
     triangles : int (T, 3)
         Zero-based indices into ``positions``; T >= 1.
 
-    Vertex normals are recomputed by Mitsuba whenever ``vertex_positions`` is updated.
+    The renderer writes the normals with the positions every frame (``<mesh id>.vertex_normals``).
     """
     import mitsuba as mi
 
     props = mi.Properties()
-    props["bsdf"] = mi.load_dict(material_for(part))
+    props["bsdf"] = mi.load_dict(material_for(part).bsdf())
     mesh = mi.Mesh(mesh_id(part), int(len(positions)), int(len(triangles)), props=props,
                    has_vertex_normals=True)
     params = mi.traverse(mesh)
-    vp, fc = params["vertex_positions"], params["faces"]
+    vp, fc, vn = params["vertex_positions"], params["faces"], params["vertex_normals"]
     params["vertex_positions"] = type(vp)(np.ascontiguousarray(positions, np.float32).ravel())
     params["faces"] = type(fc)(np.ascontiguousarray(triangles, np.uint32).ravel())
+    params["vertex_normals"] = type(vn)(vertex_normals(positions, triangles).ravel())
     params.update()
     return mesh
 
@@ -122,10 +136,17 @@ def colour_integrator_dict(preset: Preset) -> dict:
     return {"type": "path", "max_depth": preset.max_depth}
 
 
-def mask_integrator_dict() -> dict:
-    """AOV integrator: channel 0 = distance along the ray (``depth``), 1 = shape index
-    (a registry id in JIT variants, scene order + 1 in scalar ones; 0 = no hit)."""
-    return {"type": "aov", "aovs": "dd.y:depth,si:shape_index"}
+#: Channels of the aov pass, in order: distance along the ray, shape index (a registry id in
+#: JIT variants, scene order + 1 in scalar ones; 0 = no hit), surface normal x, y, z (world),
+#: triangle index within the shape.
+AOV_CHANNELS = ("depth", "shape_index", "nx", "ny", "nz", "prim_index")
+
+
+def mask_integrator_dict(*, look: str = "smooth") -> dict:
+    """The aov integrator of the one pass through the pixel centres: depth, shape index and the
+    shading normal (``look="smooth"``) or the geometric one (``"flat"``); see AOV_CHANNELS."""
+    normal = "sh_normal" if look == "smooth" else "geo_normal"
+    return {"type": "aov", "aovs": f"dd.y:depth,si:shape_index,n:{normal},pi:prim_index"}
 
 
 def scene_dict(meshes: dict[str, object], view: View, preset: Preset) -> dict:

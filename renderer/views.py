@@ -24,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Camera", "Light", "View", "Preset", "VIEWS", "PRESETS", "MATERIALS",
-           "DEFAULT_MATERIAL", "view", "preset", "VIEW_NAMES", "PRESET_NAMES"]
+__all__ = ["Camera", "Light", "View", "Preset", "Material", "VIEWS", "PRESETS", "MATERIALS",
+           "DEFAULT_MATERIAL", "material_for", "mouth_box", "project", "view", "preset", "VIEW_NAMES", "PRESET_NAMES"]
 
 Vec3 = tuple[float, float, float]
 
@@ -94,7 +94,14 @@ class View:
 
 @dataclass(frozen=True)
 class Preset:
-    """Film and sampling; fixed per preset so Dr.Jit kernels are compiled once and reused."""
+    """Film and sampling; fixed per preset so Dr.Jit kernels are compiled once and reused.
+
+    ``shading``: ``"raycast"`` shades the colour from the one ``aov`` pass that also gives the
+    mask and depth (one ray through each pixel centre: noise-free and bit-reproducible, see
+    :mod:`cassi.renderer.shading`); ``"path"`` path-traces it with ``spp`` samples per pixel and
+    ``seed``. ``look`` (raycast only): ``"smooth"`` interpolated vertex normals (Phong) or
+    ``"flat"`` one normal per triangle, like the thesis's SGI display.
+    """
 
     name: str
     width: int
@@ -103,6 +110,14 @@ class Preset:
     seed: int
     max_depth: int
     rfilter: str = "gaussian"
+    shading: str = "path"
+    look: str = "smooth"
+
+    def __post_init__(self):
+        if self.shading not in ("raycast", "path"):
+            raise ValueError(f"preset {self.name!r}: shading must be 'raycast' or 'path'")
+        if self.look not in ("smooth", "flat"):
+            raise ValueError(f"preset {self.name!r}: look must be 'smooth' or 'flat'")
 
 
 # Where the neutral face sits (Parke units): used only to place the fixed cameras.
@@ -142,43 +157,104 @@ VIEWS: dict[str, View] = {
 VIEW_NAMES = tuple(VIEWS)
 
 PRESETS: dict[str, Preset] = {
-    "preview": Preset("preview", 256, 256, spp=4, seed=1, max_depth=3),
+    # One primary ray per pixel (spp 1, no seed needed): colour, mask and depth from one pass.
+    "preview": Preset("preview", 256, 256, spp=1, seed=0, max_depth=1, shading="raycast"),
+    "flat": Preset("flat", 256, 256, spp=1, seed=0, max_depth=1, shading="raycast", look="flat"),
     "final": Preset("final", 512, 512, spp=64, seed=1, max_depth=4),
 }
 PRESET_NAMES = tuple(PRESETS)
 
 
-def _plastic(rgb: Vec3, alpha: float, specular: float = 1.0) -> dict:
-    # Rough plastic = diffuse base + dielectric coat: skin-like sheen without subsurface cost.
-    # Two-sided so the inside of the cut head (half view) is shaded, not black.
-    return {"type": "twosided", "material": {
-        "type": "roughplastic", "distribution": "ggx", "alpha": alpha,
-        "diffuse_reflectance": {"type": "rgb", "value": list(rgb)},
-        "specular_reflectance": {"type": "rgb", "value": [specular] * 3}}}
+@dataclass(frozen=True)
+class Material:
+    """A part's surface, one description for both shading modes.
 
+    ``rgb`` diffuse reflectance (linear RGB); ``alpha`` GGX roughness; ``specular`` the weight of
+    the glossy coat (0 = purely diffuse). The path tracer gets a two-sided rough plastic (diffuse
+    base + dielectric coat: skin-like sheen without subsurface cost; two-sided so the inside of
+    the cut head in the half view is shaded, not black), or a diffuse BSDF when ``specular`` is
+    0; the raycast preview gets Lambert + a Blinn-Phong lobe of the same roughness.
+    """
 
-def _diffuse(rgb: Vec3) -> dict:
-    return {"type": "twosided", "material": {
-        "type": "diffuse", "reflectance": {"type": "rgb", "value": list(rgb)}}}
+    rgb: Vec3
+    alpha: float = 0.4
+    specular: float = 0.0
+
+    def bsdf(self) -> dict:
+        """The Mitsuba BSDF dictionary of the path-traced presets."""
+        if self.specular <= 0.0:
+            inner = {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(self.rgb)}}
+        else:
+            inner = {"type": "roughplastic", "distribution": "ggx", "alpha": self.alpha,
+                     "diffuse_reflectance": {"type": "rgb", "value": list(self.rgb)},
+                     "specular_reflectance": {"type": "rgb", "value": [self.specular] * 3}}
+        return {"type": "twosided", "material": inner}
+
+    @property
+    def shininess(self) -> float:
+        """Blinn-Phong exponent with the highlight width of GGX roughness ``alpha``
+        (the usual correspondence n = 2 / alpha^2 - 2)."""
+        return max(1.0, 2.0 / self.alpha ** 2 - 2.0)
 
 
 #: Materials per part name (the part names of cassi.data.face.RenderTopology); linear RGB.
-MATERIALS: dict[str, dict] = {
-    "skin": _plastic((0.62, 0.42, 0.33), alpha=0.45, specular=0.35),
-    "lips": _plastic((0.55, 0.22, 0.22), alpha=0.30, specular=0.5),
-    "teeth": _plastic((0.85, 0.83, 0.74), alpha=0.12, specular=0.8),
-    "tongue": _plastic((0.62, 0.20, 0.22), alpha=0.25, specular=0.6),
-    "palate": _plastic((0.70, 0.35, 0.36), alpha=0.30, specular=0.5),
-    "eye_white": _plastic((0.85, 0.84, 0.80), alpha=0.08, specular=1.0),
-    "iris": _plastic((0.18, 0.28, 0.42), alpha=0.08, specular=1.0),
-    "fringe": _plastic((0.10, 0.12, 0.16), alpha=0.08, specular=1.0),
-    "pupil": _plastic((0.015, 0.015, 0.015), alpha=0.05, specular=1.0),
-    "reflection": _diffuse((0.95, 0.95, 0.95)),
-    "eyelash": _diffuse((0.05, 0.035, 0.03)),
-    "eyebrow": _diffuse((0.12, 0.08, 0.06)),
-    "eyelid": _plastic((0.60, 0.40, 0.32), alpha=0.45, specular=0.35),
+MATERIALS: dict[str, Material] = {
+    "skin": Material((0.62, 0.42, 0.33), alpha=0.45, specular=0.35),
+    "lips": Material((0.55, 0.22, 0.22), alpha=0.30, specular=0.5),
+    "teeth": Material((0.85, 0.83, 0.74), alpha=0.12, specular=0.8),
+    "tongue": Material((0.62, 0.20, 0.22), alpha=0.25, specular=0.6),
+    "palate": Material((0.70, 0.35, 0.36), alpha=0.30, specular=0.5),
+    "eye_white": Material((0.85, 0.84, 0.80), alpha=0.08, specular=1.0),
+    "iris": Material((0.18, 0.28, 0.42), alpha=0.08, specular=1.0),
+    "fringe": Material((0.10, 0.12, 0.16), alpha=0.08, specular=1.0),
+    "pupil": Material((0.015, 0.015, 0.015), alpha=0.05, specular=1.0),
+    "reflection": Material((0.95, 0.95, 0.95)),
+    "eyelash": Material((0.05, 0.035, 0.03)),
+    "eyebrow": Material((0.12, 0.08, 0.06)),
+    "eyelid": Material((0.60, 0.40, 0.32), alpha=0.45, specular=0.35),
 }
-DEFAULT_MATERIAL = _plastic((0.5, 0.5, 0.5), alpha=0.4, specular=0.3)
+DEFAULT_MATERIAL = Material((0.5, 0.5, 0.5), alpha=0.4, specular=0.3)
+
+
+def material_for(part: str) -> Material:
+    """The material of a part: exact name, else the longest material name the part starts
+    with (``teeth_upper`` -> ``teeth``), else a neutral grey."""
+    if part in MATERIALS:
+        return MATERIALS[part]
+    prefixes = [m for m in MATERIALS if part.startswith(m)]
+    if prefixes:
+        return MATERIALS[max(prefixes, key=len)]
+    return DEFAULT_MATERIAL
+
+
+#: The mouth region the image gates look at: a box around the mouth (lips, teeth, front of the
+#: tongue and palate), centre and half extents in Parke units (140 units = 35 mm).
+MOUTH_CENTER = (270.0, 0.0, -265.0)
+MOUTH_HALF_EXTENT = (140.0, 120.0, 110.0)
+
+
+def project(view: View, preset: Preset, points) -> np.ndarray:
+    """float (N, 2) pixel coordinates (column, row; 0 = the left/top edge) of world ``points``
+    (N, 3) in ``view``'s camera at ``preset``'s film size."""
+    right, up, back = view.camera.basis()
+    d = np.asarray(points, float) - np.asarray(view.camera.origin, float)
+    z = -(d @ back)
+    tan = math.tan(math.radians(view.camera.fov) / 2.0)
+    x = (d @ right) / (z * tan * preset.width / preset.height)
+    y = (d @ up) / (z * tan)
+    return np.stack([(x + 1) / 2 * preset.width, (1 - y) / 2 * preset.height], axis=1)
+
+
+def mouth_box(view: View, preset: Preset) -> tuple[int, int, int, int]:
+    """(row0, row1, col0, col1), end-exclusive: the image rectangle of the mouth region
+    (the projected MOUTH box, clipped to the film). The same for every subject and frame."""
+    c, e = np.asarray(MOUTH_CENTER, float), np.asarray(MOUTH_HALF_EXTENT, float)
+    corners = c + e * np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    px = project(view, preset, corners)
+    col0, row0 = np.floor(px.min(axis=0)).astype(int)
+    col1, row1 = np.ceil(px.max(axis=0)).astype(int)
+    return (int(max(0, row0)), int(min(preset.height, row1)),
+            int(max(0, col0)), int(min(preset.width, col1)))
 
 
 def view(name: str) -> View:

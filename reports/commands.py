@@ -5,15 +5,8 @@ import argparse
 from pathlib import Path
 
 
-#: Nightly renders only the frames that matter, in all four views: the first frame and the two
-#: frames the checks point at most strongly. Renders cost ~0.4 s each per worker here, so the
-#: budget is ~3,000: a stride of 25 (the run default) means ~60k renders for the default set,
-#: first + 8 extremes took ~20 minutes, first + 3 extremes 12.4 minutes.
-NIGHTLY_STRIDE = 0
-NIGHTLY_EXTREMES = 2
-#: Tasks 106 and 118 are animated for every version side by side from front renders every 200th
-#: frame (~700 extra renders; every 100th was ~1,350 and pushed a night past 15 minutes).
-NIGHTLY_ANIMATE_STRIDE = 200
+from cassi.reports.nightly_plan import (NIGHTLY_ANIMATE_STRIDE, NIGHTLY_EXTREMES, NIGHTLY_STRIDE,
+                                       NIGHTLY_VIDEO_VERSIONS)
 
 
 def register(sub) -> None:
@@ -37,12 +30,18 @@ def register(sub) -> None:
                    help="frames the checks point at to render per task file and version "
                         f"(default {NIGHTLY_EXTREMES})")
     p.add_argument("--animate-stride", type=int, default=NIGHTLY_ANIMATE_STRIDE,
-                   help="front-view frame stride of the task 106/118 animations "
-                        f"(default {NIGHTLY_ANIMATE_STRIDE}; 0: none)")
+                   help="row stride of every task file's four-view video, all views "
+                        f"(default {NIGHTLY_ANIMATE_STRIDE}; 0: no videos)")
+    p.add_argument("--video-versions", dest="video_versions", default=",".join(NIGHTLY_VIDEO_VERSIONS),
+                   help="versions with a four-view video of every task file, comma-separated "
+                        f"(default {','.join(NIGHTLY_VIDEO_VERSIONS)}; the others: front view of "
+                        "tasks 106 and 118 for the comparisons)")
     p.add_argument("--common-only", action="store_true", dest="common_only",
                    help="when the previous night covered other task files, versions or views, "
                         "gate only what both nights share (default: such a night fails its gate)")
-    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress (bars on a terminal, a line per stage every few seconds "
+                        "in a log) and no stage times")
     p.set_defaults(func=cmd_nightly)
 
     p = sub.add_parser("gate", help="apply the regression gates to a run",
@@ -75,8 +74,9 @@ def cmd_nightly(args: argparse.Namespace) -> int:
     from cassi.harness.config import RunConfig  # noqa: PLC0415
     from cassi.reports.nightly import nightly  # noqa: PLC0415
 
+    video = tuple(v.strip() for v in args.video_versions.split(",") if v.strip())
     cfg = RunConfig(workers=args.workers, stride=args.stride, extremes=args.extremes,
-                    animate_stride=args.animate_stride)
+                    animate_stride=args.animate_stride, video_versions=video or None)
     passed, index = nightly(args.out, corpus=args.corpus, config=cfg, progress=not args.quiet,
                             common_only=args.common_only)
     print(f"{'PASSED' if passed else 'FAILED'}: {index}")

@@ -13,8 +13,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from skimage.filters import gaussian
-from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
 from cassi.data.atomic import atomic_tmp_path, atomic_write_text
 from cassi.data.errors import CassiInputError
@@ -22,14 +20,16 @@ from cassi.reports.media import read_rgb8
 from cassi.reports.runio import Run, load_run
 from cassi.harness.rubric import CHECKS, verdicts
 
-#: Image gate thresholds. Preview renders carry Monte Carlo noise that is not bit-reproducible
-#: across processes (see the renderer), and raw SSIM of two noise patterns of the same image is
-#: only ~0.95. SSIM is therefore taken after a Gaussian blur of NOISE_SIGMA px, as the renderer's
-#: golden tests do: the same image twice scores ~0.997, the face moved by 3 px ~0.946, so 0.97
-#: separates noise from change. PSNR (raw) >= 32 dB catches broad colour or lighting changes.
-NOISE_SIGMA = 1.5
-SSIM_MIN = 0.97
-PSNR_MIN_DB = 32.0
+#: Image gate thresholds. Preview renders are one ray per pixel centre with no sampling, so a
+#: frame is the same bytes in every run of a variant; llvm and scalar_rgb differ by at most one
+#: 8-bit level except where a ray grazes a silhouette edge (one pixel per view seen). A render
+#: fails when more than MAX_CHANGED_PX pixels differ from the golden image by more than
+#: LEVELS levels: lowering the jaw by 1 Parke unit (0.25 mm) already changes hundreds.
+LEVELS = 1
+MAX_CHANGED_PX = 16
+#: What changed is shown where the evaluation looks: FLIP (perceived difference, 0..1) inside
+#: the mouth region the renderer records with every PNG (``cassi:mouth_box``).
+GATE_IMAGES = "gate-images"
 #: Extra negatives a check may gain over the baseline before the metric gate fails, unless the
 #: rubric declares its own ``gate_tolerance`` for that check.
 DEFAULT_TOLERANCE = 0
@@ -59,26 +59,87 @@ def golden_key(row) -> Path:
                 f"{row['subject']}_{int(row['task']):03d}_{int(row['rep'])}_{int(row['frame']):05d}.png")
 
 
-def image_metrics(rendered: np.ndarray, reference: np.ndarray) -> tuple[float, float]:
-    """SSIM of the images blurred by NOISE_SIGMA px, and PSNR (dB) of the raw images; both
-    8-bit RGB of the same shape."""
+def mouth_box_of(path: Path, shape: tuple[int, ...]) -> tuple[int, int, int, int] | None:
+    """(row0, row1, col0, col1) of the mouth region recorded in a render's PNG, or None."""
+    from PIL import Image  # noqa: PLC0415 - Pillow comes with imageio
+
+    try:
+        with Image.open(path) as im:
+            box = json.loads(im.text.get("cassi:mouth_box", "null"))
+    except (OSError, ValueError):
+        return None
+    if not (isinstance(box, list) and len(box) == 4):
+        return None
+    r0, r1, c0, c1 = (int(v) for v in box)
+    if not (0 <= r0 < r1 <= shape[0] and 0 <= c0 < c1 <= shape[1]):
+        return None
+    return r0, r1, c0, c1
+
+
+def image_metrics(rendered: np.ndarray, reference: np.ndarray,
+                  box: tuple[int, int, int, int] | None = None) -> dict:
+    """How two 8-bit RGB images of one shape differ.
+
+    Returns
+    -------
+    dict
+        ``changed_px`` pixels differing by more than LEVELS levels in any channel,
+        ``max_levels`` the largest difference, ``flip_mouth`` the mean FLIP error (0 = same,
+        1 = most different) inside ``box`` (the whole image when None) and ``flip_map`` its
+        per-pixel map, float (h, w).
+    """
+    import flip_evaluator  # noqa: PLC0415
+
     if rendered.shape != reference.shape:
         raise ValueError(f"image shapes differ: {rendered.shape} vs {reference.shape}")
-    a, b = (gaussian(im.astype(np.float64) / 255.0, sigma=NOISE_SIGMA, channel_axis=-1)
-            for im in (rendered, reference))
-    ssim = structural_similarity(a, b, channel_axis=-1, data_range=1.0)
-    if np.array_equal(rendered, reference):
-        return float(ssim), float("inf")
-    return float(ssim), float(peak_signal_noise_ratio(reference, rendered, data_range=255))
+    diff = np.abs(rendered.astype(np.int16) - reference.astype(np.int16)).max(axis=2)
+    r0, r1, c0, c1 = box or (0, rendered.shape[0], 0, rendered.shape[1])
+    crop = [np.ascontiguousarray(im[r0:r1, c0:c1, :3], np.float32) / 255.0
+            for im in (reference, rendered)]
+    flip_map, flip_mean, _ = flip_evaluator.evaluate(crop[0], crop[1], "LDR", applyMagma=False)
+    return {"changed_px": int((diff > LEVELS).sum()), "max_levels": int(diff.max(initial=0)),
+            "flip_mouth": float(flip_mean), "flip_map": np.asarray(flip_map, np.float32).squeeze()}
 
 
-def image_gates(run: Run, reference_dir: Path, *, ssim_min: float = SSIM_MIN,
-                psnr_min: float = PSNR_MIN_DB) -> list[GateResult]:
+def _write_gate_images(out: Path, stem: Path, rendered: np.ndarray, reference: np.ndarray,
+                       metrics: dict, box) -> list[str]:
+    """rendered, reference, difference (x4) and FLIP (mouth region, magma) images of a failed
+    gate under ``out``; returns their paths relative to ``out``."""
+    import imageio.v3 as iio  # noqa: PLC0415
+    from matplotlib import colormaps  # noqa: PLC0415
+
+    diff = np.clip(np.abs(rendered.astype(np.int16) - reference.astype(np.int16)) * 4, 0, 255)
+    flip = (colormaps["magma"](np.clip(metrics["flip_map"], 0, 1))[..., :3] * 255).astype(np.uint8)
+    images = {"rendered": rendered, "reference": reference, "difference": diff.astype(np.uint8),
+              "flip_mouth": flip}
+    if box is not None:
+        for name in ("rendered", "reference", "difference"):
+            img = images[name].copy()
+            r0, r1, c0, c1 = box
+            img[[r0, r1 - 1], c0:c1] = (0, 200, 0)
+            img[r0:r1, [c0, c1 - 1]] = (0, 200, 0)
+            images[name] = img
+    written = []
+    for name, img in images.items():
+        dest = out / GATE_IMAGES / stem.parent / f"{stem.stem}.{name}.png"
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        tmp = atomic_tmp_path(dest)
+        iio.imwrite(tmp, np.ascontiguousarray(img[..., :3], np.uint8), extension=".png")
+        os.replace(tmp, dest)
+        written.append(dest.relative_to(out).as_posix())
+    return written
+
+
+def image_gates(run: Run, reference_dir: Path, *, max_changed_px: int = MAX_CHANGED_PX,
+                images_dir: Path | None = None) -> list[GateResult]:
     """Compare every render of ``run`` with its golden counterpart under ``reference_dir``.
 
-    A render without a golden image is a skipped gate that says so; never a pass.
+    A render without a golden image is a skipped gate that says so; never a pass. A failed
+    render gets its rendered, reference, difference and FLIP images under
+    ``images_dir/gate-images`` (default: the run directory).
     """
     out = []
+    images_dir = Path(images_dir or run.root)
     for _, row in run.renders.iterrows():
         if not str(row["path"]).endswith(".png"):
             continue
@@ -89,15 +150,22 @@ def image_gates(run: Run, reference_dir: Path, *, ssim_min: float = SSIM_MIN,
                                   f"no golden image {ref}"))
             continue
         try:
-            ssim, psnr = image_metrics(read_rgb8(Path(row["path"])), read_rgb8(ref))
+            rendered, reference = read_rgb8(Path(row["path"])), read_rgb8(ref)
+            box = mouth_box_of(Path(row["path"]), rendered.shape)
+            m = image_metrics(rendered, reference, box)
         except (OSError, ValueError) as err:
             out.append(GateResult("image", row["subject"], row["version"], item, "fail", str(err)))
             continue
-        ok = ssim >= ssim_min and psnr >= psnr_min
-        reason = (f"SSIM {ssim:.4f} (blurred {NOISE_SIGMA} px; min {ssim_min}), PSNR {psnr:.1f} dB "
-                  f"(min {psnr_min})")
+        ok = m["changed_px"] <= max_changed_px
+        where = "mouth region" if box is not None else "whole image (no mouth region recorded)"
+        reason = (f"{m['changed_px']} px differ by more than {LEVELS} level (max {m['max_levels']}; "
+                  f"allowed {max_changed_px}); FLIP in the {where} {m['flip_mouth']:.4f}")
+        if not ok:
+            files = _write_gate_images(images_dir, golden_key(row), rendered, reference, m, box)
+            reason += "; images: " + ", ".join(files)
         out.append(GateResult("image", row["subject"], row["version"], item,
-                              "pass" if ok else "fail", reason, ssim, ssim_min))
+                              "pass" if ok else "fail", reason, float(m["changed_px"]),
+                              float(max_changed_px)))
     return out
 
 

@@ -1,5 +1,7 @@
-"""Pictures for reports from a run's renders: copied thumbnails, contact sheets and
-side-by-side animations of tasks 106 and 118. Reads image files only; never re-renders."""
+"""Pictures for reports from a run's renders: copied thumbnails, contact sheets, a four-view
+video of every task file and side-by-side version comparisons of tasks 106 and 118, each panel
+labelled, in real time, with the task's sound when the corpus has it. Reads image files (and
+the corpus's WAV files) only; never re-renders."""
 from __future__ import annotations
 
 import os
@@ -11,6 +13,7 @@ import numpy as np
 import pandas as pd
 
 from cassi.data.atomic import atomic_tmp_path
+from cassi.data.xrmb import NOMINAL_PERIOD_US
 
 
 def copy_image(src: str | os.PathLike, dest: Path) -> Path:
@@ -53,33 +56,104 @@ def contact_sheet(paths: list[str], dest: Path, *, columns: int = 4) -> Path:
     return dest
 
 
-def side_by_side_animation(renders: pd.DataFrame, dest: Path, *, fps: int = 12) -> Path | None:
-    """An MP4 of one task with every version side by side (columns) per frame rendered by all.
+#: The XRMB pellet time base: one recording row every 6866 us (cassi.data.xrmb).
+ROW_US = NOMINAL_PERIOD_US
+LABEL_PX = 14
 
-    ``renders`` holds one subject, task and view. Returns None when fewer than two frames were
-    rendered by every version (nothing to animate).
-    """
-    versions = list(dict.fromkeys(renders["version"]))
-    by_frame = renders.groupby("frame")
-    frames = [f for f, g in by_frame if set(g["version"]) >= set(versions)]
-    if len(frames) < 2:
-        return None
-    import imageio_ffmpeg  # noqa: PLC0415 - only needed here
 
-    first = tile([read_rgb8(p) for p in by_frame.get_group(frames[0]).set_index("version")
-                  .loc[versions, "path"]], columns=len(versions))
-    h, w = (first.shape[0] // 2) * 2, (first.shape[1] // 2) * 2  # yuv420p wants even sizes
+def label_panel(image: np.ndarray, lines: list[str]) -> np.ndarray:
+    """``image`` (uint8 (H, W, 3)) with a dark band on top carrying ``lines`` of text."""
+    from PIL import Image, ImageDraw, ImageFont  # noqa: PLC0415 - Pillow comes with imageio
+
+    font = ImageFont.load_default(size=LABEL_PX - 3)
+    band = LABEL_PX * len(lines) + 2
+    canvas = Image.new("RGB", (image.shape[1], image.shape[0] + band), (24, 24, 24))
+    canvas.paste(Image.fromarray(np.ascontiguousarray(image[..., :3])), (0, band))
+    draw = ImageDraw.Draw(canvas)
+    for i, line in enumerate(lines):
+        draw.text((4, 1 + i * LABEL_PX), line, fill=(235, 235, 235), font=font)
+    return np.asarray(canvas)
+
+
+def video_frames(renders: pd.DataFrame, *, stride: int) -> list[int]:
+    """The frames of ``renders`` that lie on the video grid (first frame + k * ``stride``) and
+    were rendered in every (version, view) of the table, so all panels move together.
+    Extreme frames off the grid are left out: they would break the time base."""
+    if not len(renders) or stride < 1:
+        return []
+    first = int(renders["frame"].min())
+    panels = renders.groupby(["version", "view"])["frame"].apply(lambda f: set(int(x) for x in f))
+    common = set.intersection(*panels.tolist())
+    return sorted(f for f in common if (f - first) % stride == 0)
+
+
+def write_video(dest: Path, frames, *, fps: float, audio: Path | None = None,
+                audio_start_s: float = 0.0, duration_s: float | None = None) -> Path:
+    """Stream uint8 (H, W, 3) ``frames`` to an H.264 MP4 at ``fps``, atomically; with ``audio``
+    (a WAV), its part from ``audio_start_s`` for ``duration_s`` is muxed in (AAC), so sound and
+    picture start together."""
+    import imageio_ffmpeg  # noqa: PLC0415
+
     dest.parent.mkdir(parents=True, exist_ok=True)
     tmp = atomic_tmp_path(dest)
-    writer = imageio_ffmpeg.write_frames(str(tmp), (w, h), fps=fps, codec="libx264",
-                                         pix_fmt_out="yuv420p", macro_block_size=1)
-    writer.send(None)
+    writer = None
     try:
-        for f in frames:
-            g = by_frame.get_group(f).set_index("version")
-            img = tile([read_rgb8(p) for p in g.loc[versions, "path"]], columns=len(versions))
-            writer.send(np.ascontiguousarray(img[:h, :w]))
-    finally:
+        for frame in frames:
+            if writer is None:
+                h, w = (frame.shape[0] // 2) * 2, (frame.shape[1] // 2) * 2  # yuv420p: even sizes
+                extra = {}
+                if audio is not None:
+                    trim = f"atrim=start={audio_start_s:.6f}"
+                    if duration_s is not None:
+                        trim += f":end={audio_start_s + duration_s:.6f}"
+                    extra = dict(audio_path=str(audio), audio_codec="aac",
+                                 output_params=["-af", trim + ",asetpts=PTS-STARTPTS"])
+                writer = imageio_ffmpeg.write_frames(str(tmp), (w, h), fps=fps, codec="libx264",
+                                                     pix_fmt_out="yuv420p", macro_block_size=1,
+                                                     ffmpeg_log_level="error", **extra)
+                writer.send(None)
+            writer.send(np.ascontiguousarray(frame[:h, :w]))
+        if writer is None:
+            raise ValueError("no frames to write")
         writer.close()
-    os.replace(tmp, dest)
+        writer = None
+        os.replace(tmp, dest)
+    finally:
+        if writer is not None:
+            writer.close()
+        tmp.unlink(missing_ok=True)
     return dest
+
+
+def task_video(renders: pd.DataFrame, dest: Path, *, stride: int, columns: list[tuple[str, str]],
+               audio: Path | None = None) -> dict | None:
+    """A video of one task file: per frame, one labelled panel per (version, view) of
+    ``columns``, side by side, played in real time (one frame per ``stride`` rows of 6866 us).
+
+    ``renders`` holds one subject, task and rep (columns version, view, frame, path). Each panel
+    is labelled with version, view, subject, task and time. With ``audio`` (the task's WAV, time
+    0 = the recording's first row) the video carries the sound in sync. Returns a description
+    (path, frames, fps, stride, audio) or None when fewer than two grid frames exist in every
+    panel.
+    """
+    wanted = renders[[(v, w) in set(columns) for v, w in zip(renders["version"], renders["view"])]]
+    frames = video_frames(wanted, stride=stride)
+    if len(frames) < 2:
+        return None
+    subject, task = wanted["subject"].iloc[0], int(wanted["task"].iloc[0])
+    paths = wanted.set_index(["version", "view", "frame"])["path"]
+    fps = 1e6 / (ROW_US * stride)
+
+    def composed():
+        for f in frames:
+            t = f * ROW_US / 1e6
+            panels = [label_panel(read_rgb8(paths[(v, w, f)]),
+                                  [f"{v} | {w}", f"{subject} task {task} | t = {t:6.3f} s"])
+                      for v, w in columns]
+            yield tile(panels, columns=len(panels), gap=2)
+
+    duration = len(frames) / fps
+    write_video(dest, composed(), fps=fps, audio=audio, audio_start_s=frames[0] * ROW_US / 1e6,
+                duration_s=duration)
+    return {"path": dest, "frames": len(frames), "fps": round(fps, 3), "stride": stride,
+            "audio": audio is not None, "seconds": round(duration, 2)}

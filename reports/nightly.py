@@ -14,6 +14,8 @@ from __future__ import annotations
 import datetime as dt
 import json
 import os
+import sys
+import time
 from pathlib import Path
 
 import pandas as pd
@@ -28,6 +30,9 @@ from cassi.reports.runio import load_run
 from cassi.harness.rubric import version_totals
 
 HISTORY_COLUMNS = ["night", "version", "negatives", "gate"]
+
+from cassi.reports.nightly_plan import (NIGHTLY_ANIMATE_STRIDE, NIGHTLY_EXTREMES,  # noqa: E402,F401
+                                         NIGHTLY_STRIDE)
 
 
 #: Written into a night's run directory once the whole night (run, gates, history, report) is
@@ -72,14 +77,19 @@ def nightly(out_dir: str | os.PathLike, *, corpus: str | os.PathLike | None = No
     """
     from cassi.harness.farm import run as run_farm  # noqa: PLC0415 - heavy import, only here
 
+    timer = StageTimer(progress)
     root = Path(out_dir)
     runs_dir, reports_dir = root / "runs", root / "reports"
     runs_dir.mkdir(parents=True, exist_ok=True)
     name = night_name(runs_dir, today)
     run_dir = runs_dir / name
     cfg = (config or RunConfig()).replace(out=run_dir, corpus=Path(corpus) if corpus else None)
-    result = run_farm(cfg, progress=progress)
+    with timer("run"):
+        result = run_farm(cfg, progress=progress)
+    timer.worker_seconds(result)
+    timer.say(f"variant: {_variant_of(run_dir)}")
 
+    timer.start("gates")
     prev = previous_night(runs_dir, name)
     golden = root / "golden"
     baselines = [p for p in (prev, golden if (golden / GOLDEN_MARK).is_file() else None)
@@ -106,9 +116,69 @@ def nightly(out_dir: str | os.PathLike, *, corpus: str | os.PathLike | None = No
     history = pd.concat([history[history["night"] != name], tonight], ignore_index=True)
     atomic_write_text(history_path, history[HISTORY_COLUMNS].to_csv(index=False, lineterminator="\n"))
 
-    index = write_report(run_dir, reports_dir / name, compare=prev, history=history)
+    timer.stop()
+    with timer("report (tables, pages, videos)"):
+        index = write_report(run_dir, reports_dir / name, compare=prev, history=history)
     atomic_write_text(root / "latest.txt", name + "\n")
     atomic_write_text(run_dir / NIGHT_DONE, json.dumps(
         {"night": name, "passed": passed,
          "finished": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")}) + "\n")
+    timer.say(timer.summary())
     return passed, index
+
+
+def _variant_of(run_dir: Path) -> str:
+    """The Mitsuba variant the night rendered with (run.json, as the farm resolved it)."""
+    meta = load_run(run_dir).meta
+    if not meta.get("views_resolved"):
+        return "none (no renders)"
+    return str(meta.get("variant_resolved") or "unknown (not recorded)")
+
+
+class StageTimer:
+    """Wall time of each stage of a night, printed as it goes (stderr) and summed at the end."""
+
+    def __init__(self, verbose: bool = True):
+        self.verbose = verbose
+        self.seconds: dict[str, float] = {}
+        self.notes: list[str] = []
+        self._current: tuple[str, float] | None = None
+
+    def start(self, name: str) -> None:
+        self.stop()
+        self._current = (name, time.perf_counter())
+
+    def stop(self) -> None:
+        if self._current is not None:
+            name, t0 = self._current
+            self.seconds[name] = time.perf_counter() - t0
+            self._current = None
+            self.say(f"{name}: {self.seconds[name]:.1f} s")
+
+    def __call__(self, name: str):
+        timer = self
+
+        class _Stage:
+            def __enter__(self):
+                timer.start(name)
+
+            def __exit__(self, *exc):
+                timer.stop()
+        return _Stage()
+
+    def worker_seconds(self, result) -> None:
+        """The farm's worker time per stage (geometry, render, image), from its job records."""
+        per = {}
+        for rec in result.records.values():
+            per[rec.stage] = per.get(rec.stage, 0.0) + rec.seconds
+        self.notes.append("worker time " + ", ".join(f"{k} {v:.1f} s" for k, v in per.items()))
+        self.say(self.notes[-1])
+
+    def summary(self) -> str:
+        total = sum(self.seconds.values())
+        parts = ", ".join(f"{k} {v:.1f} s" for k, v in self.seconds.items())
+        return f"night: {total:.1f} s ({parts}; {'; '.join(self.notes)})"
+
+    def say(self, line: str) -> None:
+        if self.verbose:
+            print(f"cassi nightly: {line}", file=sys.stderr, flush=True)

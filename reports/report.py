@@ -26,10 +26,11 @@ from cassi.reports.tables import markdown_table
 #: How many fired checks per version and task file show the four views of their frame on a
 #: subject page (the rest link to the frame's number only).
 MAX_SHEETS_PER_VERSION = 12
-ANIMATED_TASKS = (106, 118)
-#: Renders of an animation are sparse (every ~100th recording row of 145.6 Hz data), so a slow
-#: flip-book rate keeps each frame readable.
-ANIMATION_FPS = 4
+#: The view in which versions are compared side by side (where the farm rendered the video
+#: frames of several versions in it: tasks 106 and 118 in a nightly).
+COMPARISON_VIEW = "front"
+#: The order of a task video's panels.
+VIDEO_VIEWS = ("front", "side", "half", "top")
 
 
 def slug(text: str) -> str:
@@ -230,19 +231,71 @@ def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
     return page.relative_to(out).as_posix()
 
 
-def _animations(run: Run, out: Path) -> list[dict]:
-    if not len(run.renders):
+def _audio_for(run: Run):
+    """``(subject, task, rep) -> WAV path or None`` from the run's corpus (None when the corpus
+    cannot be opened: the videos are then silent, and say so)."""
+    root = run.meta.get("corpus_resolved")
+    try:
+        from cassi.data.corpus import Corpus  # noqa: PLC0415
+
+        corpus = Corpus(root) if root else None
+    except Exception:  # noqa: BLE001 - a moved corpus must not stop the report
+        corpus = None
+
+    def find(subject: str, task: int, rep: int):
+        if corpus is None:
+            return None
+        try:
+            return corpus.subject(subject).audio_path(task, rep)
+        except Exception:  # noqa: BLE001
+            return None
+    return find
+
+
+def _videos(run: Run, out: Path) -> list[dict]:
+    """From the renders on the run's ``animate_stride`` grid: a four-view video per task file
+    and version that was rendered in every view, and the versions side by side wherever
+    several versions were rendered in the comparison view."""
+    stride = int(run.meta.get("animate_stride") or 0)
+    if not len(run.renders) or stride < 1:
         return []
-    anims = []
-    sel = run.renders[run.renders["task"].isin(ANIMATED_TASKS)]
-    for (subject, task, rep, view), g in sel.groupby(["subject", "task", "rep", "view"]):
-        if g["version"].nunique() < 2:
-            continue
-        dest = out / "animations" / f"{slug(subject)}_{int(task):03d}_{int(rep)}_{slug(view)}.mp4"
-        if media.side_by_side_animation(g, dest, fps=ANIMATION_FPS) is not None:
-            anims.append({"label": f"{subject} task {task}, {view} view ({', '.join(order_versions(g['version'].unique()))})",
-                          "href": dest.relative_to(out).as_posix()})
-    return anims
+    audio_for = _audio_for(run)
+    videos = []
+
+    def add(kind, label, result, dest):
+        if result is not None:
+            videos.append({"kind": kind, "label": label, "href": dest.relative_to(out).as_posix(),
+                           "fps": result["fps"], "frames": result["frames"],
+                           "seconds": result["seconds"], "audio": result["audio"]})
+
+    for (subject, task, rep), g in run.renders.groupby(["subject", "task", "rep"]):
+        task, rep = int(task), int(rep)
+        audio = audio_for(subject, task, rep)
+        stem = f"{slug(subject)}_{task:03d}_{rep}"
+        name = f"{subject} task {task}" + (f" rep {rep}" if rep != 1 else "")
+        all_views = [v for v in VIDEO_VIEWS if v in set(g["view"])]
+        # A (version, view) was rendered for a video when its grid frames run unbroken (a
+        # first frame and a check frame that happen to fall on the grid are no video).
+        on_grid = {}
+        for (version, view), p in g.groupby(["version", "view"]):
+            grid = media.video_frames(p, stride=stride)
+            if len(grid) >= 3 and all(b - a == stride for a, b in zip(grid, grid[1:])):
+                on_grid.setdefault(version, set()).add(view)
+        versions = order_versions(on_grid)
+        for version in versions:
+            if on_grid[version] != set(all_views):
+                continue  # rendered for the comparisons only
+            dest = out / "videos" / f"{stem}_{slug(version)}.mp4"
+            add("task", f"{name}, {version}",
+                media.task_video(g, dest, stride=stride, audio=audio,
+                                 columns=[(version, v) for v in all_views]), dest)
+        compared = [v for v in versions if COMPARISON_VIEW in on_grid[v]]
+        if len(compared) > 1:
+            dest = out / "animations" / f"{stem}_{COMPARISON_VIEW}.mp4"
+            add("comparison", f"{name}, {COMPARISON_VIEW} view ({', '.join(compared)})",
+                media.task_video(g, dest, stride=stride, audio=audio,
+                                 columns=[(v, COMPARISON_VIEW) for v in compared]), dest)
+    return videos
 
 
 def _summaries(run: Run) -> list[dict]:
@@ -298,7 +351,7 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
     html = env.get_template("index.html.j2").render(
         run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
         summaries=_summaries(run), comparison=_comparison(run, previous, out),
-        tables=_table_sections(run, cr, out), animations=_animations(run, out),
+        tables=_table_sections(run, cr, out), videos=_videos(run, out),
         rules=AGGREGATION_RULES,
         subjects=subject_links, trend=trend, gate=gate,
         jobs={"counts": run.summary.get("counts", {}), "failed": run.failed,

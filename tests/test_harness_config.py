@@ -33,7 +33,7 @@ def test_toml_and_yaml_give_the_same_config(tmp_path):
     a, b = C.load_config(tmp_path / "run.toml"), C.load_config(tmp_path / "run.yaml")
     assert a == b
     assert a.out == tmp_path / "o"  # relative to the config file
-    assert a.tasks == (19, 21) and a.workers == 2 and a.stride == 25
+    assert a.tasks == (19, 21) and a.workers == 2 and a.stride == C.RunConfig().stride
 
 
 @pytest.mark.parametrize("text, match, line", [
@@ -78,7 +78,7 @@ def test_extremes_setting_is_validated(tmp_path):
     with pytest.raises(CassiInputError, match="extremes: must be at least 0"):
         config_from_args(_parser().parse_args(["run", "--out", "x", "--extremes", "-1"]))
     cfg = config_from_args(_parser().parse_args(["run", "--out", "x", "--extremes", "3"]))
-    assert cfg.extremes == 3 and C.RunConfig().extremes == 8
+    assert cfg.extremes == 3 and C.RunConfig().extremes == 4
 
 
 def test_list_flags_take_commas_or_spaces():

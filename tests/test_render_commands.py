@@ -72,3 +72,20 @@ def test_animate_neutral_mp4(corpus, tmp_path):
     meta = next(reader)
     assert tuple(meta["size"]) == (512, 256)  # two 256-pixel views side by side
     assert sum(1 for _ in reader) == 1
+
+
+def test_two_processes_write_byte_identical_previews(corpus, tmp_path):
+    """The preview is one ray per pixel centre, no sampling: two `cassi render` processes of
+    the same frame write the same PNG bytes (acceptance of issue 12)."""
+    import subprocess
+    import sys
+
+    task = _first_task(corpus)
+    outs = [tmp_path / f"p{i}.png" for i in (1, 2)]
+    for out in outs:
+        cmd = [sys.executable, "-m", "cassi.harness.cli", "render", "--corpus", str(corpus),
+               "--subject", "JW45", "--task", str(task), "--version", "cassi-2.1",
+               "--view", "half", "--frame", "40", "--out", str(out)]
+        subprocess.run(cmd, check=True, capture_output=True, timeout=300)
+    assert outs[0].read_bytes() == outs[1].read_bytes()
+    assert read_metadata(outs[0])["version"] == "cassi-2.1"

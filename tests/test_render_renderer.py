@@ -100,7 +100,7 @@ def test_top_view_hides_the_skull_and_shows_the_palate(head):
 
 
 def test_files_carry_the_variant(front, head, tmp_path):
-    res = front.render_to_files(head[1], tmp_path / "f.0001", extra={"subject": "JW99"})
+    res = front.render_to_files(head[1], tmp_path / "f.0001", exr=True, extra={"subject": "JW99"})
     names = sorted(p.name for p in tmp_path.iterdir())
     assert names == ["f.0001.exr", "f.0001.json", "f.0001.mask.png", "f.0001.png"]
     exr = read_image(tmp_path / "f.0001.exr")
@@ -121,10 +121,10 @@ def test_files_carry_the_variant(front, head, tmp_path):
 
 def test_background_writer_matches_synchronous_writes(front, head, tmp_path):
     res = front.render(head[1])
-    with FrameWriter() as w:
+    with FrameWriter(exr=True) as w:
         for k in range(5):
             w.submit(res, tmp_path / f"bg{k}")
-    images.write_result(res, tmp_path / "sync")
+    images.write_result(res, tmp_path / "sync", exr=True)
     assert len(w.written) == 20
     for ext in (".exr", ".png", ".mask.png"):
         assert np.array_equal(read_image(tmp_path / f"bg4{ext}"), read_image(tmp_path / f"sync{ext}"))

@@ -1,0 +1,21 @@
+"""The farm preview benchmark runs end to end and reports what `cassi bench` promises
+(figures are read from `cassi bench`, never asserted here)."""
+from __future__ import annotations
+
+import pytest
+
+pytestmark = [pytest.mark.render, pytest.mark.slow]
+
+
+def test_farm_preview_benchmark_reports_every_view_beside_a_bare_render():
+    from cassi.harness.bench import bench_farm_preview, headline
+
+    out = bench_farm_preview(True)
+    assert "error" not in out, out
+    views = ("front", "side", "half", "top")
+    assert set(out["by_view"]) == set(views) == set(out["bare_mi_render_frames_per_s"])
+    frames = {v["frames"] for v in out["by_view"].values()}
+    assert len(frames) == 1 and frames.pop() >= 20  # every view renders the same frames
+    assert out["farm_preview_frames_per_s"] > 0 and out["farm_efficiency_vs_bare"] > 0
+    assert headline({"farm_preview": out}) == {
+        "farm_preview_frames_per_s": out["farm_preview_frames_per_s"]}
