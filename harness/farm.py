@@ -99,7 +99,7 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
     if progress:
         from .pipeline import render_budget  # noqa: PLC0415
 
-        n = render_budget(corpus, tasks, versions, views, stride=cfg.stride,
+        n = render_budget(checked.rows, tasks, versions, views, stride=cfg.stride,
                           extremes=cfg.extremes, animate_stride=cfg.animate_stride,
                           video_versions=cfg.video_versions)
         print(f"cassi run: {sum(t.usable for t in tasks)} task file(s) x {len(versions)} "

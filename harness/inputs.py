@@ -23,10 +23,12 @@ _SUBJECT_READS = ("palate_mm", "pharynx_mm", "mistracking", "head_measures")
 
 @dataclass
 class CheckedInputs:
-    """The run's task files with their input digests, and the warnings the files raised."""
+    """The run's task files with their input digests, the warnings the files raised, and each
+    file's number of rows (``(subject, task, rep) -> rows``)."""
 
     tasks: list[TaskSpec]
     warnings: list[str] = field(default_factory=list)
+    rows: dict[tuple[str, int, int], int] = field(default_factory=dict)
 
 
 def check_inputs(corpus, tasks: list[TaskSpec], *, get_profile) -> CheckedInputs:
@@ -62,13 +64,14 @@ def check_inputs(corpus, tasks: list[TaskSpec], *, get_profile) -> CheckedInputs
                 except CassiInputError as err:
                     errors.append(str(err))
             errors.extend(subj.problems)
-    paths = {}
+    paths, rows = {}, {}
     for spec in tasks:
         subj = subjects[spec.subject]
         if (spec.task, spec.rep) not in subj.task_files():
             continue  # no file: a skipped job that says so
         path = paths[spec] = subj.task_path(spec.task, spec.rep)
         report = check_task_file(path, subject=subj)
+        rows[(spec.subject, spec.task, spec.rep)] = report.frames or 0
         if report.error:
             errors.extend(report.problems)
         warnings.extend(report.warnings)
@@ -89,4 +92,4 @@ def check_inputs(corpus, tasks: list[TaskSpec], *, get_profile) -> CheckedInputs
                 task_file=paths[spec], subject_files=subjects[spec.subject].subject_files(),
                 profile=profiles[spec.subject]))
         checked.append(spec)
-    return CheckedInputs(checked, list(dict.fromkeys(warnings)))
+    return CheckedInputs(checked, list(dict.fromkeys(warnings)), rows)

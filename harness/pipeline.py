@@ -146,19 +146,21 @@ def extreme_frames(rows: pd.DataFrame, *, limit: int = MAX_EXTREMES) -> list[int
     return sorted(picked)
 
 
-def render_budget(corpus, tasks, versions, views, *, stride: int, extremes: int,
+def render_budget(rows_of, tasks, versions, views, *, stride: int, extremes: int,
                   animate_stride: int, video_versions=None) -> int:
     """At most how many frames a run renders (said before any work starts).
 
-    Per usable task file of R rows, version and view: the first frame, every ``stride``-th
-    row and up to ``extremes`` check frames; plus every ``animate_stride``-th row where
+    ``rows_of`` maps ``(subject, task, rep)`` to the task file's rows
+    (:attr:`cassi.harness.inputs.CheckedInputs.rows`: the files are not read again). Per
+    usable task file of R rows, version and view: the first frame, every ``stride``-th row and
+    up to ``extremes`` check frames; plus every ``animate_stride``-th row where
     :func:`geometry_stage` renders video frames (overlaps counted twice: an upper bound).
     """
     total = 0
     for t in tasks:
         if not t.usable:
             continue
-        rows = len(corpus.subject(t.subject).load(t.task, t.rep).time_us)
+        rows = rows_of[(t.subject, t.task, t.rep)]
         base = 1 + (rows // stride if stride > 0 else 0) + max(0, extremes)
         video = rows // animate_stride + 1 if animate_stride > 0 else 0
         for version in versions:
