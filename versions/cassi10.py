@@ -121,7 +121,7 @@ class JawStage:
     def animate(self, ctx: TaskContext, positions: np.ndarray) -> None:
         # Animation phase: the first valid row's jaw line -> each row's jaw line.
         mni, mnm = ctx.pellet("MNI"), ctx.pellet("MNM")
-        motion = solve_jaw_motion(mni[0], mnm[0], mni, mnm)
+        motion = solve_jaw_motion(ctx.first_pellet("MNI"), ctx.first_pellet("MNM"), mni, mnm)
         apply_zones(ctx.start, motion, self.zones, out=positions)
         ctx.state["jaw_motion"] = motion
         ctx.diagnostics["jaw_angle_rad"] = motion.theta

@@ -564,9 +564,9 @@ class LipMovementStage:
             ctx.state["lips20"] = plan
         return plan
 
-    def _frames(self, plan: dict, ul, ll) -> LipFrames:
+    def _frames(self, plan: dict, ul, ll, state: OuterAbcState | None = None) -> LipFrames:
         return lip_frames(ul, ll, plan["rest"], plan["subject"], rule=plan["rule"],
-                          blend_inner_corner=plan["blend"], params=self.params)
+                          blend_inner_corner=plan["blend"], params=self.params, state=state)
 
     def initialise(self, ctx: "TaskContext") -> None:
         plan = self._setup(ctx)
@@ -581,9 +581,13 @@ class LipMovementStage:
 
     def animate(self, ctx: "TaskContext", positions: np.ndarray) -> None:
         plan = self._setup(ctx)
-        lips = self._frames(plan, ctx.pellet("UL"), ctx.pellet("LL"))
+        # OUTER_ABC_CALC's state runs on from one chunk of frames to the next (NewSubject at the
+        # task's first frame), and the neighbours move against the task's first lip frame.
+        state = plan.setdefault("abc_state", OuterAbcState())
+        lips = self._frames(plan, ctx.pellet("UL"), ctx.pellet("LL"), state)
+        ref = plan.setdefault("anim_first_lips", lips.xyz[0].copy())
         idx = np.asarray(LIP_VERTICES) - 1
-        _move_neighbours(positions, lips, lips.xyz[0], ctx.start, ctx.neutral)
+        _move_neighbours(positions, lips, ref, ctx.start, ctx.neutral)
         positions[:, idx, :] = lips.xyz
         ctx.diagnostics.update(lips.diagnostics)
         ctx.diagnostics["thickness_rule"] = np.full(len(lips.xyz), plan["rule"].name, dtype=object)

@@ -19,13 +19,14 @@ from cassi.versions.protocol import StagedVersion, Stage, TaskContext
 __all__ = ["Parke1974", "ParkeJawStage", "parke_jaw_angle"]
 
 
-def parke_jaw_angle(mni: np.ndarray, mnm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def parke_jaw_angle(mni: np.ndarray, mnm: np.ndarray, *, closed=None) -> tuple[np.ndarray, np.ndarray]:
     """Parameter 4 from the jaw pellets: (clipped, raw) angles in radians, (F,) each.
 
     ``mni``, ``mnm``: (F, 2) pellet positions (any frame where x and the vertical axis agree with
-    Parke's); the first row is the closed reference.
+    Parke's); ``closed`` the (MNI, MNM) closed reference, by default their first row.
     """
-    raw = jaw_angle(mni[0], mnm[0], mni, mnm)
+    mni0, mnm0 = (mni[0], mnm[0]) if closed is None else closed
+    raw = jaw_angle(mni0, mnm0, mni, mnm)
     lo, hi = np.radians(K.PARKE_JAW_RANGE_DEG)
     return np.clip(raw, lo, hi), raw
 
@@ -42,7 +43,8 @@ class ParkeJawStage:
         return None
 
     def animate(self, ctx: TaskContext, positions: np.ndarray) -> None:
-        theta, raw = parke_jaw_angle(ctx.pellet("MNI"), ctx.pellet("MNM"))
+        theta, raw = parke_jaw_angle(ctx.pellet("MNI"), ctx.pellet("MNM"),
+                                     closed=(ctx.first_pellet("MNI"), ctx.first_pellet("MNM")))
         pivot = ctx.start[K.V_PARKE_JAW_PIVOT - 1, [0, 2]]
         motion = fixed_pivot_motion(theta, pivot)
         apply_zones(ctx.start, motion, self.zones, out=positions)

@@ -14,8 +14,9 @@ the stages.
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Iterator, Protocol, runtime_checkable
 
 import numpy as np
 import pandas as pd
@@ -155,7 +156,11 @@ class TaskContext:
     diagnostics : dict[str, ndarray (F,)]
         Columns added by the stages.
     state : dict
-        Values one stage leaves for a later one (for instance the jaw rotation per frame).
+        Values one stage leaves for a later one (for instance the jaw rotation per frame), and
+        what a stage carries from one chunk of frames to the next.
+    first : float64 (8, 2)
+        The mapped pellets at the first valid row: the reference of every displacement, also
+        in a window (:meth:`window`) that starts later.
     """
 
     profile: Any
@@ -170,20 +175,35 @@ class TaskContext:
     start: np.ndarray
     diagnostics: dict[str, np.ndarray] = field(default_factory=dict)
     state: dict[str, Any] = field(default_factory=dict)
+    first: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.first is None:
+            self.first = np.array(self.pellets[0], dtype=np.float64)
 
     @property
     def n_frames(self) -> int:
         return int(self.rows.shape[0])
 
     def pellet(self, name: str) -> np.ndarray:
-        """Mapped pellet ``name`` over all frames, float64 (F, 2) Parke (x, z)."""
+        """Mapped pellet ``name`` over this context's frames, float64 (F, 2) Parke (x, z)."""
         return self.pellets[:, PELLET_INDEX[name], :]
+
+    def first_pellet(self, name: str) -> np.ndarray:
+        """Mapped pellet ``name`` at the first valid row, float64 (2,) Parke (x, z)."""
+        return self.first[PELLET_INDEX[name]]
 
     def displacement(self, name: str) -> np.ndarray:
         """Pellet ``name`` minus its first-valid-row position, float64 (F, 2) Parke (x, z): the
         animation phase compares each line with the first one (thesis Figure 4.1)."""
-        p = self.pellet(name)
-        return p - p[0]
+        return self.pellet(name) - self.first_pellet(name)
+
+    def window(self, start: int, stop: int) -> "TaskContext":
+        """The frames ``start:stop`` of this context: same subject, start face and carried
+        ``state``, its own ``diagnostics``."""
+        sl = slice(start, stop)
+        return dataclasses.replace(self, rows=self.rows[sl], pellets_mm=self.pellets_mm[sl],
+                                   held=self.held[sl], pellets=self.pellets[sl], diagnostics={})
 
 
 class Stage(Protocol):
@@ -243,17 +263,30 @@ class StagedVersion:
                            start=neutral.copy())
 
     def animate(self, profile: "SubjectProfile", face: "FaceModel", rec: "TaskRecording") -> Animation:
+        return next(self.animate_chunks(profile, face, rec, frames=None))
+
+    def animate_chunks(self, profile: "SubjectProfile", face: "FaceModel", rec: "TaskRecording",
+                       *, frames: int | None) -> Iterator[Animation]:
+        """Animate ``frames`` frames at a time (None: all at once), one :class:`Animation` per
+        chunk, in order; together they equal :meth:`animate` exactly (stages carry what a
+        frame needs from the previous one in ``ctx.state``), in memory bounded by the chunk."""
         ctx = self.context(profile, face, rec)
         stages = self.stages()
         for stage in stages:            # initialisation phase: the subject's starting face
             stage.initialise(ctx)
-        # float32 from the start: the result's dtype, and half the memory traffic of float64 on
-        # a long task (the stages compute in float64 and store here).
-        positions = np.empty((ctx.n_frames,) + ctx.start.shape, dtype=np.float32)
-        positions[...] = ctx.start
-        for stage in stages:            # animation phase: every line against the first line
-            stage.animate(ctx, positions)
-        return self.finish(ctx, positions)
+        n = ctx.n_frames
+        step = n if frames is None else int(frames)
+        if step < 1:
+            raise ValueError(f"frames per chunk must be at least 1, not {frames}")
+        for a in range(0, n, step):
+            window = ctx if step >= n else ctx.window(a, min(n, a + step))
+            # float32 from the start: the result's dtype, and half the memory traffic of float64
+            # on a long task (the stages compute in float64 and store here).
+            positions = np.empty((window.n_frames,) + ctx.start.shape, dtype=np.float32)
+            positions[...] = ctx.start
+            for stage in stages:        # animation phase: every line against the first line
+                stage.animate(window, positions)
+            yield self.finish(window, positions)
 
     def finish(self, ctx: TaskContext, positions: np.ndarray) -> Animation:
         time_us = np.asarray(ctx.rec.time_us, dtype=np.int64)[ctx.rows]

@@ -1,0 +1,54 @@
+"""Every built-in version animated in chunks of frames equals the version animated at once,
+exactly (positions and diagnostics): the ground for a geometry stage whose memory does not grow
+with the task. Tasks: a sentence, jaw wagging and maximum lip protrusion of the embedded corpus,
+for a subject whose lips are centred low (JW40: CASSI 2.1's thickness rule) and one whose are
+not (JW45)."""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from cassi.harness.pipeline import get_corpus, get_face, get_profile
+from cassi.versions.registry import get_version
+
+VERSIONS = ("parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1")
+
+
+@pytest.fixture(scope="module")
+def inputs():
+    corpus = get_corpus(None)
+    out = {}
+    for subject, task in (("JW40", 5), ("JW40", 118), ("JW45", 106)):
+        profile = get_profile(corpus, subject)
+        out[(subject, task)] = (profile, get_face(corpus, subject, profile),
+                                corpus.subject(subject).load(task))
+    return out
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+@pytest.mark.parametrize("frames", [1, 97, 1000])
+def test_chunks_equal_the_whole_task(inputs, version, frames):
+    v = get_version(version)
+    for key, (profile, face, rec) in inputs.items():
+        rec_short = rec if frames > 1 else _first_rows(rec, 400)
+        whole = v.animate(profile, face, rec_short)
+        chunks = list(v.animate_chunks(profile, face, rec_short, frames=frames))
+        assert all(len(c.frames) <= frames for c in chunks)
+        np.testing.assert_array_equal(np.concatenate([c.frames for c in chunks]), whole.frames)
+        np.testing.assert_array_equal(np.concatenate([c.positions for c in chunks]),
+                                      whole.positions, err_msg=f"{version} {key}")
+        pd.testing.assert_frame_equal(
+            pd.concat([c.diagnostics for c in chunks], ignore_index=True), whole.diagnostics)
+
+
+def _first_rows(rec, n):
+    """The recording's first ``n`` rows (one-frame chunks over a whole task would be slow)."""
+    return type(rec)(rec.path, rec.subject, rec.task, rec.rep, rec.time_us[:n], rec.xy_mm[:n],
+                     rec.valid[:n])
+
+
+def test_a_chunk_of_no_frames_is_refused(inputs):
+    profile, face, rec = inputs[("JW45", 106)]
+    with pytest.raises(ValueError, match="at least 1"):
+        next(get_version("cassi-1.0").animate_chunks(profile, face, rec, frames=0))
