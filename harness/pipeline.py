@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import os
 import platform
+import tempfile
 import threading
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Mapping
 
@@ -200,10 +202,52 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
     except CassiInputError as err:
         raise SkipJob(f"subject cannot be preprocessed: {err}") from err
     face = get_face(corpus, job.subject, profile)
-    anim = get_version(job.version).animate(profile, face, rec)
-    rows = rubric.run_geometry_checks(anim, face, profile, task=job.task, subject=job.subject,
-                                      rep=job.rep, neutral=get_neutral(), recording=rec)
-    rows = pd.DataFrame(rows)
+    with tempfile.TemporaryDirectory(prefix="cassi-geometry-") as tmp:
+        anim = animate_to_file(get_version(job.version), profile, face, rec, Path(tmp))
+        rows = rubric.run_geometry_checks(anim, face, profile, task=job.task, subject=job.subject,
+                                          rep=job.rep, neutral=get_neutral(), recording=rec)
+        return _geometry_output(job, ctx, rec, anim, pd.DataFrame(rows))
+
+
+@dataclass(frozen=True)
+class StreamedAnimation:
+    """An :class:`~cassi.versions.protocol.Animation` whose positions stay in a file
+    (:class:`~cassi.harness.rubric.frames.FileFrames`), read back a chunk at a time."""
+
+    version: str
+    frames: np.ndarray
+    time_us: np.ndarray
+    positions: object
+    diagnostics: pd.DataFrame
+
+
+def animate_to_file(version, profile, face, rec, tmp: Path) -> StreamedAnimation:
+    """Animate ``rec`` a chunk of frames at a time into a positions file under ``tmp``, so a
+    worker's memory does not grow with the task's positions (about 6.8 KB a frame for the
+    570-vertex face). A version without ``animate_chunks`` (the protocol only asks for
+    ``animate``) is animated at once and its positions written out."""
+    from cassi.harness.rubric.frames import CHUNK_FRAMES, FileFrames  # noqa: PLC0415
+
+    chunks = (version.animate_chunks(profile, face, rec, frames=CHUNK_FRAMES)
+              if hasattr(version, "animate_chunks") else iter([version.animate(profile, face, rec)]))
+    store, frames, times, diags, name = None, [], [], [], getattr(version, "name", "")
+    for anim in chunks:
+        if store is None:
+            store = FileFrames(tmp / "positions.f32", anim.positions.shape[1])
+        store.append(anim.positions)
+        frames.append(np.asarray(anim.frames, np.int64))
+        times.append(np.asarray(anim.time_us, np.int64))
+        diags.append(anim.diagnostics)
+        name = anim.version
+    if store is None:
+        raise SkipJob("the version animated no frame")
+    return StreamedAnimation(name, np.concatenate(frames), np.concatenate(times), store,
+                             pd.concat(diags, ignore_index=True))
+
+
+def _geometry_output(job: Job, ctx: StageContext, rec, anim: StreamedAnimation,
+                     rows: pd.DataFrame) -> StageOutput:
+    """Pick the frames to render from the checks' rows and keep their positions."""
     frames = np.asarray(anim.frames, dtype=np.int64)
     if frames.size == 0:
         raise SkipJob("the version animated no frame")
@@ -229,8 +273,7 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
             meta["render_frames_by_view"] = {view: sorted(set(pick) | grid) for view in views}
     keep = sorted(set(pick).union(*meta.get("render_frames_by_view", {}).values()))
     idx = np.searchsorted(frames, keep)
-    keyframes = npz_bytes(frames=np.asarray(keep, np.int64),
-                          positions=np.asarray(anim.positions[idx], np.float32))
+    keyframes = npz_bytes(frames=np.asarray(keep, np.int64), positions=anim.positions.take(idx))
     log = [f"frames {frames[0]}..{frames[-1]} ({frames.size}); render {len(pick)}: {pick}"]
     if len(keep) > len(pick):
         log.append(f"video frames (every {step}th row, {', '.join(views)}): "

@@ -52,3 +52,22 @@ def test_a_chunk_of_no_frames_is_refused(inputs):
     profile, face, rec = inputs[("JW45", 106)]
     with pytest.raises(ValueError, match="at least 1"):
         next(get_version("cassi-1.0").animate_chunks(profile, face, rec, frames=0))
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+def test_the_rubric_on_chunks_from_a_file_equals_the_rubric_on_the_whole_array(
+        inputs, version, tmp_path):
+    """The geometry stage's path (positions streamed to a file, checks read back a chunk at a
+    time, jitter windows and frame steps with their halo) gives the same rows, exactly."""
+    from cassi.harness.pipeline import animate_to_file, get_neutral
+    from cassi.harness.rubric import run_geometry_checks
+
+    v = get_version(version)
+    for (subject, task), (profile, face, rec) in inputs.items():
+        whole = v.animate(profile, face, rec)
+        streamed = animate_to_file(v, profile, face, rec, tmp_path)
+        streamed.positions.chunk = 97  # many chunks, each boundary crossed by the halos
+        kw = dict(task=task, subject=subject, rep=1, neutral=get_neutral(), recording=rec)
+        a = run_geometry_checks(whole, face, profile, **kw)
+        b = run_geometry_checks(streamed, face, profile, **kw)
+        pd.testing.assert_frame_equal(a, b, check_exact=True, obj=f"{version} {subject} {task}")

@@ -20,6 +20,7 @@ import numpy as np
 from cassi.data import numbering as N
 from cassi.data.errors import CassiInputError
 
+from .frames import Frames
 from .model import Measurement
 from .registry import FIDELITY_MIN_RANGE_MM
 
@@ -95,7 +96,10 @@ class FidelityContext:
         data = xy[frames].copy()
         valid = np.asarray(recording.valid, bool)[frames]
         data[~valid] = np.nan
-        return cls(model=virtual_pellets(anim.positions, mapping), data=data, frames=frames)
+        positions = anim.positions
+        model = (positions.series(virtual_pellets, mapping) if isinstance(positions, Frames)
+                 else virtual_pellets(positions, mapping))
+        return cls(model=model, data=data, frames=frames)
 
     @functools.cached_property
     def model_moves(self) -> np.ndarray:

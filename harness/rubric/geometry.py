@@ -419,10 +419,16 @@ def protrusion_difference(pos: np.ndarray, parts: MouthParts) -> np.ndarray:
     return pos[:, parts.ll_outer, 0] - pos[:, parts.ul_outer, 0]
 
 
+def protrusion_sum(pos: np.ndarray, parts: MouthParts) -> np.ndarray:
+    """Per frame: x of the upper plus the lower lip pellet vertex (its maximum is the frame of
+    maximum protrusion), (F,)."""
+    pos = np.asarray(pos, np.float64)
+    return pos[:, parts.ul_outer, 0] + pos[:, parts.ll_outer, 0]
+
+
 def max_protrusion_frame(pos: np.ndarray, parts: MouthParts) -> int:
     """The frame of maximum lip protrusion: largest mean x of the two lip pellet vertices."""
-    pos = np.asarray(pos, np.float64)
-    return int(np.argmax(pos[:, parts.ul_outer, 0] + pos[:, parts.ll_outer, 0]))
+    return int(np.argmax(protrusion_sum(pos, parts)))
 
 
 def lip_nose_clearance(pos: np.ndarray, parts: MouthParts, rest: np.ndarray) -> np.ndarray:
@@ -475,6 +481,12 @@ def corner_misplacement(pos: np.ndarray, parts: MouthParts) -> np.ndarray:
     return np.hypot(dz, dx)
 
 
+def lip_rounding_at(first: np.ndarray, at: np.ndarray, parts: MouthParts) -> float:
+    """Corner half-width in frame ``at`` over that in frame ``first`` (each float (V, 3))."""
+    w0 = abs(float(first[parts.corner, 1])) or 1.0
+    return float(abs(float(at[parts.corner, 1])) / w0)
+
+
 def lip_rounding(pos: np.ndarray, parts: MouthParts) -> tuple[float, int]:
     """Narrowing of the mouth at maximum protrusion: corner half-width there over at the start.
 
@@ -483,8 +495,7 @@ def lip_rounding(pos: np.ndarray, parts: MouthParts) -> tuple[float, int]:
     """
     pos = np.asarray(pos, np.float64)
     f = max_protrusion_frame(pos, parts)
-    w0 = abs(pos[0, parts.corner, 1]) or 1.0
-    return float(abs(pos[f, parts.corner, 1]) / w0), f
+    return lip_rounding_at(pos[0], pos[f], parts), f
 
 
 def opening_polygon(pos: np.ndarray, parts: MouthParts) -> np.ndarray:
@@ -554,11 +565,26 @@ def excess_jitter(pos: np.ndarray, points, ref_points, *, window: int, order: in
     return np.maximum(lip - ref, 0.0)
 
 
-def switch_jumps(pos: np.ndarray, parts: MouthParts, branch) -> tuple[np.ndarray, np.ndarray]:
-    """Jumps of the lip corners where a per-frame label changes.
+def corner_step_excess(pos: np.ndarray, parts: MouthParts) -> np.ndarray:
+    """Per frame i: how far the lip corners moved from frame i-1 beyond the jaw point's move,
+    ``|step of the corner| - |step of the jaw point|`` (>= 0; 0 at the first frame), (F,)."""
+    pos = np.asarray(pos, np.float64)
+    out = np.zeros(pos.shape[0])
+    if pos.shape[0] < 2:
+        return out
+    corners = np.asarray([parts.corner, parts.inner_corner])
+    step = np.linalg.norm(pos[1:, corners] - pos[:-1, corners], axis=-1).max(axis=1)
+    jstep = np.linalg.norm(pos[1:, parts.jaw_point] - pos[:-1, parts.jaw_point], axis=-1)
+    out[1:] = np.maximum(step - jstep, 0.0)
+    return out
+
+
+def switch_jumps_from(excess: np.ndarray, branch) -> tuple[np.ndarray, np.ndarray]:
+    """The corner jumps (:func:`corner_step_excess`) at the frames where a label changes.
 
     Parameters
     ----------
+    excess : float (F,)
     branch : (F,) array-like or None
         A label per frame (the rubric passes the ``ellipse`` diagnostic, horizontal or
         vertical); None = no switches known.
@@ -566,13 +592,13 @@ def switch_jumps(pos: np.ndarray, parts: MouthParts, branch) -> tuple[np.ndarray
     Returns
     -------
     jump : float (F,)
-        ``|step of the corner| - |step of the jaw point|`` (>= 0) at frames where the branch
-        differs from the previous frame, 0 elsewhere (Parke units).
+        The excess at frames where the branch differs from the previous frame, 0 elsewhere
+        (Parke units).
     switches : int (S,)
         The switch frames.
     """
-    pos = np.asarray(pos, np.float64)
-    F = pos.shape[0]
+    excess = np.asarray(excess, np.float64)
+    F = excess.shape[0]
     jump = np.zeros(F)
     if branch is None or F < 2:
         return jump, np.zeros(0, np.int64)
@@ -580,12 +606,14 @@ def switch_jumps(pos: np.ndarray, parts: MouthParts, branch) -> tuple[np.ndarray
     if b.shape[0] != F:
         return jump, np.zeros(0, np.int64)
     sw = np.flatnonzero(b[1:] != b[:-1]) + 1
-    corners = np.asarray([parts.corner, parts.inner_corner])
-    step = np.linalg.norm(pos[1:, corners] - pos[:-1, corners], axis=-1).max(axis=1)
-    jstep = np.linalg.norm(pos[1:, parts.jaw_point] - pos[:-1, parts.jaw_point], axis=-1)
-    exc = np.maximum(step - jstep, 0.0)
-    jump[sw] = exc[sw - 1]
+    jump[sw] = excess[sw]
     return jump, sw
+
+
+def switch_jumps(pos: np.ndarray, parts: MouthParts, branch) -> tuple[np.ndarray, np.ndarray]:
+    """Jumps of the lip corners where a per-frame label changes (:func:`switch_jumps_from` of
+    :func:`corner_step_excess`)."""
+    return switch_jumps_from(corner_step_excess(pos, parts), branch)
 
 
 # ----------------------------------------------------------------------------------------------

@@ -16,6 +16,7 @@ import pandas as pd
 from cassi.data.errors import CassiInputError
 
 from . import geometry as G
+from .frames import ArrayFrames, Frames
 from .model import Measurement
 from .registry import (CHECKS, END_SHARE, JAW_NEAR_CLOSED_MM, JITTER_ORDER, JITTER_WINDOW,
                        LIPS_BELOW_TEETH_MM, MIN_FRAMES, OFTEN_PERCENTILE, TEETH_HOLD_FRAMES, WIDE_OPEN_MM,
@@ -26,8 +27,10 @@ class GeometryContext:
 
     Parameters
     ----------
-    positions : float (F, V, 3)
-        Parke units (``Animation.positions``).
+    positions : float (F, V, 3) or frames.Frames
+        Parke units (``Animation.positions``), or a source that gives them a chunk of frames
+        at a time (:mod:`.frames`): every measure reads per-frame series through
+        :meth:`series` and single frames through :meth:`frame`, so memory holds one chunk.
     parts : geometry.MouthParts
     rest : float (V, 3)
         The face before initialization (``FaceModel.vertices``): the reference shape for
@@ -44,18 +47,19 @@ class GeometryContext:
 
     def __init__(self, positions, parts: G.MouthParts, *, rest=None, mm_per_unit: float = 1.0,
                  diagnostics: pd.DataFrame | None = None, neutral=None, task: int | None = None):
-        self.pos = np.asarray(positions, dtype=np.float64)
-        if self.pos.ndim != 3 or self.pos.shape[2] != 3 or self.pos.shape[0] < 1:
-            raise CassiInputError(f"positions must be (F, V, 3), got {self.pos.shape}")
-        if not np.all(np.isfinite(self.pos)):
+        self.frames = positions if isinstance(positions, Frames) else ArrayFrames(positions)
+        if self.frames.n_frames < 1:
+            raise CassiInputError("positions must be (F, V, 3) with at least one frame")
+        finite = self.frames.series(lambda p: np.isfinite(p).all(axis=(1, 2)))
+        if not finite.all():
             raise CassiInputError("positions contain NaN or infinite values")
         need = max(int(np.max(np.atleast_1d(v))) for v in vars(parts).values()
                    if isinstance(v, (int, np.integer, np.ndarray)) and np.size(v))
-        if need >= self.pos.shape[1]:
-            raise CassiInputError(f"positions have {self.pos.shape[1]} vertices; the mouth parts "
-                                  f"use vertex row {need}")
+        if need >= self.frames.n_vertices:
+            raise CassiInputError(f"positions have {self.frames.n_vertices} vertices; the mouth "
+                                  f"parts use vertex row {need}")
         self.parts = parts
-        self.rest = self.pos[0] if rest is None else np.asarray(rest, dtype=np.float64)
+        self.rest = self.frame(0) if rest is None else np.asarray(rest, dtype=np.float64)
         self.mm = float(mm_per_unit)
         self.diagnostics = diagnostics
         self.neutral = None if neutral is None else np.asarray(neutral, dtype=np.float64)
@@ -63,16 +67,24 @@ class GeometryContext:
 
     @property
     def F(self) -> int:
-        return self.pos.shape[0]
+        return self.frames.n_frames
+
+    def series(self, fn, *args, halo: int = 0, **kwargs):
+        """``fn(positions, *args)`` over every frame (see :meth:`frames.Frames.series`)."""
+        return self.frames.series(fn, *args, halo=halo, **kwargs)
+
+    def frame(self, i: int) -> np.ndarray:
+        """float64 (V, 3): frame ``i``."""
+        return self.frames.frame(i)
 
     @functools.cached_property
     def tongue_teeth(self) -> dict[str, np.ndarray]:
-        d = G.tongue_teeth_penetration(self.pos, self.parts, rest=self.rest)
+        d = self.series(G.tongue_teeth_penetration, self.parts, rest=self.rest)
         return {k: v * self.mm for k, v in d.items()}
 
     @functools.cached_property
     def gap(self) -> np.ndarray:
-        return G.inner_lip_gap(self.pos, self.parts) * self.mm
+        return self.series(G.inner_lip_gap, self.parts) * self.mm
 
     @functools.cached_property
     def handled_overlap(self) -> np.ndarray:
@@ -86,13 +98,14 @@ class GeometryContext:
 
     @functools.cached_property
     def max_protrusion(self) -> int:
-        return G.max_protrusion_frame(self.pos, self.parts)
+        return int(np.argmax(self.series(G.protrusion_sum, self.parts)))
 
     @functools.cached_property
     def jaw_near_closed(self) -> np.ndarray:
         """bool (F,): the jaw point (258) within JAW_NEAR_CLOSED_MM of its most closed (highest)
         position in the task."""
-        z = self.pos[:, self.parts.jaw_point, 2] * self.mm
+        jp = self.parts.jaw_point
+        z = self.series(lambda p: p[:, jp, 2]) * self.mm
         return z >= z.max() - JAW_NEAR_CLOSED_MM
 
     @functools.cached_property
@@ -149,18 +162,18 @@ def _teeth(ctx: GeometryContext, series: np.ndarray, *, closed_only: bool = Fals
 
 
 def m_teeth_front_overlap(ctx):
-    front, _ = G.teeth_overlap(ctx.pos, ctx.parts)
+    front, _ = ctx.series(G.teeth_overlap, ctx.parts)
     return _teeth(ctx, front * ctx.mm)
 
 
 def m_teeth_back_overlap(ctx):
-    _, back = G.teeth_overlap(ctx.pos, ctx.parts)
+    _, back = ctx.series(G.teeth_overlap, ctx.parts)
     _, back0 = G.teeth_overlap(ctx.rest[None], ctx.parts)
     return _teeth(ctx, (back - back0[0]) * ctx.mm)
 
 
 def _slope(ctx):
-    return G.teeth_slope(ctx.pos, ctx.parts) - G.teeth_slope(ctx.rest[None], ctx.parts)[0]
+    return ctx.series(G.teeth_slope, ctx.parts) - G.teeth_slope(ctx.rest[None], ctx.parts)[0]
 
 
 def m_teeth_slope_up(ctx):
@@ -174,8 +187,8 @@ def m_teeth_slope_down(ctx):
 def m_teeth_apart(ctx):
     # the larger of the front gap and the back teeth's opening beyond rest: the half view shows
     # either (render review: CASSI 2.0's back teeth stand 5.5 mm apart while the incisors overlap)
-    front = G.teeth_gap(ctx.pos, ctx.parts)
-    _, back = G.teeth_overlap(ctx.pos, ctx.parts)
+    front = ctx.series(G.teeth_gap, ctx.parts)
+    _, back = ctx.series(G.teeth_overlap, ctx.parts)
     _, back0 = G.teeth_overlap(ctx.rest[None], ctx.parts)
     return _teeth(ctx, np.maximum(front, -(back - back0[0])) * ctx.mm, closed_only=True)
 
@@ -208,7 +221,7 @@ def m_lips_too_large_moving(ctx):
     n = int(crossing.sum())
     if n == 0:
         return Measurement(float("nan"), -1, "the lips never cross")
-    area = _outer_area(ctx.pos, ctx.parts) / _outer_area(ctx.rest[None], ctx.parts)[0]
+    area = ctx.series(_outer_area, ctx.parts) / _outer_area(ctx.rest[None], ctx.parts)[0]
     idx = np.flatnonzero(crossing)
     v = float(np.percentile(area[idx], OFTEN_PERCENTILE))
     f = int(idx[np.argmax(area[idx])])
@@ -219,7 +232,7 @@ def m_lips_too_large_moving(ctx):
 
 
 def m_lower_lip_below_teeth(ctx):
-    below = G.lower_lip_below_teeth(ctx.pos, ctx.parts) * ctx.mm
+    below = ctx.series(G.lower_lip_below_teeth, ctx.parts) * ctx.mm
     frac = float(np.mean(below > LIPS_BELOW_TEETH_MM))
     f = int(np.argmax(below))
     return Measurement(frac, f, f"lower lip edge (58) more than {LIPS_BELOW_TEETH_MM} mm below the "
@@ -228,12 +241,12 @@ def m_lower_lip_below_teeth(ctx):
 
 
 def m_lips_through_teeth(ctx):
-    d = G.lip_teeth_penetration(ctx.pos, ctx.parts, rest=ctx.rest) * ctx.mm
+    d = ctx.series(G.lip_teeth_penetration, ctx.parts, rest=ctx.rest) * ctx.mm
     return _m_sustained(d, detail="lip vertices behind the front surface of the front teeth")
 
 
 def m_lower_lip_protrudes(ctx):
-    d = G.protrusion_difference(ctx.pos, ctx.parts) * ctx.mm
+    d = ctx.series(G.protrusion_difference, ctx.parts) * ctx.mm
     v = float(np.percentile(d, OFTEN_PERCENTILE))
     f = int(np.argmax(d))
     return Measurement(v, f, f"{OFTEN_PERCENTILE}th percentile over frames of x(49) - x(67)",
@@ -254,7 +267,7 @@ def m_tongue_teeth(ctx):
 
 
 def m_tongue_palate(ctx):
-    d = G.tongue_palate_penetration(ctx.pos, ctx.parts) * ctx.mm
+    d = ctx.series(G.tongue_palate_penetration, ctx.parts) * ctx.mm
     return _m_sustained(d, detail="tongue above the palatal surface (not counted by the thesis)")
 
 
@@ -264,13 +277,13 @@ def m_tongue_back_v(ctx):
         return Measurement(float("nan"), -1, "no tongue centre line")
     # centre line tip, T1-T4, back (numbering.TONGUE_CENTRE): the angle at T4 between T3 and
     # the anchored back vertex
-    ang = G.profile_angle(ctx.pos, t[3], t[4], t[5])
+    ang = ctx.series(G.profile_angle, t[3], t[4], t[5])
     return _m_sustained(ang, worst="min", detail="side-view angle T3-T4-back of the tongue "
                                                  "(not counted by the thesis)")
 
 
 def m_palate_below_incisor(ctx):
-    d = G.palate_below_incisor(ctx.pos[0], ctx.parts) * ctx.mm
+    d = G.palate_below_incisor(ctx.frame(0), ctx.parts) * ctx.mm
     return Measurement(d, 0, "lowest palate vertex below vertex 226 at initialization", frame_value=d)
 
 
@@ -294,7 +307,7 @@ def _jaw_ratio(ctx, i: int, what: str) -> Measurement:
         return Measurement(float("nan"), -1, "no neutral face to compare with")
     # the version's initial jaw rotation is no shape change: align the jaw to the neutral one
     # (rotation and translation in the side view, Kabsch) before measuring
-    a = ctx.pos[0][jaw][:, [0, 2]]
+    a = ctx.frame(0)[jaw][:, [0, 2]]
     b = ctx.neutral[jaw][:, [0, 2]]
     ac, bc = a - a.mean(0), b - b.mean(0)
     u, _, vt = np.linalg.svd(ac.T @ bc)
@@ -322,7 +335,8 @@ def m_jaw_square(ctx):
 
 
 def m_no_rounding(ctx):
-    r, f = G.lip_rounding(ctx.pos, ctx.parts)
+    f = ctx.max_protrusion
+    r = G.lip_rounding_at(ctx.frame(0), ctx.frame(f), ctx.parts)
     return Measurement(r, f, "lip-corner half-width at maximum protrusion over at the start",
                        frame_value=r)
 
@@ -330,14 +344,15 @@ def m_no_rounding(ctx):
 def m_lips_from_chin(ctx):
     p = ctx.parts
     f = ctx.max_protrusion
-    d = (ctx.pos[f, p.ll_outer, 0] - ctx.pos[f, p.chin, 0]) - (ctx.pos[0, p.ll_outer, 0] - ctx.pos[0, p.chin, 0])
+    at, first = ctx.frame(f), ctx.frame(0)
+    d = (at[p.ll_outer, 0] - at[p.chin, 0]) - (first[p.ll_outer, 0] - first[p.chin, 0])
     return Measurement(float(d * ctx.mm), f, "x(49) - x(chin) at maximum protrusion, beyond the "
                                              "first frame",
                        frame_value=float(d * ctx.mm))
 
 
 def _cave(ctx, a, m, b, what):
-    c = G.concavity(ctx.pos, a, m, b) - G.concavity(ctx.rest[None], a, m, b)[0]
+    c = ctx.series(G.concavity, a, m, b) - G.concavity(ctx.rest[None], a, m, b)[0]
     return _m_sustained(c * ctx.mm, detail=f"{what} behind the chord of its neighbours, beyond rest")
 
 
@@ -357,7 +372,7 @@ def m_chin_cave(ctx):
 
 
 def m_lips_into_nose(ctx):
-    c = G.lip_nose_clearance(ctx.pos, ctx.parts, ctx.rest)
+    c = ctx.series(G.lip_nose_clearance, ctx.parts, ctx.rest)
     return _m_sustained(c, worst="min", detail="distance 67 - nose base over its rest value")
 
 
@@ -373,26 +388,26 @@ def _outer_area(pos, p):
 
 def m_lips_too_big(ctx):
     f = ctx.max_protrusion
-    r = float(_outer_area(ctx.pos[f:f + 1], ctx.parts)[0] / _outer_area(ctx.rest[None], ctx.parts)[0])
+    r = float(_outer_area(ctx.frame(f)[None], ctx.parts)[0] / _outer_area(ctx.rest[None], ctx.parts)[0])
     return Measurement(r, f, "front-view area inside the outer lip outline at maximum protrusion "
                              "over at rest", frame_value=r)
 
 
 def m_lower_lip_protrudes_start(ctx):
-    d = float(G.protrusion_difference(ctx.pos[:1], ctx.parts)[0] * ctx.mm)
+    d = float(G.protrusion_difference(ctx.frame(0)[None], ctx.parts)[0] * ctx.mm)
     return Measurement(d, 0, "x(49) - x(67) at the first frame", frame_value=d)
 
 
 def m_upper_protrudes_more(ctx):
     f = ctx.max_protrusion
-    d = float(-G.protrusion_difference(ctx.pos[f:f + 1], ctx.parts)[0] * ctx.mm)
+    d = float(-G.protrusion_difference(ctx.frame(f)[None], ctx.parts)[0] * ctx.mm)
     return Measurement(d, f, "x(67) - x(49) at maximum protrusion", frame_value=d)
 
 
 def m_upper_lip_sharp(ctx):
     p = ctx.parts
     f = ctx.max_protrusion
-    a = G.profile_angle(ctx.pos[f:f + 1], p.above_lip[0], p.ul_outer, p.upper_inner[0])[0]
+    a = G.profile_angle(ctx.frame(f)[None], p.above_lip[0], p.ul_outer, p.upper_inner[0])[0]
     a0 = G.profile_angle(ctx.rest[None], p.above_lip[0], p.ul_outer, p.upper_inner[0])[0]
     return Measurement(float(a0 - a), f, f"profile angle 71-67-61 {a:.0f} deg at maximum "
                                          f"protrusion, {a0:.0f} deg at rest", frame_value=float(a0 - a))
@@ -409,7 +424,10 @@ def _jitter(ctx, points):
     # the excess over the largest shake of the jaw and the lip pellets (the data's own jitter)
     p = ctx.parts
     ref = np.asarray([p.jaw_point, p.ul_outer, p.ll_outer])
-    return G.excess_jitter(ctx.pos, points, ref, window=JITTER_WINDOW, order=JITTER_ORDER) * ctx.mm
+    if ctx.F < JITTER_WINDOW:
+        return np.zeros(ctx.F)
+    return ctx.series(G.excess_jitter, points, ref, window=JITTER_WINDOW, order=JITTER_ORDER,
+                      halo=JITTER_WINDOW) * ctx.mm
 
 
 def m_lip_jitter(ctx):
@@ -424,7 +442,7 @@ def m_corner_jump(ctx):
     switch = None
     if ctx.diagnostics is not None and "ellipse" in ctx.diagnostics:
         switch = ctx.diagnostics["ellipse"].astype(str).to_numpy()
-    jump, sw = G.switch_jumps(ctx.pos, p, switch)
+    jump, sw = G.switch_jumps_from(ctx.series(G.corner_step_excess, p, halo=1), switch)
     jump = jump * ctx.mm
     jit = _jitter(ctx, np.asarray([p.corner, p.inner_corner]))
     jv, jf = sustained(jit)
@@ -438,8 +456,7 @@ def m_corner_jump(ctx):
 
 
 def m_lip_shape(ctx):
-    poly = G.opening_polygon(ctx.pos, ctx.parts)
-    area, extent = G.polygon_extent(poly)
+    area, extent = ctx.series(lambda pos: G.polygon_extent(G.opening_polygon(pos, ctx.parts)))
     height = ctx.gap
     wide = height >= max(WIDE_OPEN_MM, WIDE_OPEN_SHARE * float(height.max()))
     if not np.any(wide):
@@ -453,10 +470,10 @@ def m_lip_shape(ctx):
 
 
 def m_lower_lip_through_lower_teeth(ctx):
-    d = G.lip_teeth_penetration(ctx.pos, ctx.parts, rest=ctx.rest, which="lower") * ctx.mm
+    d = ctx.series(G.lip_teeth_penetration, ctx.parts, rest=ctx.rest, which="lower") * ctx.mm
     return _m_sustained(d, detail="lower lip behind the front surface of the lower front teeth")
 
 
 def m_corners_misplaced(ctx):
-    d = G.corner_misplacement(ctx.pos, ctx.parts) * ctx.mm
+    d = ctx.series(G.corner_misplacement, ctx.parts) * ctx.mm
     return _m_sustained(d, detail="corner 70 outside the band of 69 and 51")

@@ -15,6 +15,7 @@ import pandas as pd
 from cassi.data.errors import CassiInputError
 
 from . import geometry as G
+from .frames import ArrayFrames, Frames
 from .measures import GeometryContext
 from .model import Check, Measurement
 from .registry import TRACE_STEP, TRACE_TASKS, checks_for, get_check
@@ -75,7 +76,8 @@ def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | N
     DataFrame
         Results-table rows (``frame`` are recording rows; -1 = whole task), view ``geometry``.
     """
-    pos = np.asarray(anim.positions)
+    positions = anim.positions
+    pos = positions if isinstance(positions, Frames) else ArrayFrames(positions)
     rest = np.asarray(face.vertices, dtype=np.float64) if face is not None else None
     if parts is None:
         if face is None:
@@ -83,7 +85,7 @@ def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | N
         parts = G.mouth_parts(face)
     if mm_per_unit is None:
         jaw = getattr(profile, "jaw_length_mm", None) if profile is not None else None
-        mm_per_unit = G.mm_per_unit(rest if rest is not None else pos[0], jaw)
+        mm_per_unit = G.mm_per_unit(rest if rest is not None else pos.frame(0), jaw)
     if neutral is None and face is not None:
         from cassi.data.face import build_face  # noqa: PLC0415 - Table B's reference only
 
@@ -93,7 +95,7 @@ def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | N
     ids = dict(subject=subject or getattr(profile, "subject", None), task=int(task), rep=int(rep),
                version=getattr(anim, "version", None))
     wanted = None if checks is None else {get_check(c).name for c in checks}
-    frame_no = _frame_numbers(anim, pos.shape[0])
+    frame_no = _frame_numbers(anim, pos.n_frames)
     rows = _measured_rows(checks_for(kind="geometry", task=task), ctx, ids, wanted, frame_no)
     if recording is not None:
         rows.extend(_fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no))
