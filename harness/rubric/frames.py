@@ -56,7 +56,8 @@ def _cut(out, a: int, b: int):
         return tuple(_cut(o, a, b) for o in out)
     if isinstance(out, dict):
         return {k: _cut(v, a, b) for k, v in out.items()}
-    return np.asarray(out)[a:b]
+    # a copy: a view would keep the whole chunk it was cut from alive until the join
+    return np.array(np.asarray(out)[a:b])
 
 
 def _join(parts: list):
