@@ -71,3 +71,26 @@ def test_the_rubric_on_chunks_from_a_file_equals_the_rubric_on_the_whole_array(
         a = run_geometry_checks(whole, face, profile, **kw)
         b = run_geometry_checks(streamed, face, profile, **kw)
         pd.testing.assert_frame_equal(a, b, check_exact=True, obj=f"{version} {subject} {task}")
+
+
+def test_series_hold_one_chunk_of_positions_at_a_time(tmp_path):
+    """Memory, not time: reading a per-frame series through a positions file keeps one chunk
+    (plus its results) alive, never the whole task (tracemalloc counts numpy's buffers)."""
+    import tracemalloc
+
+    from cassi.harness.rubric.frames import FileFrames
+
+    store = FileFrames(tmp_path / "p.f32", 10, chunk=1000)
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        store.append(rng.standard_normal((1000, 10, 3)).astype(np.float32))
+    whole_mb = 50_000 * 10 * 3 * 8 / 1e6           # 12 MB in float64
+    tracemalloc.start()
+    try:
+        z = store.series(lambda p: p[:, 3, 2])       # a view of each chunk, as measures make
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert z.shape == (50_000,) and peak / 1e6 < whole_mb / 4
+    np.testing.assert_array_equal(z, np.concatenate(
+        [store.read(a, a + 1000)[:, 3, 2] for a in range(0, 50_000, 1000)]))
