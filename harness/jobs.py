@@ -23,6 +23,7 @@ content-addressed, write the manifest last.
 from __future__ import annotations
 
 import enum
+from collections import abc
 import hashlib
 import io
 import json
@@ -199,13 +200,30 @@ def npz_bytes(**arrays) -> bytes:
     return buf.getvalue()
 
 
-def parent_inputs(store: OutputStore, job: Job) -> dict[str, bytes] | None:
-    """The outputs of ``job``'s parents by name, or None when a parent has none.
+class ParentOutputs(abc.Mapping):
+    """The outputs of a job's parents by name, each read from the store when asked for, so a
+    stage that reads one mask at a time never holds every parent blob at once."""
+
+    def __init__(self, store: OutputStore, refs: dict):
+        self._store, self._refs = store, refs
+
+    def __getitem__(self, name: str) -> bytes:
+        return self._store.get(self._refs[name])
+
+    def __iter__(self):
+        return iter(self._refs)
+
+    def __len__(self) -> int:
+        return len(self._refs)
+
+
+def parent_inputs(store: OutputStore, job: Job) -> ParentOutputs | None:
+    """The outputs of ``job``'s parents by name (read lazily), or None when a parent has none.
 
     Each parent's ``rows`` are left out when there are several parents: they are already in
     the results, and their names would clash.
     """
-    inputs: dict[str, bytes] = {}
+    refs: dict = {}
     for key in job.parents:
         parent = store.read_manifest(key)
         if parent is None:
@@ -213,8 +231,8 @@ def parent_inputs(store: OutputStore, job: Job) -> dict[str, bytes] | None:
         for name, ref in parent["outputs"].items():
             if name == "rows" and len(job.parents) > 1:
                 continue
-            inputs[name] = store.get(ref)
-    return inputs
+            refs[name] = ref
+    return ParentOutputs(store, refs)
 
 
 def store_outputs(store: OutputStore, key: str, digest: str,

@@ -137,7 +137,7 @@ class Scheduler:
             if shipped is None:
                 self._skip(job, "a parent job has no outputs")
                 return
-            args += (shipped,)
+            args += (dict(shipped),)  # bytes: they travel to a node that cannot read our store
         self._record(job, State.RUNNING)
         self.executor.submit(job.key, call_job, *args)
 
