@@ -224,9 +224,13 @@ class StreamedAnimation:
 def animate_to_file(version, profile, face, rec, tmp: Path) -> StreamedAnimation:
     """Animate ``rec`` a chunk of frames at a time into a positions file under ``tmp``, so a
     worker's memory does not grow with the task's positions (about 6.8 KB a frame for the
-    570-vertex face). A version without ``animate_chunks`` (the protocol only asks for
-    ``animate``) is animated at once and its positions written out."""
+    570-vertex face); of the diagnostics, only the columns the rubric reads are kept. A version
+    without ``animate_chunks`` (the protocol only asks for ``animate``) is animated at once and
+    its positions written out."""
     from cassi.harness.rubric.frames import CHUNK_FRAMES, FileFrames  # noqa: PLC0415
+    from cassi.harness.rubric.measures import DIAGNOSTICS_READ  # noqa: PLC0415
+
+    kept = ("frame", "time_us", *DIAGNOSTICS_READ)
 
     chunks = (version.animate_chunks(profile, face, rec, frames=CHUNK_FRAMES)
               if hasattr(version, "animate_chunks") else iter([version.animate(profile, face, rec)]))
@@ -237,7 +241,7 @@ def animate_to_file(version, profile, face, rec, tmp: Path) -> StreamedAnimation
         store.append(anim.positions)
         frames.append(np.asarray(anim.frames, np.int64))
         times.append(np.asarray(anim.time_us, np.int64))
-        diags.append(anim.diagnostics)
+        diags.append(anim.diagnostics.filter(items=kept))
         name = anim.version
     if store is None:
         raise SkipJob("the version animated no frame")
@@ -338,15 +342,16 @@ def image_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> Sta
 
     from cassi.harness import rubric  # noqa: PLC0415
 
-    frames = {}
-    for f in job.frames:
-        d = np.load(io.BytesIO(inputs[f"masks-{f:06d}"]))
-        frames[int(f)] = StoredFrame(d["mask"].astype(np.int32), d["depth"],
-                                     tuple(str(n) for n in d["part_names"]))
-    rows = rubric.run_image_checks({job.view: frames}, task=job.task, subject=job.subject,
+    def frames():  # one frame's masks at a time: the checks keep a few numbers per frame
+        for f in job.frames:
+            d = np.load(io.BytesIO(inputs[f"masks-{f:06d}"]))
+            yield int(f), StoredFrame(d["mask"].astype(np.int32), d["depth"],
+                                      tuple(str(n) for n in d["part_names"]))
+
+    rows = rubric.run_image_checks({job.view: frames()}, task=job.task, subject=job.subject,
                                    rep=job.rep, version=job.version)
     return StageOutput(rows=pd.DataFrame(rows),
-                       log=[f"image checks on {len(frames)} frame(s): {len(rows)} row(s)"])
+                       log=[f"image checks on {len(job.frames)} frame(s): {len(rows)} row(s)"])
 
 
 def cassi_pipeline(*, render: bool = True) -> Pipeline:

@@ -188,7 +188,7 @@ def test_a_slit_between_the_lips_is_not_an_open_mouth():
     slit.mask[ring] = LIPS
     slit.mask[(yy == 60) & (np.abs(xx - 80) < 25)] = TEETH   # a 1-pixel line of teeth glint
     ctx = I.ImageContext.of({0: slit})
-    assert ctx.openings[0].sum() >= REG.OPEN_MIN_PIXELS and not ctx.open[0]
+    assert ctx.stats[0].opening_px >= REG.OPEN_MIN_PIXELS and not ctx.open[0]
 
 
 def test_centering_is_judged_on_the_wide_open_frames():

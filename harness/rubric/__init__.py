@@ -17,6 +17,7 @@ from .model import (GOOD_RATINGS, RATINGS, TABLE_TOPICS, TABLES, VERSION_ORDER, 
                     Measurement, rate, table_title)
 from .registry import (AGGREGATION_RULES, CHECKS, MIN_FRAMES, checks_for, get_check,
                        registry_table)
+from .measures import DIAGNOSTICS_READ
 from .run import run_geometry_checks, run_image_checks
 from .tables import (component_ratings, file_verdicts, negatives_text, order_versions,
                      rating_counts, table_c_rule, verdicts, version_comparisons,
@@ -25,7 +26,7 @@ from .tables import (component_ratings, file_verdicts, negatives_text, order_ver
 __all__ = [
     "Check", "Measurement", "CHECKS", "TABLES", "TABLE_TOPICS", "RATINGS", "GOOD_RATINGS",
     "VERSION_ORDER", "MIN_FRAMES", "AGGREGATION_RULES", "rate", "table_title", "get_check",
-    "checks_for", "registry_table", "run_geometry_checks", "run_image_checks", "file_verdicts",
+    "checks_for", "registry_table", "DIAGNOSTICS_READ", "run_geometry_checks", "run_image_checks", "file_verdicts",
     "verdicts", "table_c_rule", "component_ratings", "rating_counts", "version_totals",
     "version_summaries", "version_comparisons", "negatives_text", "order_versions",
 ]

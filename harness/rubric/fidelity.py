@@ -71,16 +71,21 @@ def tract_variables(xy: np.ndarray) -> dict[str, np.ndarray]:
 class FidelityContext:
     """Virtual and measured pellets of one animation, as displacements from the first frame.
 
+    Only the displacements are kept (every measure here is a movement, a correlation or a
+    range, none of which needs the absolute position), so a long task holds two (F, 8, 2)
+    arrays and the error, not five.
+
     Attributes
     ----------
-    model, data : float64 (F, 8, 2)
-        mm, XRMB frame; ``data`` is NaN where the pellet was not valid.
+    model_moves, data_moves : float64 (F, 8, 2)
+        mm, XRMB frame, minus the first animated frame; ``data_moves`` is NaN where the pellet
+        was not valid.
     frames : int64 (F,)
         Recording rows.
     """
 
-    model: np.ndarray
-    data: np.ndarray
+    model_moves: np.ndarray
+    data_moves: np.ndarray
     frames: np.ndarray
 
     @classmethod
@@ -93,28 +98,22 @@ class FidelityContext:
                                   f"{frames.max() if frames.size else '-'}) are not rows of the "
                                   f"recording ({xy.shape[0]} rows)",
                                   path=getattr(recording, "path", None))
-        data = xy[frames].copy()
-        valid = np.asarray(recording.valid, bool)[frames]
-        data[~valid] = np.nan
+        data = xy[frames]  # fancy indexing: a copy, changed in place below
+        data[~np.asarray(recording.valid, bool)[frames]] = np.nan
         positions = anim.positions
         model = (positions.series(virtual_pellets, mapping) if isinstance(positions, Frames)
                  else virtual_pellets(positions, mapping))
-        return cls(model=model, data=data, frames=frames)
-
-    @functools.cached_property
-    def model_moves(self) -> np.ndarray:
-        return self.model - self.model[0]
-
-    @functools.cached_property
-    def data_moves(self) -> np.ndarray:
-        first = self.data[0]
-        return self.data - first
+        data -= data[0].copy()
+        model -= model[0].copy()
+        return cls(model_moves=model, data_moves=data, frames=frames)
 
     @functools.cached_property
     def error(self) -> np.ndarray:
         """float (F, 8): distance between the model's and the data's movement, mm (NaN where the
         pellet was not valid)."""
-        return np.linalg.norm(self.model_moves - self.data_moves, axis=-1)
+        d = self.model_moves - self.data_moves
+        np.square(d, out=d)
+        return np.sqrt(d.sum(axis=-1))  # what np.linalg.norm(axis=-1) computes, one temporary less
 
 
 def traces(ctx: FidelityContext, *, step: int) -> list[dict]:
@@ -150,8 +149,8 @@ def articulator_error(ctx: FidelityContext, articulator: str) -> Measurement:
 
 
 def _both(ctx: FidelityContext, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    m = tract_variables(ctx.model)[name]
-    d = tract_variables(ctx.data)[name]
+    m = tract_variables(ctx.model_moves)[name]
+    d = tract_variables(ctx.data_moves)[name]
     ok = np.isfinite(d) & np.isfinite(m)
     return m, d, ok
 

@@ -26,7 +26,7 @@ from .model import Measurement
 from .registry import (CENTERING_OPEN_SHARE, LOWER_TEETH_MIN_PIXELS, OPEN_MIN_HEIGHT,
                        OPEN_MIN_PIXELS, TEETH_MIN_PIXELS, TONGUE_MIN_PIXELS, WIDE_OPEN_SHARE)
 
-__all__ = ["FrameMasks", "ImageContext", "mouth_opening", "teeth_split", "opening_extent",
+__all__ = ["FrameMasks", "FrameStats", "ImageContext", "mouth_opening", "teeth_split", "opening_extent",
            "m_centered_high", "m_centered_low", "m_centering_offset", "m_tongue_visible", "m_tongue_in_front",
            "m_lower_teeth_seen", "m_opening_extent"]
 
@@ -155,22 +155,51 @@ def opening_extent(opening: np.ndarray) -> tuple[float, float]:
     return float(props.area), float(props.extent)
 
 
+@dataclass(frozen=True)
+class FrameStats:
+    """What the image measures need of one frame: a few numbers, so a view's frames are judged
+    one at a time and memory does not grow with the number of rendered frames."""
+
+    frame: int
+    opening_px: int         # pixels enclosed by the lips
+    opening_height: int     # tallest column of the opening, px
+    upper_in_open: int      # upper-teeth pixels inside the opening
+    lower_in_open: int      # lower-teeth pixels inside the opening
+    tongue_patch: int       # largest connected patch of tongue inside the opening, px
+    tongue_in_front: int    # tongue pixels nearer than the front teeth (m_tongue_in_front)
+    region_area: float      # area of the largest opening region, px
+    region_extent: float    # its extent (area / bounding box; nan without an opening)
+
+    @classmethod
+    def of(cls, f: FrameMasks) -> "FrameStats":
+        o = mouth_opening(f.lips)
+        area, extent = opening_extent(o)
+        return cls(f.frame, int(o.sum()), int(o.sum(axis=0).max(initial=0)),
+                   int((f.upper_teeth & o).sum()), int((f.lower_teeth & o).sum()),
+                   _largest(f.tongue & o), _tongue_in_front(f), area, extent)
+
+    @property
+    def open(self) -> bool:
+        return self.opening_px >= OPEN_MIN_PIXELS and self.opening_height >= OPEN_MIN_HEIGHT
+
+
 class ImageContext:
-    """The frames of one view of one animation, as :class:`FrameMasks`, with open-frame stats."""
+    """The frames of one view of one animation, each reduced to :class:`FrameStats` as it
+    arrives (its masks are dropped at once), in frame order."""
 
     def __init__(self, frames: Iterable[FrameMasks]):
-        self.frames = sorted(frames, key=lambda f: f.frame)
-        self.openings = [mouth_opening(f.lips) for f in self.frames]
-        self.open = [int(o.sum()) >= OPEN_MIN_PIXELS and int(o.sum(axis=0).max()) >= OPEN_MIN_HEIGHT
-                     for o in self.openings]
+        self.stats = sorted((FrameStats.of(f) for f in frames), key=lambda s: s.frame)
+        self.open = [s.open for s in self.stats]
 
     @classmethod
     def of(cls, frames: Mapping[int, Any] | Iterable[tuple[int, Any]]) -> "ImageContext":
+        """From ``frame -> RenderResult`` pairs, read one at a time (a generator keeps only one
+        frame's masks in memory)."""
         items = frames.items() if hasattr(frames, "items") else frames
         return cls(FrameMasks.of(k, r) for k, r in items)
 
-    def open_frames(self) -> list[tuple[FrameMasks, np.ndarray]]:
-        return [(f, o) for f, o, ok in zip(self.frames, self.openings, self.open) if ok]
+    def open_frames(self) -> list[FrameStats]:
+        return [s for s in self.stats if s.open]
 
     def upper_shares(self) -> tuple[np.ndarray, np.ndarray]:
         """Per open frame with teeth showing: share of upper teeth among the teeth in the opening.
@@ -181,16 +210,14 @@ class ImageContext:
         of = self.open_frames()
         if not of:
             return np.zeros(0), np.zeros(0, int)
-        widest = max(int(o.sum()) for _, o in of)
+        widest = max(s.opening_px for s in of)
         shares, frames = [], []
-        for f, o in of:
-            if o.sum() < CENTERING_OPEN_SHARE * widest:
+        for s in of:
+            if s.opening_px < CENTERING_OPEN_SHARE * widest:
                 continue
-            u = int((f.upper_teeth & o).sum())
-            lo = int((f.lower_teeth & o).sum())
-            if u + lo >= TEETH_MIN_PIXELS:
-                shares.append(u / (u + lo))
-                frames.append(f.frame)
+            if s.upper_in_open + s.lower_in_open >= TEETH_MIN_PIXELS:
+                shares.append(s.upper_in_open / (s.upper_in_open + s.lower_in_open))
+                frames.append(s.frame)
         return np.asarray(shares, float), np.asarray(frames, int)
 
 
@@ -241,9 +268,9 @@ def m_tongue_visible(ctx: ImageContext) -> Measurement:
     of = ctx.open_frames()
     if not of:
         return _none("no frame with the lips open")
-    seen = np.asarray([_largest(f.tongue & o) >= TONGUE_MIN_PIXELS for f, o in of])
+    seen = np.asarray([s.tongue_patch >= TONGUE_MIN_PIXELS for s in of])
     i = int(np.argmin(seen))
-    return Measurement(float(seen.mean()), of[i][0].frame,
+    return Measurement(float(seen.mean()), of[i].frame,
                        f"tongue seen in {int(seen.sum())} of {seen.size} open frames",
                        frame_value=float(seen[i]))
 
@@ -259,44 +286,49 @@ def m_lower_teeth_seen(ctx: ImageContext) -> Measurement:
     of = ctx.open_frames()
     if not of:
         return _none("no frame with the lips open")
-    seen = np.asarray([int((f.lower_teeth & o).sum()) >= LOWER_TEETH_MIN_PIXELS for f, o in of])
+    seen = np.asarray([s.lower_in_open >= LOWER_TEETH_MIN_PIXELS for s in of])
     i = int(np.argmin(seen))
-    return Measurement(float(seen.mean()), of[i][0].frame,
+    return Measurement(float(seen.mean()), of[i].frame,
                        f"lower teeth seen in {int(seen.sum())} of {seen.size} open frames",
                        frame_value=float(seen[i]))
 
 
 def m_tongue_in_front(ctx: ImageContext) -> Measurement:
-    """Most tongue pixels, in any frame, nearer the camera than the front teeth around them.
+    """Most tongue pixels, in any frame, nearer the camera than the front teeth around them
+    (:func:`_tongue_in_front`)."""
+    best = max(ctx.stats, key=lambda s: s.tongue_in_front, default=None)
+    if best is None or best.tongue_in_front == 0:
+        return Measurement(0.0, -1, "tongue pixels nearer than the front teeth", frame_value=None)
+    return Measurement(float(best.tongue_in_front), best.frame,
+                       "tongue pixels nearer than the front teeth",
+                       frame_value=float(best.tongue_in_front))
 
-    The front teeth's depth is the median depth of the teeth pixels; a tongue pixel is in front
-    of the teeth when it is nearer than that by more than a tenth of the teeth pixels' depth
-    spread (so a tongue seen between the teeth, behind them, never counts).
+
+def _tongue_in_front(f: FrameMasks) -> int:
+    """Tongue pixels of one frame nearer the camera than the front teeth around them.
+
+    The front teeth's depth is the 10th percentile of the teeth pixels' depth; a tongue pixel is
+    in front of the teeth when it is nearer than that by more than a tenth of the teeth pixels'
+    depth spread (so a tongue seen between the teeth, behind them, never counts).
     """
-    best, frame = 0, -1
-    for f in ctx.frames:
-        if not f.tongue.any() or not f.teeth.any():
-            continue
-        td = f.depth[f.teeth]
-        td = td[np.isfinite(td)]
-        if td.size == 0:
-            continue
-        front = float(np.percentile(td, 10))
-        margin = 0.1 * float(np.ptp(td)) + 1e-6
-        # only where the tongue is inside the teeth's horizontal span (the front teeth region)
-        cols = np.flatnonzero(f.teeth.any(axis=0))
-        span = np.zeros_like(f.tongue)
-        span[:, cols.min():cols.max() + 1] = True
-        n = int(np.sum(f.tongue & span & (f.depth < front - margin)))
-        if n > best:
-            best, frame = n, f.frame
-    return Measurement(float(best), frame, "tongue pixels nearer than the front teeth",
-                       frame_value=float(best) if frame >= 0 else None)
+    if not f.tongue.any() or not f.teeth.any():
+        return 0
+    td = f.depth[f.teeth]
+    td = td[np.isfinite(td)]
+    if td.size == 0:
+        return 0
+    front = float(np.percentile(td, 10))
+    margin = 0.1 * float(np.ptp(td)) + 1e-6
+    # only where the tongue is inside the teeth's horizontal span (the front teeth region)
+    cols = np.flatnonzero(f.teeth.any(axis=0))
+    span = np.zeros_like(f.tongue)
+    span[:, cols.min():cols.max() + 1] = True
+    return int(np.sum(f.tongue & span & (f.depth < front - margin)))
 
 
 def m_opening_extent(ctx: ImageContext) -> Measurement:
     """Median extent of the mouth opening over the wide-open frames (area >= 70 % of the max)."""
-    stats = [(f.frame, *opening_extent(o)) for f, o in ctx.open_frames()]
+    stats = [(s.frame, s.region_area, s.region_extent) for s in ctx.open_frames()]
     if not stats:
         return _none("no frame with the lips open")
     areas = np.asarray([a for _, a, _ in stats])

@@ -22,6 +22,11 @@ from .registry import (CHECKS, END_SHARE, JAW_NEAR_CLOSED_MM, JITTER_ORDER, JITT
                        LIPS_BELOW_TEETH_MM, MIN_FRAMES, OFTEN_PERCENTILE, TEETH_HOLD_FRAMES, WIDE_OPEN_MM,
                        WIDE_OPEN_SHARE)
 
+#: The ``Animation.diagnostics`` columns a measure reads (the geometry stage keeps only these of
+#: a long task: a version may report 50 columns, about 400 bytes a frame).
+DIAGNOSTICS_READ = ("lips_overlap", "ellipse")
+
+
 class GeometryContext:
     """One animation's positions with its mouth parts, units and cached measures.
 

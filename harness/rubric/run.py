@@ -150,7 +150,8 @@ def run_image_checks(results_by_view: Mapping[str, Any], *, task: int, subject: 
     Parameters
     ----------
     results_by_view : mapping view -> frames
-        Frames as a mapping ``frame -> RenderResult`` or a sequence of ``(frame, RenderResult)``;
+        Frames as a mapping ``frame -> RenderResult`` or an iterable of ``(frame, RenderResult)``
+        pairs (read once, one frame at a time);
         a RenderResult has ``mask`` int (H, W) part ids, ``part_names`` and ``depth``.
     task : int
 
