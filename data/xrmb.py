@@ -62,6 +62,9 @@ _NUM = r"[+-]?[0-9]{1,12}"
 _SEP = r"[ \t\f\v]+"
 # One well-formed row; rows that do not match are diagnosed field by field (the slow path).
 _ROW_RE = re.compile(rf"[ \t\f\v]*[0-9]{{1,15}}(?:{_SEP}{_NUM}){{16}}[ \t\f\v\r]*", re.ASCII)
+# A whole file of nothing but rows (what every real file is): checked without a string per
+# line; possessive (*+) so the engine keeps no backtracking state per row (2.8 GB an hour).
+_FILE_RE = re.compile(rf"(?:{_ROW_RE.pattern}\n)*+(?:{_ROW_RE.pattern})?", re.ASCII)
 _TASK_NAME_RE = re.compile(
     r"^(?:tp|(?P<subject>[a-z]+[0-9]+)_)(?P<task>[0-9]{1,4})(?:_(?P<rep>[0-9]{1,3}))?\.txy$",
     re.IGNORECASE | re.ASCII)
@@ -213,12 +216,87 @@ def parse_txy(data: bytes | str, *, path: str | os.PathLike | None = None,
     subject = subject or "UNKNOWN"
 
     text = decode_ascii(data, path=path)
-    lines = split_lines(text)
     warnings: list[str] = []
 
     def warn(msg: str, line: int | None = None) -> None:
+        line = None if line is None else int(line)
         warnings.append(str(CassiInputError(msg, path=path, line=line)))
 
+    # NumPy's C text reader parses the table without a Python string per number (an hour-long
+    # file has ten million of them); every row has matched _ROW_RE (integers only) first.
+    if text.strip() and _FILE_RE.fullmatch(text):
+        flat = np.fromstring(text, dtype=np.int64, sep=" ")
+        del text
+        line_numbers = np.arange(1, flat.size // N_COLUMNS + 1)
+    else:  # a header, blank lines or a bad row: line by line, to say which line is wrong
+        rows, line_numbers = _table_rows(split_lines(text), path=path, warn=warn)
+        flat = np.fromstring(" ".join(rows), dtype=np.int64, sep=" ")
+    if flat.size != len(line_numbers) * N_COLUMNS:  # pragma: no cover - defensive: rows matched
+        raise CassiInputError("malformed rows", path=path)
+    values = flat.reshape(len(line_numbers), N_COLUMNS)
+    time_us = values[:, 0].astype(np.int64)
+    dt = np.diff(time_us)
+    bad_dt = np.flatnonzero(dt <= 0)
+    if bad_dt.size:
+        k = int(bad_dt[0]) + 1
+        raise CassiInputError(
+            f"time not increasing: {time_us[k]} us after {time_us[k - 1]} us",
+            path=path, line=int(line_numbers[k]))
+    if dt.size:
+        off = np.flatnonzero(np.abs(dt - NOMINAL_PERIOD_US) > 2)
+        if off.size:
+            k = int(off[0]) + 1
+            warn(f"{off.size} sample interval(s) differ from the nominal {NOMINAL_PERIOD_US} us "
+                 f"(first: {int(dt[k - 1])} us)", line_numbers[k])
+
+    coords = values[:, 1:].reshape(len(line_numbers), len(PELLETS), 2)
+    bad = coords == BAD_VALUE
+    valid = ~bad.any(axis=2)
+    half = np.argwhere(bad.any(axis=2) & ~bad.all(axis=2))
+    if half.size:
+        r, p = half[0]
+        warn(f"{len(half)} pellet sample(s) with only one coordinate 1000000 treated as invalid "
+             f"(first: {PELLETS[p]})", line_numbers[r])
+    wild = np.argwhere(valid & (np.abs(coords) > _MAX_ABS_UM).any(axis=2))
+    if wild.size:
+        r, p = wild[0]
+        warn(f"{len(wild)} pellet sample(s) farther than {_MAX_ABS_UM // 1000} mm from the origin "
+             f"(first: {PELLETS[p]})", line_numbers[r])
+    xy_mm = coords.astype(np.float64)  # in place from here: no temporary of the whole table
+    xy_mm /= 1000.0
+    xy_mm[~valid] = np.nan
+
+    all_valid = valid.all(axis=1)
+    if not all_valid.any():
+        never = [PELLETS[p] for p in range(len(PELLETS)) if not valid[:, p].any()]
+        why = f" (never valid: {', '.join(never)})" if never else ""
+        msg = f"no row has all eight pellets valid{why}"
+        if require_valid:
+            raise CassiInputError(msg, path=path, line=int(line_numbers[-1]))
+        warn(msg)
+    else:
+        first = int(np.flatnonzero(all_valid)[0])
+        # A pellet lost part-way and never recovered (the thesis's JW29/JW32 cases): record it.
+        for p, name in enumerate(PELLETS):
+            after = valid[first:, p]
+            if not after.all():
+                lost = first + int(np.flatnonzero(~after)[0])
+                if not valid[lost:, p].any():
+                    warn(f"pellet {name} invalid from time {time_us[lost]} us to the end",
+                         line_numbers[lost])
+                else:
+                    n = int((~after).sum())
+                    warn(f"pellet {name} invalid in {n} row(s) after the first valid row",
+                         line_numbers[lost])
+    return TaskRecording(path=None if path is None else Path(path), subject=str(subject),
+                         task=int(task), rep=int(rep), time_us=time_us, xy_mm=xy_mm,
+                         valid=valid, warnings=tuple(warnings))
+
+
+def _table_rows(lines: list[str], *, path, warn) -> tuple[list[str], np.ndarray]:
+    """The data rows of a task file and their line numbers (1-based), line by line: a header
+    line is skipped with a warning, blank lines between rows are warned about, anything else
+    that is not a row is an error naming its line."""
     rows: list[str] = []
     line_numbers: list[int] = []
     blank_inside: list[int] = []
@@ -243,68 +321,7 @@ def parse_txy(data: bytes | str, *, path: str | os.PathLike | None = None,
     inner = [b for b in blank_inside if line_numbers[0] < b < line_numbers[-1]]
     if inner:
         warn(f"{len(inner)} blank line(s) between rows (first at line {inner[0]})", inner[0])
-
-    # Every row matched _ROW_RE (integers only), so NumPy's C text reader parses the whole
-    # table without a Python string per number (an hour-long file has ten million of them).
-    flat = np.fromstring(" ".join(rows), dtype=np.int64, sep=" ")
-    if flat.size != len(rows) * N_COLUMNS:  # pragma: no cover - defensive: the rows matched
-        raise CassiInputError("malformed rows", path=path)
-    values = flat.reshape(len(rows), N_COLUMNS)
-    time_us = values[:, 0].astype(np.int64)
-    dt = np.diff(time_us)
-    bad_dt = np.flatnonzero(dt <= 0)
-    if bad_dt.size:
-        k = int(bad_dt[0]) + 1
-        raise CassiInputError(
-            f"time not increasing: {time_us[k]} us after {time_us[k - 1]} us",
-            path=path, line=line_numbers[k])
-    if dt.size:
-        off = np.flatnonzero(np.abs(dt - NOMINAL_PERIOD_US) > 2)
-        if off.size:
-            k = int(off[0]) + 1
-            warn(f"{off.size} sample interval(s) differ from the nominal {NOMINAL_PERIOD_US} us "
-                 f"(first: {int(dt[k - 1])} us)", line_numbers[k])
-
-    coords = values[:, 1:].reshape(len(rows), len(PELLETS), 2)
-    bad = coords == BAD_VALUE
-    valid = ~bad.any(axis=2)
-    half = np.argwhere(bad.any(axis=2) & ~bad.all(axis=2))
-    if half.size:
-        r, p = half[0]
-        warn(f"{len(half)} pellet sample(s) with only one coordinate 1000000 treated as invalid "
-             f"(first: {PELLETS[p]})", line_numbers[r])
-    wild = np.argwhere(valid & (np.abs(coords) > _MAX_ABS_UM).any(axis=2))
-    if wild.size:
-        r, p = wild[0]
-        warn(f"{len(wild)} pellet sample(s) farther than {_MAX_ABS_UM // 1000} mm from the origin "
-             f"(first: {PELLETS[p]})", line_numbers[r])
-    xy_mm = np.where(valid[:, :, None], coords.astype(np.float64) / 1000.0, np.nan)
-
-    all_valid = valid.all(axis=1)
-    if not all_valid.any():
-        never = [PELLETS[p] for p in range(len(PELLETS)) if not valid[:, p].any()]
-        why = f" (never valid: {', '.join(never)})" if never else ""
-        msg = f"no row has all eight pellets valid{why}"
-        if require_valid:
-            raise CassiInputError(msg, path=path, line=line_numbers[-1])
-        warn(msg)
-    else:
-        first = int(np.flatnonzero(all_valid)[0])
-        # A pellet lost part-way and never recovered (the thesis's JW29/JW32 cases): record it.
-        for p, name in enumerate(PELLETS):
-            after = valid[first:, p]
-            if not after.all():
-                lost = first + int(np.flatnonzero(~after)[0])
-                if not valid[lost:, p].any():
-                    warn(f"pellet {name} invalid from time {time_us[lost]} us to the end",
-                         line_numbers[lost])
-                else:
-                    n = int((~after).sum())
-                    warn(f"pellet {name} invalid in {n} row(s) after the first valid row",
-                         line_numbers[lost])
-    return TaskRecording(path=None if path is None else Path(path), subject=str(subject),
-                         task=int(task), rep=int(rep), time_us=time_us, xy_mm=xy_mm,
-                         valid=valid, warnings=tuple(warnings))
+    return rows, np.asarray(line_numbers)
 
 
 def read_txy(path: str | os.PathLike, *, subject: str | None = None, task: int | None = None,

@@ -127,6 +127,14 @@ def test_txy_text_variants_parse_to_the_same_values(rows, crlf, sep, final_newli
     again = parse_txy(format_txy(rec), path="tp001.txy")
     np.testing.assert_array_equal(again.valid, rec.valid)
     np.testing.assert_array_equal(np.nan_to_num(again.xy_mm), np.nan_to_num(rec.xy_mm))
+    # A header line sends the file down the line-by-line path: the same values, line numbers
+    # counted from the header.
+    header = sep.join(["time", *(f"{p}{c}" for p in PELLETS for c in "xy")])
+    slow = parse_txy((header + eol + text).encode(), path="tp001.txy")
+    np.testing.assert_array_equal(slow.time_us, rec.time_us)
+    np.testing.assert_array_equal(slow.valid, rec.valid)
+    np.testing.assert_array_equal(np.nan_to_num(slow.xy_mm), np.nan_to_num(rec.xy_mm))
+    assert len(slow.warnings) == len(rec.warnings) + 1
 
 
 codes = st.sampled_from(["TT", "TB1", "TB2", "TD", "UL", "LL", "MAN I", "MAN M", "MAX G"])
