@@ -2,8 +2,8 @@
 
 - ``geometry``: :func:`cassi.versions.bench.bench_geometry` (owned by the versions package);
 - ``render``: :func:`cassi.renderer.bench.bench_render` (owned by the renderer package);
-- ``geometry_memory``: peak RSS of one worker on a 100,000-row task
-  (:mod:`.bench_memory`, ``geometry_peak_rss_mb``);
+- ``geometry_memory`` and ``image_memory``: peak RSS of one worker on a 100,000-row task
+  (:mod:`.bench_memory`, ``geometry_peak_rss_mb``, ``image_peak_rss_mb``);
 - ``farm_preview``: preview frames per second end to end in the farm (one worker, one core:
   render jobs reading their keyframes, rendering, encoding the PNG in memory, storing PNG and
   masks), per view and the mean over the four views (``farm_preview_frames_per_s``, goal >= 60
@@ -317,6 +317,7 @@ def _variant() -> str:
 #: Figures copied to the top of the document, under the keys the issues name.
 HEADLINE = {"geometry": ("geometry_frames_per_s",),
             "geometry_memory": ("geometry_peak_rss_mb",),
+            "image_memory": ("image_peak_rss_mb",),
             "render": ("render_per_s", "render_pipeline_efficiency", "render_rss_growth_mb",
                        "bare_mi_render_frames_per_s"),
             "farm_preview": ("farm_preview_frames_per_s",)}
@@ -343,6 +344,8 @@ def run_benchmarks(*, quick: bool = False) -> dict:
     report["benchmarks"]["render"] = _registered("cassi.renderer.bench", "bench_render", quick)
     report["benchmarks"]["geometry_memory"] = _registered("cassi.harness.bench_memory",
                                                           "bench_geometry_memory", quick)
+    report["benchmarks"]["image_memory"] = _registered("cassi.harness.bench_memory",
+                                                       "bench_image_memory", quick)
     report["benchmarks"]["farm_preview"] = _registered("cassi.harness.bench", "bench_farm_preview",
                                                        quick)
     try:

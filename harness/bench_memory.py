@@ -1,9 +1,12 @@
-"""``geometry_peak_rss_mb``: peak memory of one worker animating and checking a long task.
+"""Peak memory of one worker on a long task: ``geometry_peak_rss_mb``, ``image_peak_rss_mb``.
 
 A 100,000-row task file (about 11.5 minutes at 145.6 Hz) is made from a real-format task file
 of the embedded corpus, its rows repeated with the time running on; each version's geometry
 job (animation, geometric checks, key frames) then runs in a fresh process, whose peak resident
-set size (``ru_maxrss``) is the figure. The goal is under 1 GB per worker for any legal file.
+set size (``ru_maxrss``) is the figure. The image job of such a task judges the 2,000 frames the
+default stride (50) renders of it: it runs in a fresh process on one real rendered frame's
+masks, stored once and read back for every frame (what the farm's store gives it). The goal is
+under 1 GB per worker for any legal file.
 """
 from __future__ import annotations
 
@@ -21,6 +24,8 @@ import numpy as np
 
 ROWS = 100_000
 GOAL_MB = 1024.0
+#: Frames an image job judges on a ROWS-row task at the default stride (every 50th row).
+IMAGE_FRAMES = ROWS // 50
 
 
 def long_task_corpus(root: Path, *, rows: int = ROWS, subject: str = "JW12", task: int = 2) -> Path:
@@ -63,6 +68,58 @@ def child(corpus: str, subject: str, task: int, version: str) -> None:
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     print(json.dumps({"peak_rss_mb": round(peak, 1), "rss_before_mb": round(before, 1),
                       "seconds": round(wall, 2), "frames": out.meta.get("n_frames")}))
+
+
+class _SameMasks(dict):
+    """Parent outputs where every ``masks-<frame>`` is the same stored blob."""
+
+    def __init__(self, blob: bytes):
+        super().__init__()
+        self.blob = blob
+
+    def __getitem__(self, name: str) -> bytes:
+        return self.blob
+
+
+def image_child(frames: int, subject: str = "JW12", task: int = 2) -> None:
+    """In a fresh process: one image job (front view) over ``frames`` stored frames; print its
+    peak RSS (MB), the RSS before it and its wall time."""
+    import numpy as np  # noqa: PLC0415
+
+    from cassi.harness.jobs import Job, StageContext, npz_bytes  # noqa: PLC0415
+    from cassi.harness.pipeline import (get_corpus, get_face, get_profile, get_renderer,  # noqa: PLC0415
+                                        image_stage)
+
+    c = get_corpus(None)
+    profile = get_profile(c, subject)
+    face = get_face(c, subject, profile)
+    res = get_renderer(c, subject, face, "front", "preview", None).render(
+        np.asarray(face.vertices, np.float32))
+    blob = npz_bytes(mask=np.asarray(res.mask, np.uint8), depth=np.asarray(res.depth, np.float32),
+                     part_names=np.asarray(res.part_names, dtype=str))
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    t0 = time.perf_counter()
+    job = Job("image", subject, task, 1, "cassi-2.1", view="front", frames=tuple(range(frames)))
+    out = image_stage(job, StageContext(out_dir=Path("."), corpus=None), _SameMasks(blob))
+    wall = time.perf_counter() - t0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    print(json.dumps({"peak_rss_mb": round(peak, 1), "rss_before_mb": round(before, 1),
+                      "seconds": round(wall, 2), "frames": frames, "rows": len(out.rows)}))
+
+
+def bench_image_memory(quick: bool = False, *, frames: int = IMAGE_FRAMES) -> dict:
+    """Peak RSS of one image job over ``frames`` frames in a fresh process (``quick``: 200
+    frames, and the figure is then not the headline one)."""
+    frames = min(frames, 200) if quick else frames
+    code = f"from cassi.harness.bench_memory import image_child; image_child({int(frames)})"
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env={**os.environ, "OMP_NUM_THREADS": "1"}, timeout=1800)
+    if proc.returncode != 0:
+        return {"error": proc.stderr.strip().splitlines()[-1:]}
+    out = {**json.loads(proc.stdout.strip().splitlines()[-1]), "goal_mb": GOAL_MB}
+    if frames == IMAGE_FRAMES:
+        out["image_peak_rss_mb"] = out["peak_rss_mb"]
+    return out
 
 
 def bench_geometry_memory(quick: bool = False, *, versions=None, rows: int = ROWS) -> dict:
