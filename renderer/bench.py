@@ -88,7 +88,7 @@ def pipeline_frame(renderer, positions: np.ndarray, metadata: dict | None = None
     from .images import png_bytes
 
     res = renderer.render(positions)
-    png = png_bytes(res.rgb, metadata={**res.metadata(), **(metadata or {})})
+    png = png_bytes(res.srgb8(), metadata={**res.metadata(), **(metadata or {})}, linear=False)
     buf = io.BytesIO()
     np.savez(buf, mask=res.mask.astype(np.uint8), depth=res.depth,
              part_names=np.asarray(res.part_names, dtype=str))
