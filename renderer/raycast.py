@@ -135,8 +135,8 @@ class RaycastPass:
         srgb uint8 (H, W, 3)) of the scene's current geometry."""
         packed, depth, rgb = self.kernel()
         h, w = self.height, self.width
-        words = np.asarray(packed).view(np.uint8).reshape(h, w, 4)
+        words = np.asarray(packed).astype("<u4", copy=False).view(np.uint8).reshape(h, w, 4)
         mask = words[..., 3].astype(np.int32)
-        srgb = np.ascontiguousarray(words[..., :3])
+        srgb = words[..., :3]  # a view: png_bytes reads it in place
         colour = np.stack([np.asarray(v) for v in rgb], axis=-1).reshape(h, w, 3)
         return mask, np.asarray(depth).reshape(h, w), colour, srgb
