@@ -317,7 +317,8 @@ def _variant() -> str:
 #: Figures copied to the top of the document, under the keys the issues name.
 HEADLINE = {"geometry": ("geometry_frames_per_s",),
             "geometry_memory": ("geometry_peak_rss_mb",),
-            "render": ("render_per_s", "render_pipeline_efficiency", "render_rss_growth_mb",
+            "render": ("render_per_s", "render_pipeline_efficiency",
+                       "render_pipeline_efficiency_vs_own_pass", "render_rss_growth_mb",
                        "bare_mi_render_frames_per_s"),
             "farm_preview": ("farm_preview_frames_per_s",)}
 
@@ -333,27 +334,34 @@ def headline(benchmarks: dict) -> dict:
     return out
 
 
-def run_benchmarks(*, quick: bool = False) -> dict:
-    """Every benchmark; the document ``cassi bench`` writes."""
+#: The benchmarks of ``cassi bench``, in the order they run (``--only`` picks some).
+BENCHMARKS = ("geometry", "render", "geometry_memory", "farm_preview", "farm")
+
+
+def run_benchmarks(*, quick: bool = False, only=None) -> dict:
+    """Every benchmark (or those named in ``only``); the document ``cassi bench`` writes."""
+    chosen = tuple(BENCHMARKS if only is None else (n for n in BENCHMARKS if n in set(only)))
     report = {"quick": quick, "cpu_count": os.cpu_count(),
               "cpus_usable": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
               "python": platform.python_version(), "machine": platform.machine(),
-              "variant": _variant(), "benchmarks": {}}
-    report["benchmarks"]["geometry"] = _registered("cassi.versions.bench", "bench_geometry", quick)
-    report["benchmarks"]["render"] = _registered("cassi.renderer.bench", "bench_render", quick)
-    report["benchmarks"]["geometry_memory"] = _registered("cassi.harness.bench_memory",
-                                                          "bench_geometry_memory", quick)
-    report["benchmarks"]["farm_preview"] = _registered("cassi.harness.bench", "bench_farm_preview",
-                                                       quick)
-    try:
-        farm = bench_farm(quick, repeats=1 if quick else 2)  # --quick: under a minute in all
-    except Exception as err:  # noqa: BLE001
-        farm = {"error": f"{type(err).__name__}: {err}",
-                "traceback": traceback.format_exc().splitlines()[-6:]}
-    report["benchmarks"]["farm"] = farm
+              "variant": _variant(), "benchmarks": {}, "only": list(chosen)}
+    registered = {"geometry": ("cassi.versions.bench", "bench_geometry"),
+                  "render": ("cassi.renderer.bench", "bench_render"),
+                  "geometry_memory": ("cassi.harness.bench_memory", "bench_geometry_memory"),
+                  "farm_preview": ("cassi.harness.bench", "bench_farm_preview")}
+    for name in chosen:
+        if name in registered:
+            report["benchmarks"][name] = _registered(*registered[name], quick)
+    if "farm" in chosen:
+        try:
+            farm = bench_farm(quick, repeats=1 if quick else 2)  # --quick: under a minute in all
+        except Exception as err:  # noqa: BLE001
+            farm = {"error": f"{type(err).__name__}: {err}",
+                    "traceback": traceback.format_exc().splitlines()[-6:]}
+        report["benchmarks"]["farm"] = farm
+        if "speedup_2_workers" in farm:
+            report["farm_speedup_2_workers"] = farm["speedup_2_workers"]
+        if "ray_overhead_vs_local" in farm:
+            report["ray_overhead_vs_local"] = farm["ray_overhead_vs_local"]
     report.update(headline(report["benchmarks"]))
-    if "speedup_2_workers" in farm:
-        report["farm_speedup_2_workers"] = farm["speedup_2_workers"]
-    if "ray_overhead_vs_local" in farm:
-        report["ray_overhead_vs_local"] = farm["ray_overhead_vs_local"]
     return report
