@@ -137,6 +137,6 @@ class RaycastPass:
         h, w = self.height, self.width
         words = np.asarray(packed).astype("<u4", copy=False).view(np.uint8).reshape(h, w, 4)
         mask = words[..., 3].astype(np.int32)
-        srgb = words[..., :3]  # a view: png_bytes reads it in place
+        srgb = words[..., :3]  # a view (the PNG encoder copies it once, as it must)
         colour = np.stack([np.asarray(v) for v in rgb], axis=-1).reshape(h, w, 3)
         return mask, np.asarray(depth).reshape(h, w), colour, srgb
