@@ -167,6 +167,7 @@ class FaceRenderer:
         self._scene = None
         self._uploaded: dict[str, np.ndarray] = {}  # float32 positions per part now in the scene
         self.loads = 0  # how many times a scene was loaded (stays 1: tests check it)
+        self._mouth_box = list(mouth_box(self.view, self.preset))  # fixed per view and preset
 
     # -- scene ---------------------------------------------------------------------------
     def _clip(self, expanded: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -360,7 +361,7 @@ class FaceRenderer:
                             spp=self.preset.spp, seed=self.preset.seed,
                             render_s=time.perf_counter() - t0,
                             extra={"shading": self.preset.shading, "look": self.preset.look,
-                                   "mouth_box": list(mouth_box(self.view, self.preset))})
+                                   "mouth_box": list(self._mouth_box)})
 
     def render_to_files(self, positions: np.ndarray, stem: str | Path, *, exr: bool = False,
                         png: bool = True, mask_png: bool = True, sidecar: bool = True,
