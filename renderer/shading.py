@@ -6,6 +6,10 @@ the aov pass (part id and shading normal through each pixel centre) gives colour
 from one ray per pixel, exactly aligned, with no sampling at all: the same bytes in every run,
 process and machine of one variant.
 
+The formula is written once (:func:`shade_terms`) over an array namespace: :func:`shade` runs it
+in numpy on the aov pass's outputs (scalar variants), :mod:`cassi.renderer.raycast` inside its
+Dr.Jit kernel (llvm, cuda), where the same numbers come out without a pass over numpy arrays.
+
 The model is the fixed-function one of the thesis's SGI display: per part a Lambert term plus a
 Blinn-Phong highlight (:class:`~cassi.renderer.views.Material`), the view's studio lights as
 directional lights (no shadows) and the view's ambient level, with smooth (interpolated vertex
