@@ -8,7 +8,9 @@
   render jobs reading their keyframes, rendering, encoding the PNG in memory, storing PNG and
   masks), per view and the mean over the four views (``farm_preview_frames_per_s``, goal >= 60
   with llvm), beside a bare Mitsuba frame (vertex upload + the one ``mi.render``) of the same
-  subject's scene in the same run;
+  subject's scene in the same run; the same two per CPU second as well
+  (``farm_preview_cpu_frames_per_s``: the rate of a worker with a core to itself, which the
+  wall-clock rate on a machine shared with other work understates);
 - ``farm``: the same batch run with 1 and 2 local worker processes side by side
   (``farm_speedup_2_workers``, goal >= 1.6) and through a local Ray cluster (its overhead
   against the 2-worker local pool).
@@ -106,6 +108,12 @@ def _workload(quick: bool, kind: str = "auto"):
             "ctx": dict(options=(("work", 0.1 if quick else 0.2),))}, why
 
 
+def _job_times(rec) -> tuple[float, float] | None:
+    """(wall, cpu) seconds of a job as its worker logged them (first log line), or None."""
+    m = re.match(r"wall ([\d.]+) s, cpu ([\d.]+) s", rec.log[0]) if rec.log else None
+    return (float(m.group(1)), float(m.group(2))) if m else None
+
+
 def _time_batch(work: dict, executor, n_workers: int, tmp: Path, name: str) -> dict:
     """Start ``executor``, wait until each of its workers has run the warm-up, time the batch."""
     t0 = time.perf_counter()
@@ -136,10 +144,10 @@ def _time_batch(work: dict, executor, n_workers: int, tmp: Path, name: str) -> d
     failures = sorted({r.reason for r in res.summary.failed})[:3]
     wall_sum = cpu_sum = 0.0
     for rec in res.records.values():
-        m = re.match(r"wall ([\d.]+) s, cpu ([\d.]+) s", rec.log[0]) if rec.log else None
-        if m:
-            wall_sum += float(m.group(1))
-            cpu_sum += float(m.group(2))
+        times = _job_times(rec)
+        if times:
+            wall_sum += times[0]
+            cpu_sum += times[1]
     return {"jobs": jobs, "jobs_by_stage": by_stage, "failed": c["failed"],
             "failure_reasons": failures, "skipped": c["skipped"], "seconds": round(wall, 3),
             "jobs_per_s": round(jobs / wall, 3) if wall else None,
@@ -261,20 +269,30 @@ def bench_farm_preview(quick: bool = False, *, subject: str = "JW11", task: int 
                             progress=False)
         renders = pd.read_parquet(ctx.out_dir / "renders.parquet")
         seconds: dict[str, float] = {}
+        cpu: dict[str, float] = {}
         for key, rec in res.records.items():
             if rec.stage == "render" and rec.state.value == "done":
                 view = key.split("/")[3]
                 seconds[view] = seconds.get(view, 0.0) + rec.seconds
+                cpu[view] = cpu.get(view, 0.0) + (_job_times(rec) or (0.0, 0.0))[1]
         per_view = {}
         for view in views:
             n = int((renders["view"] == view).sum())
             if n and seconds.get(view):
                 per_view[view] = {"frames": n, "seconds": round(seconds[view], 3),
-                                  "frames_per_s": round(n / seconds[view], 2)}
+                                  "frames_per_s": round(n / seconds[view], 2),
+                                  "cpu_seconds": round(cpu.get(view, 0.0), 3)}
+                if cpu.get(view):
+                    per_view[view]["cpu_frames_per_s"] = round(n / cpu[view], 2)
         out["by_view"] = per_view
         if len(per_view) == len(views):
             out["farm_preview_frames_per_s"] = round(
                 float(np.mean([v["frames_per_s"] for v in per_view.values()])), 2)
+            if all("cpu_frames_per_s" in v for v in per_view.values()):
+                # What a worker with a core to itself would reach: on a shared machine the
+                # wall-clock rate above also counts the time other processes held the core.
+                out["farm_preview_cpu_frames_per_s"] = round(
+                    float(np.mean([v["cpu_frames_per_s"] for v in per_view.values()])), 2)
         else:
             out["error"] = f"render jobs failed: {sorted(res.summary.to_dict()['failed'].items())[:2]}"
 
@@ -287,19 +305,25 @@ def bench_farm_preview(quick: bool = False, *, subject: str = "JW11", task: int 
         keyframes = OutputStore(ctx.out_dir).get(
             OutputStore(ctx.out_dir).read_manifest(geo)["outputs"]["keyframes"])
         positions = np.load(io.BytesIO(keyframes))["positions"]
-        bare = {}
+        bare, bare_cpu = {}, {}
         for view in views:
             r = get_renderer(c, subject, face, view, "preview", None)
             bare_frame(r, positions[0])
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             for pos in positions:
                 bare_frame(r, pos)
             bare[view] = round(len(positions) / (time.perf_counter() - t0), 2)
+            bare_cpu[view] = round(len(positions) / max(1e-9, time.process_time() - c0), 2)
         out["bare_mi_render_frames_per_s"] = bare
         out["bare_mi_render_mean_frames_per_s"] = round(float(np.mean(list(bare.values()))), 2)
+        out["bare_mi_render_cpu_frames_per_s"] = bare_cpu
+        out["bare_mi_render_mean_cpu_frames_per_s"] = round(float(np.mean(list(bare_cpu.values()))), 2)
         if "farm_preview_frames_per_s" in out:
             out["farm_efficiency_vs_bare"] = round(
                 out["farm_preview_frames_per_s"] / out["bare_mi_render_mean_frames_per_s"], 3)
+        if "farm_preview_cpu_frames_per_s" in out:
+            out["farm_cpu_efficiency_vs_bare"] = round(
+                out["farm_preview_cpu_frames_per_s"] / out["bare_mi_render_mean_cpu_frames_per_s"], 3)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return out
@@ -318,9 +342,10 @@ def _variant() -> str:
 HEADLINE = {"geometry": ("geometry_frames_per_s",),
             "geometry_memory": ("geometry_peak_rss_mb",),
             "image_memory": ("image_peak_rss_mb",),
-            "render": ("render_per_s", "render_pipeline_efficiency", "render_rss_growth_mb",
+            "render": ("render_per_s", "render_pipeline_efficiency",
+                       "render_pipeline_efficiency_vs_own_pass", "render_rss_growth_mb",
                        "bare_mi_render_frames_per_s"),
-            "farm_preview": ("farm_preview_frames_per_s",)}
+            "farm_preview": ("farm_preview_frames_per_s", "farm_preview_cpu_frames_per_s")}
 
 
 def headline(benchmarks: dict) -> dict:
@@ -334,29 +359,35 @@ def headline(benchmarks: dict) -> dict:
     return out
 
 
-def run_benchmarks(*, quick: bool = False) -> dict:
-    """Every benchmark; the document ``cassi bench`` writes."""
+#: The benchmarks of ``cassi bench``, in the order they run (``--only`` picks some).
+BENCHMARKS = ("geometry", "render", "geometry_memory", "image_memory", "farm_preview", "farm")
+
+
+def run_benchmarks(*, quick: bool = False, only=None) -> dict:
+    """Every benchmark (or those named in ``only``); the document ``cassi bench`` writes."""
+    chosen = tuple(BENCHMARKS if only is None else (n for n in BENCHMARKS if n in set(only)))
     report = {"quick": quick, "cpu_count": os.cpu_count(),
               "cpus_usable": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
               "python": platform.python_version(), "machine": platform.machine(),
-              "variant": _variant(), "benchmarks": {}}
-    report["benchmarks"]["geometry"] = _registered("cassi.versions.bench", "bench_geometry", quick)
-    report["benchmarks"]["render"] = _registered("cassi.renderer.bench", "bench_render", quick)
-    report["benchmarks"]["geometry_memory"] = _registered("cassi.harness.bench_memory",
-                                                          "bench_geometry_memory", quick)
-    report["benchmarks"]["image_memory"] = _registered("cassi.harness.bench_memory",
-                                                       "bench_image_memory", quick)
-    report["benchmarks"]["farm_preview"] = _registered("cassi.harness.bench", "bench_farm_preview",
-                                                       quick)
-    try:
-        farm = bench_farm(quick, repeats=1 if quick else 2)  # --quick: under a minute in all
-    except Exception as err:  # noqa: BLE001
-        farm = {"error": f"{type(err).__name__}: {err}",
-                "traceback": traceback.format_exc().splitlines()[-6:]}
-    report["benchmarks"]["farm"] = farm
+              "variant": _variant(), "benchmarks": {}, "only": list(chosen)}
+    registered = {"geometry": ("cassi.versions.bench", "bench_geometry"),
+                  "render": ("cassi.renderer.bench", "bench_render"),
+                  "geometry_memory": ("cassi.harness.bench_memory", "bench_geometry_memory"),
+                  "image_memory": ("cassi.harness.bench_memory", "bench_image_memory"),
+                  "farm_preview": ("cassi.harness.bench", "bench_farm_preview")}
+    for name in chosen:
+        if name in registered:
+            report["benchmarks"][name] = _registered(*registered[name], quick)
+    if "farm" in chosen:
+        try:
+            farm = bench_farm(quick, repeats=1 if quick else 2)  # --quick: under a minute in all
+        except Exception as err:  # noqa: BLE001
+            farm = {"error": f"{type(err).__name__}: {err}",
+                    "traceback": traceback.format_exc().splitlines()[-6:]}
+        report["benchmarks"]["farm"] = farm
+        if "speedup_2_workers" in farm:
+            report["farm_speedup_2_workers"] = farm["speedup_2_workers"]
+        if "ray_overhead_vs_local" in farm:
+            report["ray_overhead_vs_local"] = farm["ray_overhead_vs_local"]
     report.update(headline(report["benchmarks"]))
-    if "speedup_2_workers" in farm:
-        report["farm_speedup_2_workers"] = farm["speedup_2_workers"]
-    if "ray_overhead_vs_local" in farm:
-        report["ray_overhead_vs_local"] = farm["ray_overhead_vs_local"]
     return report

@@ -51,6 +51,9 @@ def _add_bench(sub) -> None:
                        description="Run the registered benchmarks and write one JSON file.")
     p.add_argument("--out", type=Path, default=Path("bench.json"), help="JSON file to write")
     p.add_argument("--quick", action="store_true", help="small sizes (CI smoke test)")
+    p.add_argument("--only", default=None, metavar="NAME[,NAME]",
+                   help="run only these benchmarks (geometry, render, geometry_memory, "
+                        "farm_preview, farm); e.g. --only render,farm_preview")
     p.set_defaults(func=cmd_bench)
 
 
@@ -87,9 +90,16 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from .bench import run_benchmarks  # noqa: PLC0415
+    from .bench import BENCHMARKS, run_benchmarks  # noqa: PLC0415
 
-    report = run_benchmarks(quick=args.quick)
+    only = None
+    if args.only:
+        only = [n for n in args.only.split(",") if n]
+        unknown = sorted(set(only) - set(BENCHMARKS))
+        if unknown:
+            raise CassiInputError(f"no benchmark {', '.join(unknown)}; "
+                                  f"known: {', '.join(BENCHMARKS)}")
+    report = run_benchmarks(quick=args.quick, only=only)
     out = Path(args.out)
     try:
         atomic_write_text(out, json.dumps(report, indent=1, sort_keys=True, default=str) + "\n")

@@ -286,11 +286,11 @@ def _geometry_output(job: Job, ctx: StageContext, rec, anim: StreamedAnimation,
     return StageOutput(rows=rows, files={"keyframes": (keyframes, ".npz")}, meta=meta, log=log)
 
 
-def _png_bytes(rgb: np.ndarray, metadata: dict | None = None) -> bytes:
-    """The frame's sRGB PNG, encoded in memory (no temporary file per frame)."""
+def _png_bytes(srgb: np.ndarray, metadata: dict | None = None) -> bytes:
+    """The frame's sRGB PNG (uint8 (H, W, 3)), encoded in memory (no temporary file per frame)."""
     from cassi.renderer.images import png_bytes  # noqa: PLC0415
 
-    return png_bytes(rgb, metadata=metadata)
+    return png_bytes(srgb, metadata=metadata, linear=False)
 
 
 class StoredFrame:
@@ -323,7 +323,7 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
         meta = {"subject": job.subject, "task": job.task, "rep": job.rep,
                 "version": job.version, "view": job.view, "frame": f,
                 "synthetic": ctx.synthetic}
-        files[f"render-{f:06d}"] = (_png_bytes(res.rgb, {**res.metadata(), **meta}), ".png")
+        files[f"render-{f:06d}"] = (_png_bytes(res.srgb8(), {**res.metadata(), **meta}), ".png")
         mask = np.asarray(res.mask)
         if mask.max(initial=0) > 255:
             raise ValueError("more than 255 parts: masks are stored as uint8")

@@ -10,6 +10,8 @@ Each frame gives the colour image (linear RGB), the part shown at each pixel and
 from the camera, from one pass of the ``aov`` integrator through the pixel centres (part id,
 depth, surface normal). The ``preview`` preset shades its colour from that pass
 (:mod:`cassi.renderer.shading`): one ray per pixel, no noise, the same bytes in every process.
+In JIT variants one Dr.Jit kernel (:mod:`cassi.renderer.raycast`) traces the same rays and gives
+part, depth, colour and its 8-bit sRGB encoding at once.
 The ``final`` preset path-traces the colour in a second pass (same camera, same pixel grid).
 """
 from __future__ import annotations
@@ -24,7 +26,7 @@ import numpy as np
 
 from cassi.data.errors import CassiInputError
 
-from . import scenes, shading
+from . import raycast, scenes, shading
 from .variant import activate_variant, choose_variant
 from .views import Preset, View, mouth_box, preset as _preset, view as _view
 
@@ -51,6 +53,9 @@ class RenderResult:
         ``("background", part1, part2, ...)``.
     view, preset, variant : str
         What produced the image (recorded in every file written from it).
+    srgb : uint8 (H, W, 3) or None
+        ``images.to_srgb8(rgb)`` when the renderer computed it with the colour (raycast
+        presets in JIT variants); read it through :meth:`srgb8`.
     """
 
     rgb: np.ndarray
@@ -64,6 +69,15 @@ class RenderResult:
     seed: int
     render_s: float = 0.0
     extra: dict = field(default_factory=dict)
+    srgb: np.ndarray | None = None
+
+    def srgb8(self) -> np.ndarray:
+        """uint8 (H, W, 3): the colour sRGB-encoded, ``images.to_srgb8(rgb)`` (the renderer's
+        kernel gives it in JIT variants; else it is computed here)."""
+        if self.srgb is not None:
+            return self.srgb
+        from .images import to_srgb8
+        return to_srgb8(self.rgb)
 
     def part_mask(self, part: str) -> np.ndarray:
         """bool (H, W): where ``part`` is the visible surface."""
@@ -153,6 +167,7 @@ class FaceRenderer:
         self._scene = None
         self._uploaded: dict[str, np.ndarray] = {}  # float32 positions per part now in the scene
         self.loads = 0  # how many times a scene was loaded (stays 1: tests check it)
+        self._mouth_box = list(mouth_box(self.view, self.preset))  # fixed per view and preset
 
     # -- scene ---------------------------------------------------------------------------
     def _clip(self, expanded: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -237,6 +252,13 @@ class FaceRenderer:
         self._lut = lut
         self._near_offset = _near_offset(self.view, self.preset)
         self._tables = shading.shading_tables(self.view, self.preset, self.part_names)
+        # JIT variants: colour, sRGB, part and depth from one Dr.Jit kernel (renderer.raycast);
+        # scalar_rgb keeps the aov pass with numpy shading (its Dr.Jit arrays are scalars).
+        self._raycast = None
+        if self.preset.shading == "raycast" and not mi.variant().startswith("scalar"):
+            self._raycast = raycast.RaycastPass(
+                self._scene, self._sensor_mask, by_id[scenes.mesh_id(scenes.MERGED)],
+                self._tri_part, self._near_offset, self._tables, look=self.preset.look)
 
     def _group_positions(self, name: str, expanded: dict[str, np.ndarray]) -> np.ndarray:
         """float32 (W, 3): the vertices of one scene mesh (its parts' vertices in order)."""
@@ -277,7 +299,8 @@ class FaceRenderer:
     def render_pass(self) -> np.ndarray:
         """The preset's one colour-giving ``mi.render`` of the current geometry, as Mitsuba
         returns it (the bare call ``cassi bench`` compares the pipeline with): the aov pass for
-        raycast presets, the path-traced image for path presets."""
+        raycast presets (which JIT variants replace by the :mod:`~cassi.renderer.raycast`
+        kernel: same rays, colour included), the path-traced image for path presets."""
         import mitsuba as mi
         if self.preset.shading == "raycast":
             return mi.render(self._scene, integrator=self._mask_integrator,
@@ -293,9 +316,16 @@ class FaceRenderer:
 
     def render_aov(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(mask int32 (H, W), depth float32 (H, W), colour) of the current geometry from the
-        one aov pass; colour is the raycast shading (float32 (H, W, 3) linear RGB), or None
-        for path presets."""
+        one pass through the pixel centres; colour is the raycast shading (float32 (H, W, 3)
+        linear RGB), or None for path presets."""
+        mask, depth, colour, _ = self._one_pass()
+        return mask, depth, colour
+
+    def _one_pass(self):
+        """render_aov's results and the sRGB colour when the kernel gave it (else None)."""
         import mitsuba as mi
+        if self._raycast is not None:
+            return self._raycast()
         aov = np.asarray(mi.render(self._scene, integrator=self._mask_integrator,
                                    sensor=self._sensor_mask, seed=0, spp=1), dtype=np.float32)
         raw = np.rint(aov[..., 1]).astype(np.int64)
@@ -312,7 +342,7 @@ class FaceRenderer:
         colour = None
         if self.preset.shading == "raycast":
             colour = shading.shade(self._tables, mask, aov[..., 2:5])
-        return mask, depth, colour
+        return mask, depth, colour, None
 
     def render_mask(self) -> tuple[np.ndarray, np.ndarray]:
         """(mask int32 (H, W), depth float32 (H, W)) of the current geometry."""
@@ -323,15 +353,15 @@ class FaceRenderer:
         """Render one frame: colour, mask and depth (one pass for raycast presets)."""
         t0 = time.perf_counter()
         self.update(positions)
-        mask, depth, rgb = self.render_aov()
+        mask, depth, rgb, srgb = self._one_pass()
         if rgb is None:
             rgb = self.render_colour()
-        return RenderResult(rgb=rgb, mask=mask, depth=depth, part_names=self.part_names,
+        return RenderResult(rgb=rgb, mask=mask, depth=depth, part_names=self.part_names, srgb=srgb,
                             view=self.view.name, preset=self.preset.name, variant=self.variant,
                             spp=self.preset.spp, seed=self.preset.seed,
                             render_s=time.perf_counter() - t0,
                             extra={"shading": self.preset.shading, "look": self.preset.look,
-                                   "mouth_box": list(mouth_box(self.view, self.preset))})
+                                   "mouth_box": list(self._mouth_box)})
 
     def render_to_files(self, positions: np.ndarray, stem: str | Path, *, exr: bool = False,
                         png: bool = True, mask_png: bool = True, sidecar: bool = True,

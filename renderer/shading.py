@@ -6,6 +6,10 @@ the aov pass (part id and shading normal through each pixel centre) gives colour
 from one ray per pixel, exactly aligned, with no sampling at all: the same bytes in every run,
 process and machine of one variant.
 
+The formula is written once (:func:`shade_terms`) over an array namespace: :func:`shade` runs it
+in numpy on the aov pass's outputs (scalar variants), :mod:`cassi.renderer.raycast` inside its
+Dr.Jit kernel (llvm, cuda), where the same numbers come out without a pass over numpy arrays.
+
 The model is the fixed-function one of the thesis's SGI display: per part a Lambert term plus a
 Blinn-Phong highlight (:class:`~cassi.renderer.views.Material`), the view's studio lights as
 directional lights (no shadows) and the view's ambient level, with smooth (interpolated vertex
@@ -26,7 +30,8 @@ import numpy as np
 
 from .views import Material, Preset, View, material_for
 
-__all__ = ["ShadingTables", "shading_tables", "shade", "pixel_directions"]
+__all__ = ["ShadingTables", "shading_tables", "shade", "shade_terms", "columns", "NumpyOps",
+           "pixel_directions"]
 
 
 def pixel_directions(view: View, preset: Preset) -> np.ndarray:
@@ -102,8 +107,88 @@ def shading_tables(view: View, preset: Preset, part_names: tuple[str, ...]) -> S
         background=np.full(3, view.ambient, np.float32))
 
 
+class NumpyOps:
+    """Array operations of :func:`shade_terms` on numpy arrays (float32 kept float32)."""
+
+    @staticmethod
+    def take(column: np.ndarray, part: np.ndarray) -> np.ndarray:
+        return column[part]
+
+    @staticmethod
+    def select(cond, a: float, b) -> np.ndarray:
+        return np.where(cond, np.float32(a), np.asarray(b, np.float32))
+
+    maximum, clip, power, abs = (staticmethod(np.maximum), staticmethod(np.clip),
+                                 staticmethod(np.power), staticmethod(np.abs))
+
+
+def shade_terms(ops, tables, part, normal, view, half_norm):
+    """The shading formula, written once for numpy (:class:`NumpyOps`) and Dr.Jit arrays
+    (:class:`cassi.renderer.raycast.DrJitOps`).
+
+    Parameters
+    ----------
+    ops
+        The array operations (``take``, ``select``, ``maximum``, ``clip``, ``power``, ``abs``).
+    tables
+        Per-part columns in the backend's arrays: ``ambient_rgb`` and ``diffuse`` (3 columns
+        each), ``specular``, ``shininess``; and ``light_dirs``, ``light_rgb`` (L, 3) numbers.
+    part : int (N,)
+        Part index per pixel (only hit pixels are meaningful).
+    normal, view : 3 arrays (N,)
+        World-space unit surface normal and direction towards the camera, per component.
+    half_norm : L arrays (N,)
+        ``1 / |l + v|`` per light.
+
+    Returns
+    -------
+    list of 3 arrays (N,)
+        Linear R, G, B.
+    """
+    nx, ny, nz = normal
+    ndv = nx * view[0] + ny * view[1] + nz * view[2]
+    # two-sided: a normal facing away from the camera is flipped (n -> -n flips every n . x)
+    sign = ops.select(ndv < 0, -1.0, 1.0)
+    ndv = ops.abs(ndv)
+    shininess = ops.take(tables.shininess, part)
+    diffuse_e, glossy_e = [0.0] * 3, [0.0] * 3
+    for (lx, ly, lz), rgb, hn in zip(tables.light_dirs, tables.light_rgb, half_norm):
+        ndl = (nx * float(lx) + ny * float(ly) + nz * float(lz)) * sign
+        lit = ops.maximum(ndl, 0.0)
+        ndh = ops.clip((ndl + ndv) * hn, 0.0, 1.0)
+        glossy = ops.power(ndh, shininess) * lit
+        for c in range(3):
+            diffuse_e[c] = diffuse_e[c] + lit * float(rgb[c])
+            glossy_e[c] = glossy_e[c] + glossy * float(rgb[c])
+    specular = ops.take(tables.specular, part)
+    return [ops.take(tables.ambient_rgb[c], part) + ops.take(tables.diffuse[c], part) * diffuse_e[c]
+            + specular * glossy_e[c] for c in range(3)]
+
+
+@dataclass(frozen=True)
+class _Columns:
+    """Per-part tables as columns (what :func:`shade_terms` reads)."""
+
+    ambient_rgb: tuple
+    diffuse: tuple
+    specular: object
+    shininess: object
+    light_dirs: np.ndarray
+    light_rgb: np.ndarray
+
+
+def columns(tables: ShadingTables, convert=np.ascontiguousarray) -> _Columns:
+    """The per-part tables of ``tables`` as columns, each passed through ``convert`` (e.g. a
+    Dr.Jit array type)."""
+    return _Columns(ambient_rgb=tuple(convert(tables.ambient_rgb[:, c]) for c in range(3)),
+                    diffuse=tuple(convert(tables.diffuse[:, c]) for c in range(3)),
+                    specular=convert(tables.specular), shininess=convert(tables.shininess),
+                    light_dirs=tables.light_dirs, light_rgb=tables.light_rgb)
+
+
 def shade(tables: ShadingTables, mask: np.ndarray, normals: np.ndarray) -> np.ndarray:
-    """Linear RGB of one frame.
+    """Linear RGB of one frame, in numpy (scalar variants; JIT variants shade inside their
+    Dr.Jit kernel, :mod:`cassi.renderer.raycast`, with the same :func:`shade_terms`).
 
     Parameters
     ----------
@@ -126,18 +211,11 @@ def shade(tables: ShadingTables, mask: np.ndarray, normals: np.ndarray) -> np.nd
     hit = np.flatnonzero(flat)
     if not hit.size:
         return out.reshape(h, w, 3)
-    part = flat[hit]
     n = normals.reshape(-1, 3)[hit]
-    ndv = (n * tables.view_dirs.reshape(-1, 3)[hit]).sum(axis=1)
-    # two-sided: a normal facing away from the camera is flipped (n -> -n flips every n . x)
-    sign = np.where(ndv < 0, np.float32(-1.0), np.float32(1.0))
-    ndl = (n @ tables.light_dirs.T) * sign[:, None]                      # (N, L)
-    ndv = np.abs(ndv)
-    lit = np.maximum(ndl, 0.0)
-    ndh = (ndl + ndv[:, None]) * tables.half_norm.reshape(h * w, -1)[hit]
-    np.clip(ndh, 0.0, 1.0, out=ndh)
-    glossy = np.power(ndh, tables.shininess[part][:, None]) * lit
-    colour = tables.ambient_rgb[part] + tables.diffuse[part] * (lit @ tables.light_rgb)
-    colour += tables.specular[part][:, None] * (glossy @ tables.light_rgb)
-    out[hit] = colour
+    view = tables.view_dirs.reshape(-1, 3)[hit]
+    half = tables.half_norm.reshape(h * w, -1)[hit]
+    rgb = shade_terms(NumpyOps, columns(tables), flat[hit], (n[:, 0], n[:, 1], n[:, 2]),
+                      (view[:, 0], view[:, 1], view[:, 2]),
+                      [half[:, k] for k in range(half.shape[1])])
+    out[hit] = np.stack(rgb, axis=1)
     return out.reshape(h, w, 3)

@@ -17,5 +17,18 @@ def test_farm_preview_benchmark_reports_every_view_beside_a_bare_render():
     frames = {v["frames"] for v in out["by_view"].values()}
     assert len(frames) == 1 and frames.pop() >= 20  # every view renders the same frames
     assert out["farm_preview_frames_per_s"] > 0 and out["farm_efficiency_vs_bare"] > 0
+    assert 0 < out["farm_preview_cpu_frames_per_s"] and out["farm_cpu_efficiency_vs_bare"] > 0
     assert headline({"farm_preview": out}) == {
-        "farm_preview_frames_per_s": out["farm_preview_frames_per_s"]}
+        "farm_preview_frames_per_s": out["farm_preview_frames_per_s"],
+        "farm_preview_cpu_frames_per_s": out["farm_preview_cpu_frames_per_s"]}
+
+
+@pytest.mark.parametrize("only", ["nope", "render,nope"])
+def test_bench_only_names_unknown_benchmarks(only, tmp_path, capsys):
+    from cassi.harness.cli import main
+
+    code = main(["bench", "--only", only, "--out", str(tmp_path / "b.json")])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "no benchmark nope" in err and "farm_preview" in err
+    assert not (tmp_path / "b.json").exists()

@@ -84,3 +84,26 @@ def test_animation_mp4_and_gif(tmp_path):
         write_animation(tmp_path / "b.mp4", iter([]), fps=10)
     assert not (tmp_path / "b.mp4").exists()
     assert realtime_fps(1) == 50.0 and abs(realtime_fps(5) - 1e6 / (6866 * 5)) < 1e-9
+
+
+@pytest.mark.parametrize("shape", [(37, 53, 3), (16, 9)])
+def test_png_bytes_decode_exactly_in_pillow_and_openimageio(tmp_path, shape):
+    """png_bytes writes its own rows (Up filter, zlib): readers other than ours must agree."""
+    import io
+
+    from PIL import Image
+
+    rng = np.random.default_rng(3)
+    pixels = rng.integers(0, 256, shape, dtype=np.uint8)
+    pixels[5:9] = 250  # flat rows next to noisy ones: both byte wrap-arounds of the filter
+    meta = {"view": "front", "part_names": ["background", "skin"], "subject": "JW11 é ✓"}
+    data = images.png_bytes(pixels, metadata=meta, linear=False)
+    assert data == images.png_bytes(pixels.copy(), metadata=dict(meta), linear=False)
+    with Image.open(io.BytesIO(data)) as im:
+        im.load()
+        np.testing.assert_array_equal(np.asarray(im), pixels)
+        assert im.text["cassi:subject"] == "JW11 é ✓"
+    (tmp_path / "a.png").write_bytes(data)
+    back = images.read_image(tmp_path / "a.png")
+    np.testing.assert_array_equal(back if back.ndim == len(shape) else back[..., 0], pixels)
+    assert images.read_metadata(tmp_path / "a.png") == meta

@@ -146,5 +146,31 @@ def test_bench_render_quick_on_toy_head():
                                         "top/preview", "front/final"}
     assert all(v > 0 for v in out["render_per_s"].values())
     assert 0 < out["render_pipeline_efficiency"] <= 1.5
+    assert 0 < out["render_pipeline_efficiency_vs_own_pass"] <= 1.0
     assert out["render_rss_growth_mb"] < 50
     assert all(n == 1 for n in out["scene_loads"].values())
+
+
+@pytest.mark.parametrize("view,look", [("front", "smooth"), ("side", "flat"), ("top", "smooth")])
+def test_kernel_equals_aov_pass_with_numpy_shading(head, view, look):
+    """JIT variants render raycast presets in one Dr.Jit kernel (renderer.raycast); Mitsuba's aov
+    pass with the numpy shading is the path it replaces (and scalar_rgb's). Same rays: the same
+    mask and depth bits; same formula: the same 8-bit colour, which is to_srgb8 of the linear one."""
+    topo, pos = head
+    r = FaceRenderer(topo, view, dataclasses.replace(SMALL, look=look))
+    moved = pos.copy()
+    moved[:, 0] += 7.0
+    res = r.render(moved)
+    if r._raycast is None:
+        pytest.skip("scalar variant: the aov pass is the only path")
+    kernel, r._raycast = r._raycast, None
+    try:
+        mask, depth, rgb, srgb = r._one_pass()
+    finally:
+        r._raycast = kernel
+    assert srgb is None and res.srgb is not None
+    np.testing.assert_array_equal(res.mask, mask)
+    np.testing.assert_array_equal(res.depth, depth)
+    np.testing.assert_array_equal(res.srgb, images.to_srgb8(res.rgb))
+    np.testing.assert_array_equal(res.srgb8(), images.to_srgb8(rgb))
+    assert float(np.abs(res.rgb - rgb).max()) < 1e-4
