@@ -1,10 +1,11 @@
-"""Collision handling of CASSI 3.0: the tongue is kept behind the front teeth, under the palate
-and in front of the pharyngeal wall by a *soft* projection.
+"""Collision handling of CASSI 3.0: the tongue is kept under the palate and in front of the
+pharyngeal wall by a *soft* projection, and out of the front teeth by a projection onto their
+surface (or, when the tongue is protruded, into the gap between them).
 
-A coordinate ``v`` bounded above by ``b`` becomes ``b - w * log(1 + exp((b - v) / w))``: equal
-to ``v`` (within ``w * exp(-(b - v) / w)``) when it is clear of the bound, ``b`` when the data
-puts it far past, and a smooth, monotonic function of ``v`` in between, so the constraint adds
-no jitter to a smooth trajectory. Bounds already include the margin.
+Soft: a coordinate ``v`` bounded above by ``b`` becomes ``b - w * log(1 + exp((b - v) / w))``:
+equal to ``v`` (within ``w * exp(-(b - v) / w)``) when it is clear of the bound, ``b`` when the
+data puts it far past, and a smooth, monotonic function of ``v`` in between, so the constraint
+adds no jitter to a smooth trajectory. Bounds already include the margin.
 """
 from __future__ import annotations
 
@@ -140,7 +141,7 @@ class FrontTeeth:
         p : float (F, E, 3)
             The points (left half), changed in place and returned.
         margin, zone : float
-            Parke units.
+            Parke units; the margin also closes the slits between neighbouring teeth.
         protruding : bool (F,)
 
         Returns
@@ -148,16 +149,19 @@ class FrontTeeth:
         p
         """
         y = np.abs(p[..., 1])
-        wu, tu = _wall(positions, self.upper, y, p[..., 2])
-        wl, tl = _wall(positions, self.lower, y, p[..., 2])
-        wall = np.minimum(wu, wl)
+        wu, tu = _wall(positions, self.upper, y, p[..., 2], margin)
+        wl, tl = _wall(positions, self.lower, y, p[..., 2], margin)
         out = protruding[:, None]
         # the gap's ends; a set that does not span |y| (beside it, or between two teeth)
         # leaves that end open
         lo = np.where(np.isnan(tl), -np.inf, tl + margin)
         hi = np.where(np.isnan(tu), np.inf, tu - margin)
-        squeeze = out & (p[..., 0] > wall - zone) & (hi > lo)
-        p[..., 2] = np.where(squeeze, np.clip(p[..., 2], lo, hi), p[..., 2])
+        # down from the upper teeth's height near the upper teeth, up from the lower's near
+        # the lower teeth (each set's own surface: the jaw moves the lower one back)
+        open_ = out & (hi > lo)
+        z = p[..., 2]
+        z = np.where(open_ & (p[..., 0] > wu - zone) & (z > hi), hi, z)
+        p[..., 2] = np.where(open_ & (p[..., 0] > wl - zone) & (z < lo), lo, z)
         # what is still in front of a tooth at its height (or anywhere, inside the mouth)
         z = p[..., 2]
         in_upper = ~out | (z > tu - margin)
@@ -167,10 +171,12 @@ class FrontTeeth:
         return p
 
 
-def _wall(positions: np.ndarray, edges: np.ndarray, y: np.ndarray, z: np.ndarray
-          ) -> tuple[np.ndarray, np.ndarray]:
+def _wall(positions: np.ndarray, edges: np.ndarray, y: np.ndarray, z: np.ndarray,
+          slit: float) -> tuple[np.ndarray, np.ndarray]:
     """For points (F, E): x of the front-most quad of ``edges`` at (|y|, z) (each edge
-    extended vertically) and the z of that quad's tip at |y|; +inf / NaN where none spans |y|."""
+    extended vertically) and the z of that quad's tip at |y|; +inf / NaN where none spans |y|.
+    Each quad's span is widened by ``slit`` on both sides, so that the slits between
+    neighbouring teeth (0.8 Parke units each side in the generated face) are no way through."""
     if len(edges) == 0:
         shape = np.shape(y)
         return np.full(shape, np.inf), np.full(shape, np.nan)
@@ -184,7 +190,7 @@ def _wall(positions: np.ndarray, edges: np.ndarray, y: np.ndarray, z: np.ndarray
     ey = np.abs(tip[:, None, ..., 1] + t * (gum - tip)[:, None, ..., 1])
     ay = y[:, :, None]
     y0, y1 = ey[..., 0], ey[..., 1]
-    span = (ay >= np.minimum(y0, y1)) & (ay <= np.maximum(y0, y1))
+    span = (ay >= np.minimum(y0, y1) - slit) & (ay <= np.maximum(y0, y1) + slit)
     s = (ay - y0) / np.where(np.abs(y1 - y0) > 1e-12, y1 - y0, 1.0)
     x = np.where(span, ex[..., 0] + s * (ex[..., 1] - ex[..., 0]), np.inf)
     tz = tip[:, None, :, 0, 2] + s * (tip[:, None, :, 1, 2] - tip[:, None, :, 0, 2])

@@ -79,7 +79,7 @@ TEETH_STATIONS = 4
 #: 20 mm off its pellet). 10 mm: the length of the tongue between its stations near the tip
 #: (tip -> T1 8 mm, T1 -> the next station ~8 mm), so no edge from a free point behind can cross
 #: a tooth on its way to a point in the gap.
-PROTRUSION_ZONE_MM = 10.0
+PROTRUSION_ZONE_MM = 6.0
 #: A teeth quad is the arch's front (a wall the tongue could pass forward through) when its
 #: outward normal is at least this much forward (|n_x|, 60 degrees off straight ahead); the rest
 #: run along the cheek. The same value CASSI 1.0 uses for its arch (versions.constants

@@ -100,6 +100,8 @@ class ThickTongueStage:
         wall_x = np.interp(back[..., 1], pz, px)
         back[..., 0] = soft_above(back[..., 0], wall_x + K.PHARYNX_CLEARANCE_MM * scale, w)
         st = centre_stations(tip, pellets, back)
+        out = tip[:, 0] > incisor_wall_x(teeth, tip[:, 1]) - margin
+        self._pass_between_teeth(st, out, teeth, margin, K.PROTRUSION_ZONE_MM * scale)
         width = arch_half_width(*plan["arch"], st[..., 0], scale=scale)
         width[:, 0] = K.HALF_WIDTH_TIP_MM * scale
         v = sections(st, normals(st), width, plan["thickness"])
@@ -114,7 +116,6 @@ class ThickTongueStage:
         # Behind the front teeth, or between them.
         front = v[:, :K.TEETH_STATIONS].reshape(v.shape[0], -1, 3)
         before = front.copy()
-        out = tip[:, 0] > incisor_wall_x(teeth, tip[:, 1]) - margin
         plan["teeth"].keep_out(teeth, front, margin, protruding=out,
                                zone=K.PROTRUSION_ZONE_MM * scale)
         v[:, :K.TEETH_STATIONS] = front.reshape(v.shape[0], K.TEETH_STATIONS, -1, 3)
@@ -125,6 +126,20 @@ class ThickTongueStage:
                 "tongue_teeth_push_mm": dx.max(axis=1) / scale,
                 "tongue_site_shift_mm": np.linalg.norm(sites - pellets, axis=-1).max(1) / scale}
         return v, diag
+
+    @staticmethod
+    def _pass_between_teeth(st: np.ndarray, out: np.ndarray, teeth: np.ndarray, margin: float,
+                            zone: float) -> None:
+        """In a protruded frame whose T1 is past the upper incisors and whose T2 is not, the
+        station between them (no pellet site) is where the tongue passes the teeth: just
+        behind the upper incisors, within the zone, at a height inside the jaw's gap, so that
+        neither of its neighbours' edges cuts through a tooth. ``st`` changes in place."""
+        x_upper = teeth[:, N.UPPER_INCISOR_TIP - 1, 0]
+        hi = teeth[:, N.UPPER_INCISOR_TIP - 1, 2] - margin
+        lo = teeth[:, N.LOWER_INCISOR_TIP - 1, 2] + margin
+        fix = out & (st[:, 1, 0] > x_upper - margin) & (st[:, 3, 0] < x_upper - zone) & (hi > lo)
+        st[fix, 2, 0] = x_upper[fix] - 0.5 * zone
+        st[fix, 2, 1] = np.clip(st[fix, 2, 1], lo[fix], hi[fix])
 
     def initialise(self, ctx: TaskContext) -> None:
         plan = self._setup(ctx)
