@@ -238,12 +238,26 @@ def test_the_projection_is_smooth_in_time():
     np.testing.assert_allclose(soft[clear], v[clear], atol=1e-3)   # far from it: untouched
 
 
-def test_pellet_sites_stay_on_the_pellets_when_nothing_is_in_the_way(sentence):
+def test_pellet_sites_stay_on_the_pellets_unless_the_palate_is_in_the_way(sentence, version):
+    """T3 and T4 (behind the teeth: only the palate bounds them): on their pellets (within
+    5e-4 mm, constants.SOFTNESS_MM's promise) wherever the pellet is clear of the palate's
+    margin by 1 mm, and never above it."""
     anim, face, profile, rec = sentence
-    shift = anim.diagnostics["tongue_site_shift_mm"].to_numpy()
-    push = anim.diagnostics[["tongue_palate_push_mm", "tongue_teeth_push_mm"]].max(axis=1)
-    free = push.to_numpy() < 1e-6
-    assert free.sum() > 100 and shift[free].max() < 1e-4
+    ctx = version.context(profile, face, rec)      # the mapped pellets
+    scale = ctx.mapping.scale
+    pos = anim.positions.astype(np.float64)
+    tris = np.asarray([(q[0], q[k], q[k + 1]) for q in (p.vertices for p in
+                       face.polygons_of("palate")) for k in range(1, len(q) - 1)]) - 1
+    heights = PalateHeights(pos[0], tris, K.PALATE_GRID_MM * scale)
+    for j, number in ((2, N.T3), (3, N.T4)):
+        pellet = ctx.pellets[:, 2 + j]
+        bound = heights(pellet[:, 0], np.zeros(len(pellet))) - K.COLLISION_MARGIN_MM * scale
+        site = pos[:, number - 1][:, [0, 2]]
+        clear = bound - pellet[:, 1] > 1.0 * scale
+        assert clear.sum() > 100
+        shift = np.linalg.norm(site - pellet, axis=1) / scale
+        assert shift[clear].max() < 5e-4
+        assert np.all(site[:, 1] <= bound + 1e-3)
 
 
 # --- the back of the tongue --------------------------------------------------------------------

@@ -101,10 +101,13 @@ class ThickTongueStage:
         back[..., 0] = soft_above(back[..., 0], wall_x + K.PHARYNX_CLEARANCE_MM * scale, w)
         st = centre_stations(tip, pellets, back)
         out = tip[:, 0] > incisor_wall_x(teeth, tip[:, 1]) - margin
-        self._pass_between_teeth(st, out, teeth, margin, K.PROTRUSION_ZONE_MM * scale)
+        passing, lo, hi = self._pass_between_teeth(st, out, teeth, margin,
+                                                    K.PROTRUSION_ZONE_MM * scale)
         width = arch_half_width(*plan["arch"], st[..., 0], scale=scale)
         width[:, 0] = K.HALF_WIDTH_TIP_MM * scale
         v = sections(st, normals(st), width, plan["thickness"])
+        # the whole section where the tongue passes the teeth fits in the gap
+        v[passing, 2, :, 2] = np.clip(v[passing, 2, :, 2], lo[passing, None], hi[passing, None])
         # Under the palate: each dorsum point, and the underside point below it moves with it
         # (the tongue is pressed down, not flattened).
         top = v[..., :K.DORSUM_COLUMNS, :]
@@ -133,13 +136,16 @@ class ThickTongueStage:
         """In a protruded frame whose T1 is past the upper incisors and whose T2 is not, the
         station between them (no pellet site) is where the tongue passes the teeth: just
         behind the upper incisors, within the zone, at a height inside the jaw's gap, so that
-        neither of its neighbours' edges cuts through a tooth. ``st`` changes in place."""
+        neither of its neighbours' edges cuts through a tooth. ``st`` changes in place.
+
+        Returns the frames where it did, bool (F,), and the gap's low and high ends (F,)."""
         x_upper = teeth[:, N.UPPER_INCISOR_TIP - 1, 0]
         hi = teeth[:, N.UPPER_INCISOR_TIP - 1, 2] - margin
         lo = teeth[:, N.LOWER_INCISOR_TIP - 1, 2] + margin
         fix = out & (st[:, 1, 0] > x_upper - margin) & (st[:, 3, 0] < x_upper - zone) & (hi > lo)
         st[fix, 2, 0] = x_upper[fix] - 0.5 * zone
         st[fix, 2, 1] = np.clip(st[fix, 2, 1], lo[fix], hi[fix])
+        return fix, lo, hi
 
     def initialise(self, ctx: TaskContext) -> None:
         plan = self._setup(ctx)
