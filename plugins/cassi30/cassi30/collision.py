@@ -124,15 +124,15 @@ class FrontTeeth:
         return np.asarray(keep, np.int64).reshape(-1, 2, 2)
 
     def keep_out(self, positions: np.ndarray, p: np.ndarray, margin: float, *,
-                 protruding: np.ndarray, zone: float) -> np.ndarray:
+                 protruding: np.ndarray) -> np.ndarray:
         """Keep the points out of the front teeth.
 
         In a frame where the tongue stays in the mouth, a point in front of a front tooth's
         surface (within ``margin``; the surface extended up and down, so no edge between two
-        points can cross it) moves back behind it. In a frame where the tongue is protruded,
-        the points within ``zone`` behind the teeth's surface or in front of it move up or
-        down into the gap between the upper and the lower teeth's tips (the tongue passes
-        between them); where the gap is shut they move back instead.
+        points can cross it) moves back behind it. In a frame where the tongue is protruded, a
+        point in front of a tooth's surface moves up or down into the gap between the upper
+        and the lower teeth's tips (the tongue passes between them); where the gap is shut it
+        moves back instead.
 
         Parameters
         ----------
@@ -140,8 +140,8 @@ class FrontTeeth:
             Teeth placed for each frame.
         p : float (F, E, 3)
             The points (left half), changed in place and returned.
-        margin, zone : float
-            Parke units; the margin also closes the slits between neighbouring teeth.
+        margin : float
+            Parke units; it also closes the slits between neighbouring teeth.
         protruding : bool (F,)
 
         Returns
@@ -152,16 +152,15 @@ class FrontTeeth:
         wu, tu = _wall(positions, self.upper, y, p[..., 2], margin)
         wl, tl = _wall(positions, self.lower, y, p[..., 2], margin)
         out = protruding[:, None]
-        # the gap's ends; a set that does not span |y| (beside it, or between two teeth)
-        # leaves that end open
+        # the gap's ends; a set that does not span |y| leaves that end open
         lo = np.where(np.isnan(tl), -np.inf, tl + margin)
         hi = np.where(np.isnan(tu), np.inf, tu - margin)
-        # down from the upper teeth's height near the upper teeth, up from the lower's near
-        # the lower teeth (each set's own surface: the jaw moves the lower one back)
+        # down from the upper teeth's height in front of the upper teeth, up from the lower's
+        # in front of the lower teeth (each set's own surface: the jaw moves the lower one)
         open_ = out & (hi > lo)
         z = p[..., 2]
-        z = np.where(open_ & (p[..., 0] > wu - zone) & (z > hi), hi, z)
-        p[..., 2] = np.where(open_ & (p[..., 0] > wl - zone) & (z < lo), lo, z)
+        z = np.where(open_ & (p[..., 0] > wu - margin) & (z > hi), hi, z)
+        p[..., 2] = np.where(open_ & (p[..., 0] > wl - margin) & (z < lo), lo, z)
         # what is still in front of a tooth at its height (or anywhere, inside the mouth)
         z = p[..., 2]
         in_upper = ~out | (z > tu - margin)

@@ -71,14 +71,11 @@ SOFTNESS_MM = 0.15
 #: Stations held behind (or between) the front teeth: tip, T1, between T1 and T2, T2. Behind T2
 #: the tongue is ~25 mm behind the incisors at rest; only the front of the arch can be passed.
 TEETH_STATIONS = 4
-#: A frame's tongue is *protruded* when its tip (placed ahead of T1 along T2 -> T1, CASSI 1.0's
-#: rule) is in front of the central incisors' surface: the XRMB protocol's tongue protrusion
-#: (task 118) puts the tongue out between the open teeth. Then the tongue's points within this
-#: far behind the teeth or in front of them are held within the gap between the upper and the
-#: lower incisors' tips instead of being pulled back into the mouth (which would take T1 up to
-#: 20 mm off its pellet). 10 mm: the length of the tongue between its stations near the tip
-#: (tip -> T1 8 mm, T1 -> the next station ~8 mm), so no edge from a free point behind can cross
-#: a tooth on its way to a point in the gap.
+#: When the tongue is protruded (its tip and T1 out between the open teeth: the XRMB protocol's
+#: tongue protrusion, task 118) and T2 is still behind the teeth, the station between T1 and T2
+#: is put where the tongue passes the teeth: this far behind the upper incisors' surface, at the
+#: gap's height (half of it: 3 mm, half a real incisor crown's labio-lingual thickness of
+#: ~6-7 mm; Parke's teeth are only their labial faces), and T2 must be a whole zone behind.
 PROTRUSION_ZONE_MM = 6.0
 #: A teeth quad is the arch's front (a wall the tongue could pass forward through) when its
 #: outward normal is at least this much forward (|n_x|, 60 degrees off straight ahead); the rest

@@ -100,7 +100,7 @@ class ThickTongueStage:
         wall_x = np.interp(back[..., 1], pz, px)
         back[..., 0] = soft_above(back[..., 0], wall_x + K.PHARYNX_CLEARANCE_MM * scale, w)
         st = centre_stations(tip, pellets, back)
-        out = tip[:, 0] > incisor_wall_x(teeth, tip[:, 1]) - margin
+        out = self._protruded(tip, pellets[:, 0], teeth, margin)
         passing, lo, hi = self._pass_between_teeth(st, out, teeth, margin,
                                                     K.PROTRUSION_ZONE_MM * scale)
         width = arch_half_width(*plan["arch"], st[..., 0], scale=scale)
@@ -119,8 +119,7 @@ class ThickTongueStage:
         # Behind the front teeth, or between them.
         front = v[:, :K.TEETH_STATIONS].reshape(v.shape[0], -1, 3)
         before = front.copy()
-        plan["teeth"].keep_out(teeth, front, margin, protruding=out,
-                               zone=K.PROTRUSION_ZONE_MM * scale)
+        plan["teeth"].keep_out(teeth, front, margin, protruding=out)
         v[:, :K.TEETH_STATIONS] = front.reshape(v.shape[0], K.TEETH_STATIONS, -1, 3)
         dx = np.linalg.norm(front - before, axis=-1)
         sites = v[:, list(PELLET_STATIONS), 0][..., [0, 2]]
@@ -129,6 +128,21 @@ class ThickTongueStage:
                 "tongue_teeth_push_mm": dx.max(axis=1) / scale,
                 "tongue_site_shift_mm": np.linalg.norm(sites - pellets, axis=-1).max(1) / scale}
         return v, diag
+
+    @staticmethod
+    def _protruded(tip: np.ndarray, t1: np.ndarray, teeth: np.ndarray, margin: float
+                   ) -> np.ndarray:
+        """bool (F,): the tongue is out between the teeth. The tip (placed ahead of T1, behind
+        the incisors unless T1 itself is there) is in front of the incisors' surface and T1 is
+        at the height of the jaw's gap or in front of the upper incisors: a T1 behind the teeth
+        and above the gap (an alveolar contact) keeps the tip behind the teeth instead, so no
+        edge from T1 to the tip cuts through the upper incisors."""
+        hi = teeth[:, N.UPPER_INCISOR_TIP - 1, 2] - margin
+        lo = teeth[:, N.LOWER_INCISOR_TIP - 1, 2] + margin
+        ahead = tip[:, 0] > incisor_wall_x(teeth, tip[:, 1]) - margin
+        t1_through = ((t1[:, 1] >= lo) & (t1[:, 1] <= hi)) | (
+            t1[:, 0] > teeth[:, N.UPPER_INCISOR_TIP - 1, 0] - margin)
+        return ahead & t1_through
 
     @staticmethod
     def _pass_between_teeth(st: np.ndarray, out: np.ndarray, teeth: np.ndarray, margin: float,
