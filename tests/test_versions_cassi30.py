@@ -199,29 +199,27 @@ def test_the_tongue_stays_behind_the_teeth_or_passes_between_them(protrusion):
 
 def test_keep_out_holds_the_tongue_behind_the_teeth_or_in_their_gap():
     """One upper and one lower incisor quad (vertical, x = 10, y 0..8): upper tip at z 0, gum
-    10; lower tip at z -6, gum -16. Margin 1, zone 3: the gap is z in [-5, -1]."""
+    10; lower tip at z -6, gum -16. Margin 1: the gap is z in [-5, -1]."""
     v = np.zeros((8, 3))
     v[0:4] = [(10, 0, 0), (10, 8, 0), (10, 8, 10), (10, 0, 10)]           # upper tm td gd gm
     v[4:8] = [(10, 0, -6), (10, 8, -6), (10, 8, -16), (10, 0, -16)]      # lower
     teeth = FrontTeeth(np.array([[[0, 3], [1, 2]]]), np.array([[[4, 7], [5, 6]]]))
     p = np.array([[12.0, 2.0, 5.0],      # through the upper tooth
                   [20.0, 2.0, -3.0],     # in front of the gap
-                  [5.0, 2.0, 5.0],       # behind, beyond the zone
-                  [8.0, 2.0, 5.0],       # behind, within the zone
+                  [11.0, 2.0, -9.0],     # through the lower tooth
+                  [8.0, 2.0, 5.0],       # behind
                   [12.0, 20.0, 5.0]])    # beside the teeth
     pos = np.broadcast_to(v, (2, 8, 3))
-    out = teeth.keep_out(pos, np.stack([p, p]), 1.0, protruding=np.array([False, True]),
-                         zone=3.0)
-    inside, protruded = out
+    inside, protruded = teeth.keep_out(pos, np.stack([p, p]), 1.0,
+                                       protruding=np.array([False, True]))
     # in the mouth: everything in front of the teeth goes back, whatever its height
-    np.testing.assert_allclose(inside[:2, 0], [9.0, 9.0])
-    np.testing.assert_allclose(inside[2:], p[2:])
-    # protruded: the points near and in front of the teeth pass through the gap
+    np.testing.assert_allclose(inside[:3, 0], [9.0, 9.0, 9.0])
+    np.testing.assert_allclose(inside[3:], p[3:])
+    # protruded: what is in front of the teeth passes through the gap
     np.testing.assert_allclose(protruded[0], [12.0, 2.0, -1.0])
     np.testing.assert_allclose(protruded[1], p[1])
-    np.testing.assert_allclose(protruded[2], p[2])
-    np.testing.assert_allclose(protruded[3], [8.0, 2.0, -1.0])
-    np.testing.assert_allclose(protruded[4], p[4])
+    np.testing.assert_allclose(protruded[2], [11.0, 2.0, -5.0])
+    np.testing.assert_allclose(protruded[3:], p[3:])
 
 
 def test_the_projection_is_smooth_in_time():
