@@ -75,7 +75,7 @@ TEETH_STATIONS = 4
 #: tongue protrusion, task 118) and T2 is still behind the teeth, the station between T1 and T2
 #: is put where the tongue passes the teeth: this far behind the upper incisors' surface, at the
 #: gap's height (half of it: 3 mm, half a real incisor crown's labio-lingual thickness of
-#: ~6-7 mm; Parke's teeth are only their labial faces), and T2 must be a whole zone behind.
+#: ~6-7 mm; Parke's teeth are only their labial faces), when T2 is behind that place.
 PROTRUSION_ZONE_MM = 6.0
 #: A teeth quad is the arch's front (a wall the tongue could pass forward through) when its
 #: outward normal is at least this much forward (|n_x|, 60 degrees off straight ahead); the rest

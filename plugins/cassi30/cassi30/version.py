@@ -106,8 +106,16 @@ class ThickTongueStage:
         width = arch_half_width(*plan["arch"], st[..., 0], scale=scale)
         width[:, 0] = K.HALF_WIDTH_TIP_MM * scale
         v = sections(st, normals(st), width, plan["thickness"])
-        # the whole section where the tongue passes the teeth fits in the gap
-        v[passing, 2, :, 2] = np.clip(v[passing, 2, :, 2], lo[passing, None], hi[passing, None])
+        # In a protruded frame, the whole section of each front station near or past the
+        # teeth fits in the gap (the underside behind the teeth would otherwise hang below
+        # the lower incisors' tip, and its edges to the points in the gap cut through them).
+        near = teeth[:, [N.UPPER_INCISOR_TIP - 1, N.LOWER_INCISOR_TIP - 1], 0].min(axis=1)
+        squeeze = (out & (hi > lo))[:, None] & (
+            st[:, :K.TEETH_STATIONS, 0] > (near - 0.5 * K.PROTRUSION_ZONE_MM * scale)[:, None])
+        squeeze[:, 2] |= passing
+        part = v[:, :K.TEETH_STATIONS, :, 2]
+        v[:, :K.TEETH_STATIONS, :, 2] = np.where(
+            squeeze[..., None], np.clip(part, lo[:, None, None], hi[:, None, None]), part)
         # Under the palate: each dorsum point, and the underside point below it moves with it
         # (the tongue is pressed down, not flattened).
         top = v[..., :K.DORSUM_COLUMNS, :]
@@ -156,8 +164,9 @@ class ThickTongueStage:
         x_upper = teeth[:, N.UPPER_INCISOR_TIP - 1, 0]
         hi = teeth[:, N.UPPER_INCISOR_TIP - 1, 2] - margin
         lo = teeth[:, N.LOWER_INCISOR_TIP - 1, 2] + margin
-        fix = out & (st[:, 1, 0] > x_upper - margin) & (st[:, 3, 0] < x_upper - zone) & (hi > lo)
-        st[fix, 2, 0] = x_upper[fix] - 0.5 * zone
+        place = x_upper - 0.5 * zone
+        fix = out & (st[:, 1, 0] > x_upper - margin) & (st[:, 3, 0] < place - margin) & (hi > lo)
+        st[fix, 2, 0] = place[fix]
         st[fix, 2, 1] = np.clip(st[fix, 2, 1], lo[fix], hi[fix])
         return fix, lo, hi
 
