@@ -322,3 +322,21 @@ def test_pellet_stations_are_the_pellet_vertices():
     numbers = tongue_numbers(570)
     assert tuple(numbers[list(PELLET_STATIONS), 0]) == N.TONGUE_PELLETS
     assert numbers[0, 0] == N.TONGUE_TIP and numbers[BACK_STATION, 0] == N.TONGUE_BACK
+
+
+def test_the_rubric_on_streamed_chunks_equals_the_rubric_on_the_whole_task(corpus, version,
+                                                                           tmp_path):
+    """The geometry stage's path for 3.0 (positions streamed to a file, checks a chunk at a
+    time, on the face the version animates) gives the same rows, exactly."""
+    from cassi.harness.pipeline import animate_to_file, get_neutral
+    from cassi.harness.rubric import run_geometry_checks
+
+    profile, face, rec = _inputs(corpus, "JW40", 118)
+    own = version_face(version, face)
+    whole = version.animate(profile, face, rec)
+    streamed = animate_to_file(version, profile, face, rec, tmp_path)
+    streamed.positions.chunk = 97
+    kw = dict(task=118, subject="JW40", rep=1, neutral=get_neutral(), recording=rec)
+    pd.testing.assert_frame_equal(run_geometry_checks(whole, own, profile, **kw),
+                                  run_geometry_checks(streamed, own, profile, **kw),
+                                  check_exact=True)
