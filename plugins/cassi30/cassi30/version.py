@@ -94,14 +94,17 @@ class ThickTongueStage:
         plan = self._setup(ctx)
         scale, w = plan["scale"], K.SOFTNESS_MM * plan["scale"]
         margin = K.COLLISION_MARGIN_MM * scale
-        tip, _ = place_tongue_tip(pellets[:, 0], pellets[:, 1], teeth, scale)
+        # The incisors' rows only (1..258), in float64 once: place_tongue_tip and
+        # incisor_wall_x would otherwise convert the whole (F, V, 3) float32 array per call.
+        incisors = np.asarray(teeth[:, :N.MANI], np.float64)
+        tip, _ = place_tongue_tip(pellets[:, 0], pellets[:, 1], incisors, scale)
         pz, px, wall = plan["pharynx"]
         back = back_points(pellets[:, 2], pellets[:, 3], wall, K.BACK_STEP_MM * scale)
         wall_x = np.interp(back[..., 1], pz, px)
         back[..., 0] = soft_above(back[..., 0], wall_x + K.PHARYNX_CLEARANCE_MM * scale, w)
         st = centre_stations(tip, pellets, back)
-        out = self._protruded(tip, pellets[:, 0], teeth, margin)
-        passing, lo, hi = self._pass_between_teeth(st, out, teeth, margin,
+        out = self._protruded(tip, pellets[:, 0], incisors, margin)
+        passing, lo, hi = self._pass_between_teeth(st, out, incisors, margin,
                                                     K.PROTRUSION_ZONE_MM * scale)
         width = arch_half_width(*plan["arch"], st[..., 0], scale=scale)
         width[:, 0] = K.HALF_WIDTH_TIP_MM * scale
@@ -109,7 +112,7 @@ class ThickTongueStage:
         # In a protruded frame, the whole section of each front station near or past the
         # teeth fits in the gap (the underside behind the teeth would otherwise hang below
         # the lower incisors' tip, and its edges to the points in the gap cut through them).
-        near = teeth[:, [N.UPPER_INCISOR_TIP - 1, N.LOWER_INCISOR_TIP - 1], 0].min(axis=1)
+        near = incisors[:, [N.UPPER_INCISOR_TIP - 1, N.LOWER_INCISOR_TIP - 1], 0].min(axis=1)
         squeeze = (out & (hi > lo))[:, None] & (
             st[:, :K.TEETH_STATIONS, 0] > (near - 0.5 * K.PROTRUSION_ZONE_MM * scale)[:, None])
         squeeze[:, 2] |= passing
