@@ -35,7 +35,7 @@ import numpy as np
 import pandas as pd
 
 from cassi.data.atomic import atomic_write_text
-from cassi.data.corpus import Corpus, SubjectData, natural_key
+from cassi.data.corpus import SUBJECT_FILES, Corpus, SubjectData, natural_key
 from cassi.data.errors import CassiInputError
 from cassi.data.headmeasures import HeadMeasures
 from cassi.data.textlines import decode_ascii, numbered_rows, parse_num, read_bytes
@@ -75,6 +75,9 @@ class SubjectProfile:
         The lipthick.txt value: UL-LL distance at the first valid row divided by the jaw length.
     palate_mm : float64 (P, 2) or None
         PAL.DAT, mm, front to back.
+    pharynx_mm : float64 (P, 2) or None
+        PHA.DAT (the posterior pharyngeal wall), mm, as the file lists it; for versions that
+        place the back of the tongue along it (None where the subject has no PHA.DAT).
     head_measures : HeadMeasures or None
     selected : tuple of (task, rep)
         The files the values came from (thesis Table B.1).
@@ -94,6 +97,7 @@ class SubjectProfile:
     lipthick: float
     palate_mm: np.ndarray | None = None
     head_measures: HeadMeasures | None = None
+    pharynx_mm: np.ndarray | None = None
     selected: tuple[tuple[int, int], ...] = ()
     per_file: pd.DataFrame = field(default_factory=pd.DataFrame)
 
@@ -160,6 +164,13 @@ def select_files(subject: SubjectData, *, max_files: int = MAX_FILES
     return chosen
 
 
+def _pharynx(subject: SubjectData) -> np.ndarray | None:
+    """The subject's PHA.DAT (mm), None where it has none; a malformed file raises."""
+    if not any(f.name.upper() == SUBJECT_FILES["pha"] for f in subject.subject_files()):
+        return None
+    return subject.pharynx_mm
+
+
 def profile_subject(subject: SubjectData, *, max_files: int = MAX_FILES) -> SubjectProfile:
     """Preprocess one subject (see the module docstring)."""
     chosen = select_files(subject, max_files=max_files)
@@ -175,7 +186,7 @@ def profile_subject(subject: SubjectData, *, max_files: int = MAX_FILES) -> Subj
         max_ul=float(per_file["max_ul"].max()), max_ll=float(per_file["max_ll"].max()),
         min_ul=float(per_file["min_ul"].min()), min_ll=float(per_file["min_ll"].min()),
         lipthick=float(per_file["lipthick"].mean()),
-        palate_mm=palate, head_measures=subject.head_measures,
+        palate_mm=palate, head_measures=subject.head_measures, pharynx_mm=_pharynx(subject),
         selected=tuple(key for _, key in chosen), per_file=per_file)
 
 

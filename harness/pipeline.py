@@ -92,6 +92,20 @@ def get_face(corpus, subject: str, profile):
     return _faces[key]
 
 
+def get_version_face(corpus, subject: str, profile, version):
+    """The face ``version`` animates for ``subject`` (cached): the shared face, or the one the
+    version derives from it (:func:`cassi.versions.protocol.version_face`)."""
+    from cassi.versions.protocol import version_face  # noqa: PLC0415
+
+    face = get_face(corpus, subject, profile)
+    if getattr(version, "animated_face", None) is None:
+        return face
+    key = (str(corpus.root), subject, getattr(version, "name", repr(version)))
+    if key not in _faces:
+        _faces[key] = version_face(version, face)
+    return _faces[key]
+
+
 def get_neutral():
     """Vertices of the neutral face (no subject palate): the rubric's Table B reference."""
     from cassi.data.face import build_face  # noqa: PLC0415
@@ -106,7 +120,10 @@ def get_renderer(corpus, subject: str, face, view: str, preset: str, variant: st
     from cassi.data.topology import render_topology  # noqa: PLC0415
     from cassi.renderer.render import FaceRenderer  # noqa: PLC0415
 
-    key = (str(corpus.root), subject, view, preset, variant)
+    # A version may animate a face of its own (more vertices, other polygons: see
+    # cassi.versions.protocol.version_face): that face gets a scene of its own.
+    key = (str(corpus.root), subject, view, preset, variant, face.vertex_count,
+           hash(face.polygons))
     if key not in _renderers:
         topology = render_topology(face, half=(view == "half"))
         _renderers[key] = FaceRenderer(topology, view, preset, variant)
@@ -201,9 +218,11 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
         profile = get_profile(corpus, job.subject)
     except CassiInputError as err:
         raise SkipJob(f"subject cannot be preprocessed: {err}") from err
+    version = get_version(job.version)
     face = get_face(corpus, job.subject, profile)
     with tempfile.TemporaryDirectory(prefix="cassi-geometry-") as tmp:
-        anim = animate_to_file(get_version(job.version), profile, face, rec, Path(tmp))
+        anim = animate_to_file(version, profile, face, rec, Path(tmp))
+        face = get_version_face(corpus, job.subject, profile, version)  # what it animated
         rows = rubric.run_geometry_checks(anim, face, profile, task=job.task, subject=job.subject,
                                           rep=job.rep, neutral=get_neutral(), recording=rec)
         return _geometry_output(job, ctx, rec, anim, pd.DataFrame(rows))
@@ -313,7 +332,9 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
     positions = data["positions"]  # read once: each data[...] access decodes the array again
     corpus = get_corpus(ctx.corpus)
     profile = get_profile(corpus, job.subject)
-    face = get_face(corpus, job.subject, profile)
+    from cassi.versions.registry import get_version  # noqa: PLC0415
+
+    face = get_version_face(corpus, job.subject, profile, get_version(job.version))
     renderer = get_renderer(corpus, job.subject, face, job.view, ctx.preset, ctx.variant)
     files = {}
     seconds = 0.0

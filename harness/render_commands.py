@@ -15,11 +15,12 @@ __all__ = ["register", "task_positions"]
 
 
 def task_positions(corpus_dir, subject: str, task: int, rep: int, version: str):
-    """Face, recording rows int64 (F,) and positions float32 (F, V, 3) Parke units of
-    ``version`` animating one task file; ``neutral``: the subject's neutral face in every row."""
+    """Face (the one ``version`` animates), recording rows int64 (F,) and positions float32
+    (F, V, 3) Parke units of ``version`` animating one task file; ``neutral``: the subject's
+    neutral face in every row."""
     from cassi.versions.registry import get_version  # noqa: PLC0415
 
-    from .pipeline import get_corpus, get_face, get_profile  # noqa: PLC0415
+    from .pipeline import get_corpus, get_face, get_profile, get_version_face  # noqa: PLC0415
 
     corpus = get_corpus(corpus_dir)
     rec = corpus.subject(subject).load(task, rep)
@@ -31,6 +32,7 @@ def task_positions(corpus_dir, subject: str, task: int, rep: int, version: str):
         verts = np.asarray(face.vertices, np.float32)
         return face, np.arange(n, dtype=np.int64), np.broadcast_to(verts, (n, *verts.shape))
     anim = ver.animate(profile, face, rec)
+    face = get_version_face(corpus, subject, profile, ver)  # the face the version animated
     return face, np.asarray(anim.frames, np.int64), np.asarray(anim.positions, np.float32)
 
 

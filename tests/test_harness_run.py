@@ -26,7 +26,7 @@ def _cli(argv) -> int:
 
 @pytest.mark.parametrize("change, match", [
     ({"subjects": ("JW99",)}, r"unknown subject JW99.*valid subjects: JW11, JW12"),
-    ({"versions": ("cassi-3.0",)}, r"valid versions: .*cassi-1.0"),
+    ({"versions": ("cassi-9.9",)}, r"valid versions: .*cassi-1.0"),
     ({"views": ("back",)}, r"valid views: front, side, half, top, geometry"),
     ({"subjects": ("JW12",), "tasks": (999,)}, r"unknown task 999"),
 ])

@@ -50,13 +50,17 @@ def long_task(n_frames: int, *, seed: int = 0):
 
 
 def bench_profile():
-    """JW45's published profile (thesis Figures 4.16, 4.25), jaw length from Figure 3.9's row."""
+    """JW45's published profile (thesis Figures 4.16, 4.25), jaw length from Figure 3.9's row,
+    and the synthetic corpus's JW45 pharynx outline (the thesis does not print a PHA.DAT; versions
+    that place the tongue's back along it need one)."""
     from cassi.data.profile import SubjectProfile
+    from cassi.data.synth_subjects import subject_figures
 
     d = float(np.hypot(*(_JW45_ROW[6] - _JW45_ROW[7])))
     return SubjectProfile(subject="JW45", jaw_length_mm=d, rest_ul=0.462957, rest_ll=0.355955,
                           max_ul=0.692150, max_ll=0.564495, min_ul=0.010773, min_ll=0.008101,
-                          lipthick=0.619474)
+                          lipthick=0.619474,
+                          pharynx_mm=subject_figures("JW45").pharynx_outline())
 
 
 def bench_face():

@@ -10,7 +10,11 @@ array axis, thesis 4.1.2). CASSI 2.0 is CASSI 1.0 with another lip stage; CASSI 
 another thickness rule inside that stage, so no version copies another's code.
 
 Third-party versions only need :class:`Version` (a ``name`` and ``animate``); they need not use
-the stages.
+the stages. A version that animates a face of its own (more or other vertices than the shared
+face, for instance a tongue with thickness) also defines ``animated_face(face) -> FaceModel``:
+the face it derives from the shared one and numbers its positions like. The harness renders and
+checks every version's positions with :func:`version_face` (its own face, or the shared one), so
+versions without the hook are untouched.
 """
 from __future__ import annotations
 
@@ -38,6 +42,7 @@ __all__ = [
     "StagedVersion",
     "PELLET_INDEX",
     "held_pellets",
+    "version_face",
 ]
 
 #: Column of each pellet in ``TaskRecording.xy_mm`` (order of ``cassi.data.xrmb.PELLETS``).
@@ -95,13 +100,55 @@ class Animation:
 
 @runtime_checkable
 class Version(Protocol):
-    """What the harness needs from a version: a name and ``animate``."""
+    """What the harness needs from a version: a name and ``animate``.
+
+    Optional: ``animated_face(face) -> FaceModel``, the face the version animates when it is not
+    the shared one (see :func:`version_face`); ``animate`` still receives the shared face.
+    """
 
     name: str
 
     def animate(self, profile: "SubjectProfile", face: "FaceModel", rec: "TaskRecording") -> Animation:
         """Initialise from ``profile`` and the first valid row of ``rec``; animate every frame."""
         ...
+
+
+def version_face(version: Any, face: "FaceModel") -> "FaceModel":
+    """The face ``version`` animates, from the subject's shared ``face``.
+
+    A version may define ``animated_face(face) -> FaceModel`` to animate a face of its own,
+    derived from the shared one: the same vertices 1..V keep their meaning (the rubric, the
+    fidelity measures and the jaw and lip stages address them by number), further vertices
+    and other polygons may be added (a part's polygons are found by material). The
+    version's ``Animation.positions`` are numbered like that face, and the harness renders and
+    checks them with it. A version without the hook animates ``face`` itself.
+
+    Parameters
+    ----------
+    version : Version
+    face : FaceModel
+        The subject's face (``cassi.data.face.build_face``).
+
+    Returns
+    -------
+    FaceModel
+        ``version.animated_face(face)``, or ``face``.
+
+    Raises
+    ------
+    CassiInputError
+        When the version's face drops or renumbers the shared face's vertices.
+    """
+    hook = getattr(version, "animated_face", None)
+    if hook is None:
+        return face
+    own = hook(face)
+    n = np.shape(face.vertices)[0]
+    if np.shape(own.vertices)[0] < n:
+        raise CassiInputError(f"version {getattr(version, 'name', version)!r} animates a face of "
+                              f"{np.shape(own.vertices)[0]} vertices, fewer than the shared "
+                              f"face's {n}: vertices 1..{n} must keep their numbers")
+    return own
 
 
 def held_pellets(xy_mm: np.ndarray, valid: np.ndarray, start: int) -> tuple[np.ndarray, np.ndarray]:
@@ -237,8 +284,11 @@ class StagedVersion:
 
     # --- the shared skeleton (thesis Figure 4.1) ---------------------------------------------
     def context(self, profile: "SubjectProfile", face: "FaceModel", rec: "TaskRecording") -> TaskContext:
-        """Find the first valid row, hold missing pellets, map to Parke space (4.1.1)."""
+        """Find the first valid row, hold missing pellets, map to Parke space (4.1.1), on the
+        face this version animates (:func:`version_face`)."""
         from cassi.versions.mapping import XrmbToParke
+
+        face = version_face(self, face)
 
         xy_mm = np.asarray(rec.xy_mm)
         if xy_mm.ndim != 3 or xy_mm.shape[1:] != (8, 2):

@@ -160,7 +160,8 @@ def mouth_parts(face) -> MouthParts:
     """The :class:`MouthParts` of a :class:`cassi.data.face.FaceModel`.
 
     Vertex numbers come from :mod:`cassi.data.numbering` (thesis Figures 3.7, 4.4-4.7, 4.17,
-    Table 3.2). Teeth, tongue and palate surfaces come from the face's polygons by material;
+    Table 3.2). Teeth, tongue and palate surfaces come from the face's polygons by material
+    (the tongue's vertices: 288-299, then those its polygons add);
     teeth polygons using the lower teeth's vertices (255-286) are the lower set. The occlusal
     line ends are the tips of tooth quad 7 (the second molars) and of quad 0 (the incisors).
     """
@@ -176,11 +177,16 @@ def mouth_parts(face) -> MouthParts:
     else:
         edges = np.zeros((0, 2), np.int64)
     z = lambda nums: [int(v) - 1 for v in nums]  # noqa: E731 - Parke number -> row
+    # The tongue: Parke's numbers first (tip, T1-T4, back, edges: m_tongue_back_v reads the
+    # centre line by position), then any further vertex of the tongue's polygons (a version's
+    # own face may give the tongue more, cassi.versions.protocol.version_face).
+    tongue = z(N.TONGUE)
+    tongue += sorted(set(np.unique(tongue_tris).tolist()) - set(tongue))
     lips = [v for v in z(N.LOWER_LIP + N.UPPER_LIP + (N.CORNER, N.INNER_CORNER, N.CORNER_MIDDLE))
             if v < V]
     return MouthParts(
         upper_teeth_tris=teeth[~is_lower], lower_teeth_tris=teeth[is_lower],
-        tongue=z(N.TONGUE), tongue_edges=edges,
+        tongue=tongue, tongue_edges=edges,
         palate=[v for v in z(N.PALATE) if v < V], palate_tris=_polys_by_material(face, {"palate"}),
         ul_outer=N.UL - 1, ll_outer=N.LL - 1,
         ul_inner=N.UPPER_INNER[0] - 1, ll_inner=N.LOWER_INNER[0] - 1,

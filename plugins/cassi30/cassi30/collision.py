@@ -1,0 +1,199 @@
+"""Collision handling of CASSI 3.0: the tongue is kept under the palate and in front of the
+pharyngeal wall by a *soft* projection, and out of the front teeth by a projection onto their
+surface (or, when the tongue is protruded, into the gap between them).
+
+Soft: a coordinate ``v`` bounded above by ``b`` becomes ``b - w * log(1 + exp((b - v) / w))``:
+equal to ``v`` (within ``w * exp(-(b - v) / w)``) when it is clear of the bound, ``b`` when the
+data puts it far past, and a smooth, monotonic function of ``v`` in between, so the constraint
+adds no jitter to a smooth trajectory. Bounds already include the margin.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["soft_below", "soft_above", "PalateHeights", "FrontTeeth"]
+
+
+def soft_below(v: np.ndarray, bound: np.ndarray, width: float) -> np.ndarray:
+    """``v`` kept below ``bound`` (softly, see the module docstring); +inf bounds leave it."""
+    b = np.where(np.isfinite(bound), bound, 0.0)
+    out = b - width * np.logaddexp(0.0, (b - v) / width)
+    return np.where(np.isfinite(bound), out, v)
+
+
+def soft_above(v: np.ndarray, bound: np.ndarray, width: float) -> np.ndarray:
+    """``v`` kept above ``bound`` (softly); -inf bounds leave it."""
+    return -soft_below(-np.asarray(v), -np.asarray(bound), width)
+
+
+class PalateHeights:
+    """Height of the palate's lowest surface over (x, |y|), looked up bilinearly on a grid.
+
+    Parameters
+    ----------
+    vertices : float (V, 3)
+        The face with the palate placed (it does not move during a task).
+    triangles : int (T, 3)
+        The palate's triangles (0-based rows).
+    step : float
+        Grid spacing, Parke units.
+
+    Behind the palate's back edge the bound rises one unit per unit (the soft palate is not
+    modelled: the tongue is free there, and the bound grows continuously so nothing jumps);
+    beside and in front of it the edge heights hold (the teeth are there).
+    """
+
+    def __init__(self, vertices: np.ndarray, triangles: np.ndarray, step: float):
+        p = np.asarray(vertices, np.float64)[np.asarray(triangles, np.int64)]     # (T, 3, 3)
+        lo, hi = p[..., :2].reshape(-1, 2).min(0), p[..., :2].reshape(-1, 2).max(0)
+        self.x0, self.step = float(lo[0]), float(step)
+        xs = np.arange(lo[0], hi[0] + step, step)
+        ys = np.arange(0.0, hi[1] + step, step)
+        gx, gy = np.meshgrid(xs, ys, indexing="ij")
+        z = _lowest_hit(np.stack([gx.ravel(), gy.ravel()], 1), p).reshape(gx.shape)
+        # Outside the outline: hold the nearest height along y, then along x.
+        for i in range(len(xs)):
+            ok = np.isfinite(z[i])
+            if ok.any():
+                z[i] = np.interp(ys, ys[ok], z[i, ok])
+        ok = np.isfinite(z).all(axis=1)
+        for j in range(len(ys)):
+            z[:, j] = np.interp(xs, xs[ok], z[ok, j])
+        self.z = z
+        self.x_back = float(xs[ok][0])
+
+    def __call__(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Palate height over each point (any shape), Parke units."""
+        nx, ny = self.z.shape
+        fx = np.clip((x - self.x0) / self.step, 0.0, nx - 1.000001)
+        fy = np.clip(np.abs(y) / self.step, 0.0, ny - 1.000001)
+        ix, iy = fx.astype(np.int64), fy.astype(np.int64)
+        tx, ty = fx - ix, fy - iy
+        z = self.z
+        h = ((z[ix, iy] * (1 - ty) + z[ix, iy + 1] * ty) * (1 - tx)
+             + (z[ix + 1, iy] * (1 - ty) + z[ix + 1, iy + 1] * ty) * tx)
+        return h + np.maximum(self.x_back - x, 0.0)
+
+
+def _lowest_hit(q: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Lowest z of the triangles ``tri`` (T, 3, 3) above each (x, y) of ``q`` (G, 2); NaN where
+    none covers it."""
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    d = (b[:, 1] - c[:, 1]) * (a[:, 0] - c[:, 0]) + (c[:, 0] - b[:, 0]) * (a[:, 1] - c[:, 1])
+    keep = np.abs(d) > 1e-12
+    a, b, c, d = a[keep], b[keep], c[keep], d[keep]
+    qx, qy = q[:, 0, None], q[:, 1, None]
+    l1 = ((b[:, 1] - c[:, 1]) * (qx - c[:, 0]) + (c[:, 0] - b[:, 0]) * (qy - c[:, 1])) / d
+    l2 = ((c[:, 1] - a[:, 1]) * (qx - c[:, 0]) + (a[:, 0] - c[:, 0]) * (qy - c[:, 1])) / d
+    l3 = 1.0 - l1 - l2
+    eps = -1e-9
+    inside = (l1 >= eps) & (l2 >= eps) & (l3 >= eps)
+    z = l1 * a[:, 2] + l2 * b[:, 2] + l3 * c[:, 2]
+    z = np.where(inside, z, np.inf).min(axis=1)
+    return np.where(np.isfinite(z), z, np.nan)
+
+
+class FrontTeeth:
+    """The quads at the front of the upper and the lower arch, that the tongue may not pass
+    through (it may pass *between* them: a protruded tongue goes through the gap of the open
+    jaw, as in the XRMB protocol's tongue protrusion, task 118).
+
+    Parameters
+    ----------
+    upper, lower : int (Q, 2, 2)
+        Per quad its mesial and distal edge, each as (tip row, gum row), 0-based.
+    """
+
+    def __init__(self, upper: np.ndarray, lower: np.ndarray):
+        self.upper = np.asarray(upper, np.int64).reshape(-1, 2, 2)
+        self.lower = np.asarray(lower, np.int64).reshape(-1, 2, 2)
+
+    @staticmethod
+    def front_edges(vertices: np.ndarray, quads, *, min_nx: float) -> np.ndarray:
+        """The (mesial, distal) x (tip, gum) rows of the quads whose outward normal is at least
+        ``min_nx`` forward. ``quads``: (tip-mesial, tip-distal, gum-distal, gum-mesial) 1-based
+        numbers each."""
+        v = np.asarray(vertices, np.float64)
+        keep = []
+        for q in quads:
+            tm, td, gd, gm = (int(n) - 1 for n in q)
+            dx, dy = v[td, 0] - v[tm, 0], abs(v[td, 1]) - abs(v[tm, 1])
+            length = np.hypot(dx, dy)
+            if length > 0 and abs(dy) >= min_nx * length:
+                keep.append(((tm, gm), (td, gd)))
+        return np.asarray(keep, np.int64).reshape(-1, 2, 2)
+
+    def keep_out(self, positions: np.ndarray, p: np.ndarray, margin: float, *,
+                 protruding: np.ndarray) -> np.ndarray:
+        """Keep the points out of the front teeth.
+
+        In a frame where the tongue stays in the mouth, a point in front of a front tooth's
+        surface (within ``margin``; the surface extended up and down, so no edge between two
+        points can cross it) moves back behind it. In a frame where the tongue is protruded, a
+        point in front of a tooth's surface moves up or down into the gap between the upper
+        and the lower teeth's tips (the tongue passes between them); where the gap is shut it
+        moves back instead.
+
+        Parameters
+        ----------
+        positions : float (F, V, 3)
+            Teeth placed for each frame.
+        p : float (F, E, 3)
+            The points (left half), changed in place and returned.
+        margin : float
+            Parke units; it also closes the slits between neighbouring teeth.
+        protruding : bool (F,)
+
+        Returns
+        -------
+        p
+        """
+        y = np.abs(p[..., 1])
+        wu, tu = _wall(positions, self.upper, y, p[..., 2], margin)
+        wl, tl = _wall(positions, self.lower, y, p[..., 2], margin)
+        out = protruding[:, None]
+        # the gap's ends; a set that does not span |y| leaves that end open
+        lo = np.where(np.isnan(tl), -np.inf, tl + margin)
+        hi = np.where(np.isnan(tu), np.inf, tu - margin)
+        # down from the upper teeth's height in front of the upper teeth, up from the lower's
+        # in front of the lower teeth (each set's own surface: the jaw moves the lower one)
+        open_ = out & (hi > lo)
+        z = p[..., 2]
+        z = np.where(open_ & (p[..., 0] > wu - margin) & (z > hi), hi, z)
+        p[..., 2] = np.where(open_ & (p[..., 0] > wl - margin) & (z < lo), lo, z)
+        # what is still in front of a tooth at its height (or anywhere, inside the mouth)
+        z = p[..., 2]
+        in_upper = ~out | (z > tu - margin)
+        in_lower = ~out | (z < tl + margin)
+        for w, at in ((wu, in_upper), (wl, in_lower)):
+            p[..., 0] = np.where(at & (p[..., 0] > w - margin), w - margin, p[..., 0])
+        return p
+
+
+def _wall(positions: np.ndarray, edges: np.ndarray, y: np.ndarray, z: np.ndarray,
+          slit: float) -> tuple[np.ndarray, np.ndarray]:
+    """For points (F, E): x of the front-most quad of ``edges`` at (|y|, z) (each edge
+    extended vertically) and the z of that quad's tip at |y|; +inf / NaN where none spans |y|.
+    Each quad's span is widened by ``slit`` on both sides, so that the slits between
+    neighbouring teeth (0.8 Parke units each side in the generated face) are no way through."""
+    if len(edges) == 0:
+        shape = np.shape(y)
+        return np.full(shape, np.inf), np.full(shape, np.nan)
+    tip = positions[:, edges[:, :, 0]]                     # (F, Q, 2, 3)
+    gum = positions[:, edges[:, :, 1]]
+    dz = gum[..., 2] - tip[..., 2]
+    zz = z[:, :, None, None]                                # (F, E, 1, 1)
+    t = np.clip((zz - tip[:, None, ..., 2]) / np.where(np.abs(dz) > 1e-12, dz, 1.0)[:, None],
+                0.0, 1.0)                                    # (F, E, Q, 2)
+    ex = tip[:, None, ..., 0] + t * (gum - tip)[:, None, ..., 0]
+    ey = np.abs(tip[:, None, ..., 1] + t * (gum - tip)[:, None, ..., 1])
+    ay = y[:, :, None]
+    y0, y1 = ey[..., 0], ey[..., 1]
+    span = (ay >= np.minimum(y0, y1) - slit) & (ay <= np.maximum(y0, y1) + slit)
+    s = (ay - y0) / np.where(np.abs(y1 - y0) > 1e-12, y1 - y0, 1.0)
+    x = np.where(span, ex[..., 0] + s * (ex[..., 1] - ex[..., 0]), np.inf)
+    tz = tip[:, None, :, 0, 2] + s * (tip[:, None, :, 1, 2] - tip[:, None, :, 0, 2])
+    q = np.argmin(x, axis=-1)[..., None]
+    wall = np.take_along_axis(x, q, -1)[..., 0]
+    tipz = np.where(np.isfinite(wall), np.take_along_axis(tz, q, -1)[..., 0], np.nan)
+    return wall, tipz

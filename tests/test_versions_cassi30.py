@@ -1,0 +1,342 @@
+"""CASSI 3.0, the plug-in version (plugins/cassi30): registered through the entry point and
+built on public names only; a thick tongue kept behind the teeth and under the palate, smoothly;
+back points that follow T3-T4 along PHA.DAT; a palate fitted above the upper incisor tip; chunked
+animation equal to the whole. Tasks come from the embedded synthetic corpus (they describe the
+software, not real speakers). Skips where the plug-in is not installed
+(``pip install --no-deps -e plugins/cassi30``).
+"""
+from __future__ import annotations
+
+import ast
+import dataclasses
+import importlib
+from importlib.metadata import entry_points
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+cassi30 = pytest.importorskip("cassi30", reason="the cassi-3.0 plug-in is not installed")
+
+from cassi.data import numbering as N  # noqa: E402
+from cassi.harness.pipeline import get_corpus, get_face, get_profile  # noqa: E402
+from cassi.harness.rubric import geometry as G  # noqa: E402
+from cassi.versions.protocol import version_face  # noqa: E402
+from cassi.versions.registry import get_version  # noqa: E402
+from cassi30 import constants as K  # noqa: E402
+from cassi30.collision import FrontTeeth, PalateHeights, soft_below  # noqa: E402
+from cassi30.face import tongue_numbers, tongue_rows  # noqa: E402
+from cassi30.shape import BACK_STATION, PELLET_STATIONS, STATIONS, back_points  # noqa: E402
+
+C = len(K.SECTION_PHI)
+
+
+@pytest.fixture(scope="module")
+def corpus():
+    return get_corpus(None)
+
+
+@pytest.fixture(scope="module")
+def version():
+    return get_version("cassi-3.0")
+
+
+def _inputs(corpus, subject, task):
+    profile = get_profile(corpus, subject)
+    return profile, get_face(corpus, subject, profile), corpus.subject(subject).load(task)
+
+
+@pytest.fixture(scope="module")
+def protrusion(corpus, version):
+    """JW11 task 118: maximum lip, then tongue protrusion (the tongue leaves the mouth)."""
+    profile, face, rec = _inputs(corpus, "JW11", 118)
+    return version.animate(profile, face, rec), version_face(version, face), profile
+
+
+@pytest.fixture(scope="module")
+def sentence(corpus, version):
+    """JW11 task 19 (sentences): the tongue touches the palate."""
+    profile, face, rec = _inputs(corpus, "JW11", 19)
+    return version.animate(profile, face, rec), version_face(version, face), profile, rec
+
+
+# --- the extension path ------------------------------------------------------------------------
+
+def test_registered_through_the_entry_point_group(version):
+    eps = {ep.name: ep.value for ep in entry_points(group="cassi.versions")}
+    assert eps.get("cassi-3.0") == "cassi30:Cassi30"
+    assert type(version).__name__ == "Cassi30" and version.name == "cassi-3.0"
+
+
+def test_the_plug_in_imports_only_public_names_of_cassi():
+    """Every ``from cassi.X import name`` of the plug-in names a module or a name listed in the
+    module's ``__all__`` (what a third party may rely on); no ``_private`` name anywhere."""
+    root = Path(cassi30.__file__).parent
+    for path in root.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("cassi."):
+                module = importlib.import_module(node.module)
+                for alias in node.names:
+                    name = alias.name
+                    assert not name.startswith("_"), (path.name, node.module, name)
+                    public = getattr(module, "__all__", None)
+                    is_module = importlib.util.find_spec(f"{node.module}.{name}") is not None \
+                        if hasattr(module, "__path__") else False
+                    assert is_module or public is None or name in public, \
+                        f"{path.name}: {node.module}.{name} is not public"
+
+
+def test_other_versions_animate_the_shared_face(corpus):
+    profile, face, _ = _inputs(corpus, "JW45", 106)
+    for name in ("parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1"):
+        assert version_face(get_version(name), face) is face
+
+
+def test_a_face_hook_that_drops_vertices_is_refused(corpus):
+    from cassi.data.errors import CassiInputError
+
+    profile, face, _ = _inputs(corpus, "JW45", 106)
+
+    class Bad:
+        name = "bad"
+
+        def animated_face(self, f):
+            return dataclasses.replace(f, vertices=f.vertices[:-1], st1=f.st1[:-1],
+                                       st2=f.st2[:-1])
+
+    with pytest.raises(CassiInputError, match="keep their numbers"):
+        version_face(Bad(), face)
+
+
+# --- the face ----------------------------------------------------------------------------------
+
+def test_the_face_keeps_the_shared_numbers_and_adds_a_closed_tongue(corpus, version):
+    from cassi.data.topology import boundary_edges, render_topology
+
+    profile, face, _ = _inputs(corpus, "JW16", 3)
+    own = version_face(version, face)
+    n = face.vertex_count
+    assert own.vertex_count == n + STATIONS * C - len(N.TONGUE)
+    assert version_face(version, own) is own                       # deriving twice: the same
+    moved = set(N.TONGUE) | set(N.PALATE)
+    same = [i for i in range(n) if i + 1 not in moved]
+    np.testing.assert_array_equal(own.vertices[same], face.vertices[same])
+    tongue = render_topology(own).parts["tongue"]
+    assert len(boundary_edges(tongue.triangles)) == 0               # a closed body
+    parts = G.mouth_parts(own)
+    assert len(parts.tongue) == STATIONS * C
+    # the rubric's centre line (T3, T4, back) is the tongue's
+    np.testing.assert_array_equal(parts.tongue[3:6], np.asarray([N.T3, N.T4, N.TONGUE_BACK]) - 1)
+
+
+def test_the_tongue_polygons_face_outward(corpus, version):
+    """Parke's order is clockwise seen from outside: each polygon's right-hand normal points
+    into the tongue (toward its station's centre line)."""
+    profile, face, _ = _inputs(corpus, "JW16", 3)
+    own = version_face(version, face)
+    v = own.vertices
+    body = []
+    for poly in own.polygons_of("tongue"):
+        p = v[np.asarray(poly.vertices) - 1]
+        normal = np.cross(p[1] - p[0], p[2] - p[0])
+        inward = v[np.asarray(N.TONGUE_CENTRE) - 1].mean(0) - p.mean(0)
+        inward[1] = -p.mean(0)[1]          # toward the midsagittal plane as well
+        body.append(np.dot(normal, inward) > 0)
+    assert np.mean(body) > 0.9, np.mean(body)
+
+
+def test_the_palate_never_reaches_below_the_incisor_tip(corpus, version):
+    """Every subject of the corpus, and a planted outline that dips 3 mm below the tip."""
+    from cassi.data.face import build_face
+
+    faces = [get_face(corpus, s, get_profile(corpus, s)) for s in corpus.subjects[:6]]
+    low = np.array([(-2.0, -3.0), (-6.0, 2.0), (-15.0, 14.0), (-30.0, 20.0), (-50.0, 19.0)])
+    faces.append(build_face(palate_mm=low))
+    assert np.ptp(faces[-1].vertices[np.asarray(N.PALATE) - 1, 2]) > 0
+    planted_below = faces[-1].vertices[N.UPPER_INCISOR_TIP - 1, 2] - \
+        faces[-1].vertices[np.asarray(N.PALATE) - 1, 2].min()
+    assert planted_below > 2.0 * N.UNITS_PER_MM                    # the fault is there
+    for face in faces:
+        own = version_face(version, face)
+        lowest = own.vertices[np.asarray(N.PALATE) - 1, 2].min()
+        tip = own.vertices[N.UPPER_INCISOR_TIP - 1, 2]
+        assert lowest >= tip + K.PALATE_ABOVE_INCISOR_MM * N.UNITS_PER_MM - 1e-9
+
+
+# --- collisions --------------------------------------------------------------------------------
+
+def test_the_tongue_stays_under_the_palate_with_its_margin(sentence):
+    anim, face, profile, rec = sentence
+    rows = tongue_rows(face.vertex_count)
+    tris = np.asarray([(q[0], q[k], q[k + 1]) for q in (p.vertices for p in
+                       face.polygons_of("palate")) for k in range(1, len(q) - 1)]) - 1
+    pos = anim.positions.astype(np.float64)
+    scale = 1.0 / G.mm_per_unit(face.vertices, profile.jaw_length_mm)
+    heights = PalateHeights(pos[0], tris, K.PALATE_GRID_MM * scale)
+    dorsum = rows.reshape(STATIONS, C)[:, :K.DORSUM_COLUMNS].ravel()
+    p = pos[:, dorsum]
+    room = heights(p[..., 0], p[..., 1]) - p[..., 2]
+    # the data puts the tongue through the palate in this task; the margin is kept anyway
+    # (float32 storage rounds by ~1e-5 units)
+    assert room.min() >= K.COLLISION_MARGIN_MM * scale - 1e-3
+    parts = G.mouth_parts(face)
+    assert G.tongue_palate_penetration(pos, parts).max() == 0.0
+
+
+def test_the_tongue_stays_behind_the_teeth_or_passes_between_them(protrusion):
+    anim, face, profile = protrusion
+    pos = anim.positions.astype(np.float64)
+    parts = G.mouth_parts(face)
+    depth = G.tongue_teeth_penetration(pos, parts, rest=face.vertices)
+    mm = G.mm_per_unit(face.vertices, profile.jaw_length_mm)
+    assert max(depth["upper"].max(), depth["lower"].max()) * mm < 0.05
+    # the protruded tongue really leaves the mouth: T1 in front of the upper incisors, on its
+    # pellet
+    out = anim.diagnostics["tongue_protruded"].to_numpy()
+    assert (pos[out, N.T1 - 1, 0] > pos[out, N.UPPER_INCISOR_TIP - 1, 0]).sum() > 50
+
+
+def test_keep_out_holds_the_tongue_behind_the_teeth_or_in_their_gap():
+    """One upper and one lower incisor quad (vertical, x = 10, y 0..8): upper tip at z 0, gum
+    10; lower tip at z -6, gum -16. Margin 1: the gap is z in [-5, -1]."""
+    v = np.zeros((8, 3))
+    v[0:4] = [(10, 0, 0), (10, 8, 0), (10, 8, 10), (10, 0, 10)]           # upper tm td gd gm
+    v[4:8] = [(10, 0, -6), (10, 8, -6), (10, 8, -16), (10, 0, -16)]      # lower
+    teeth = FrontTeeth(np.array([[[0, 3], [1, 2]]]), np.array([[[4, 7], [5, 6]]]))
+    p = np.array([[12.0, 2.0, 5.0],      # through the upper tooth
+                  [20.0, 2.0, -3.0],     # in front of the gap
+                  [11.0, 2.0, -9.0],     # through the lower tooth
+                  [8.0, 2.0, 5.0],       # behind
+                  [12.0, 20.0, 5.0]])    # beside the teeth
+    pos = np.broadcast_to(v, (2, 8, 3))
+    inside, protruded = teeth.keep_out(pos, np.stack([p, p]), 1.0,
+                                       protruding=np.array([False, True]))
+    # in the mouth: everything in front of the teeth goes back, whatever its height
+    np.testing.assert_allclose(inside[:3, 0], [9.0, 9.0, 9.0])
+    np.testing.assert_allclose(inside[3:], p[3:])
+    # protruded: what is in front of the teeth passes through the gap
+    np.testing.assert_allclose(protruded[0], [12.0, 2.0, -1.0])
+    np.testing.assert_allclose(protruded[1], p[1])
+    np.testing.assert_allclose(protruded[2], [11.0, 2.0, -5.0])
+    np.testing.assert_allclose(protruded[3:], p[3:])
+
+
+def test_the_projection_is_smooth_in_time():
+    """A coordinate swept through its bound at constant speed: the soft projection's largest
+    second difference stays a small fraction of what a hard clamp's kink gives, so a smooth
+    pellet track gives a smooth vertex track (no new jitter)."""
+    t = np.linspace(-3.0, 3.0, 601)
+    v = 2.0 * t                                   # mm, crossing the bound 0 at t = 0
+    soft = soft_below(v, np.zeros_like(v), K.SOFTNESS_MM)
+    hard = np.minimum(v, 0.0)
+    assert np.all(soft <= 0.0) and np.all(np.diff(soft) >= 0)      # bounded, order kept
+    assert np.abs(np.diff(soft, 2)).max() < 0.2 * np.abs(np.diff(hard, 2)).max()
+    clear = v < -1.0
+    np.testing.assert_allclose(soft[clear], v[clear], atol=1e-3)   # far from it: untouched
+
+
+def test_pellet_sites_stay_on_the_pellets_unless_the_palate_is_in_the_way(sentence, version):
+    """T3 and T4 (behind the teeth: only the palate bounds them): on their pellets (within
+    5e-4 mm, constants.SOFTNESS_MM's promise) wherever the pellet is clear of the palate's
+    margin by 1 mm, and never above it."""
+    anim, face, profile, rec = sentence
+    ctx = version.context(profile, face, rec)      # the mapped pellets
+    scale = ctx.mapping.scale
+    pos = anim.positions.astype(np.float64)
+    tris = np.asarray([(q[0], q[k], q[k + 1]) for q in (p.vertices for p in
+                       face.polygons_of("palate")) for k in range(1, len(q) - 1)]) - 1
+    heights = PalateHeights(pos[0], tris, K.PALATE_GRID_MM * scale)
+    for j, number in ((2, N.T3), (3, N.T4)):
+        pellet = ctx.pellets[:, 2 + j]
+        bound = heights(pellet[:, 0], np.zeros(len(pellet))) - K.COLLISION_MARGIN_MM * scale
+        site = pos[:, number - 1][:, [0, 2]]
+        clear = bound - pellet[:, 1] > 1.0 * scale
+        assert clear.sum() > 100
+        shift = np.linalg.norm(site - pellet, axis=1) / scale
+        assert shift[clear].max() < 5e-4
+        assert np.all(site[:, 1] <= bound + 1e-3)
+
+
+# --- the back of the tongue --------------------------------------------------------------------
+
+def test_back_points_turn_from_t3_t4_toward_the_wall_and_move_with_the_tongue():
+    t3, t4 = np.array([[0.0, 0.0], [5.0, 3.0]]), np.array([[-10.0, -2.0], [-5.0, 1.0]])
+    wall = np.array([0.0, -1.0])
+    b = back_points(t3, t4, wall, 8.0)
+    assert b.shape == (2, K.BACK_POINTS, 2)
+    np.testing.assert_allclose(b[1] - b[0], np.broadcast_to(t4[1] - t4[0], b[0].shape))
+    steps = np.diff(np.concatenate([t4[:1, None], b[:1]], axis=1)[0], axis=0)
+    u = (t4[0] - t3[0]) / np.hypot(*(t4[0] - t3[0]))
+    cos_u = steps @ u / 8.0
+    cos_w = steps @ wall / 8.0
+    assert np.all(np.diff(cos_u) < 0) and np.all(np.diff(cos_w) > 0)   # turning toward the wall
+    np.testing.assert_allclose(np.hypot(*steps.T), 8.0)
+
+
+def test_back_points_follow_t3_t4_along_pha_without_a_v(sentence):
+    anim, face, profile, rec = sentence
+    pos = anim.positions.astype(np.float64)
+    angle = G.profile_angle(pos, N.T3 - 1, N.T4 - 1, N.TONGUE_BACK - 1)
+    assert angle.min() > 120.0                    # the rubric's V threshold, every frame
+    # the back moves with T4 (not anchored) ...
+    back = pos[:, N.TONGUE_BACK - 1, [0, 2]]
+    t4 = pos[:, N.T4 - 1, [0, 2]]
+    assert np.corrcoef(back[:, 1], t4[:, 1])[0, 1] > 0.8
+    # ... and every back point stays in front of the pharyngeal wall
+    from cassi.versions.mapping import XrmbToParke
+
+    m = XrmbToParke.from_face(face.vertices, profile.jaw_length_mm)
+    pha = m.to_parke(profile.pharynx_mm)
+    order = np.argsort(pha[:, 1])
+    rows = tongue_rows(face.vertex_count)
+    centre_back = rows.reshape(STATIONS, C)[BACK_STATION:, 0]
+    p = pos[:, centre_back]
+    wall_x = np.interp(p[..., 2], pha[order, 1], pha[order, 0])
+    assert (p[..., 0] - wall_x).min() >= (K.PHARYNX_CLEARANCE_MM - 0.1) * m.scale
+
+
+def test_a_subject_without_pha_dat_is_refused(corpus, version):
+    from cassi.data.errors import CassiInputError
+
+    profile, face, rec = _inputs(corpus, "JW45", 106)
+    with pytest.raises(CassiInputError, match="PHA.DAT"):
+        version.animate(dataclasses.replace(profile, pharynx_mm=None), face, rec)
+
+
+# --- chunks ------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("frames", [97, 1000])
+def test_chunks_equal_the_whole_task(corpus, version, frames):
+    for subject, task in (("JW40", 5), ("JW45", 106)):
+        profile, face, rec = _inputs(corpus, subject, task)
+        whole = version.animate(profile, face, rec)
+        chunks = list(version.animate_chunks(profile, face, rec, frames=frames))
+        np.testing.assert_array_equal(np.concatenate([c.positions for c in chunks]),
+                                      whole.positions)
+        pd.testing.assert_frame_equal(
+            pd.concat([c.diagnostics for c in chunks], ignore_index=True), whole.diagnostics)
+
+
+def test_pellet_stations_are_the_pellet_vertices():
+    numbers = tongue_numbers(570)
+    assert tuple(numbers[list(PELLET_STATIONS), 0]) == N.TONGUE_PELLETS
+    assert numbers[0, 0] == N.TONGUE_TIP and numbers[BACK_STATION, 0] == N.TONGUE_BACK
+
+
+def test_the_rubric_on_streamed_chunks_equals_the_rubric_on_the_whole_task(corpus, version,
+                                                                           tmp_path):
+    """The geometry stage's path for 3.0 (positions streamed to a file, checks a chunk at a
+    time, on the face the version animates) gives the same rows, exactly."""
+    from cassi.harness.pipeline import animate_to_file, get_neutral
+    from cassi.harness.rubric import run_geometry_checks
+
+    profile, face, rec = _inputs(corpus, "JW40", 118)
+    own = version_face(version, face)
+    whole = version.animate(profile, face, rec)
+    streamed = animate_to_file(version, profile, face, rec, tmp_path)
+    streamed.positions.chunk = 97
+    kw = dict(task=118, subject="JW40", rep=1, neutral=get_neutral(), recording=rec)
+    pd.testing.assert_frame_equal(run_geometry_checks(whole, own, profile, **kw),
+                                  run_geometry_checks(streamed, own, profile, **kw),
+                                  check_exact=True)
