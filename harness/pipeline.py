@@ -327,13 +327,13 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
     """
     import io  # noqa: PLC0415
 
+    from cassi.versions.registry import get_version  # noqa: PLC0415
+
     data = np.load(io.BytesIO(inputs["keyframes"]))
     all_frames = data["frames"].tolist()
     positions = data["positions"]  # read once: each data[...] access decodes the array again
     corpus = get_corpus(ctx.corpus)
     profile = get_profile(corpus, job.subject)
-    from cassi.versions.registry import get_version  # noqa: PLC0415
-
     face = get_version_face(corpus, job.subject, profile, get_version(job.version))
     renderer = get_renderer(corpus, job.subject, face, job.view, ctx.preset, ctx.variant)
     files = {}
