@@ -12,6 +12,7 @@ import os
 import platform
 import tempfile
 import threading
+from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Mapping
@@ -38,7 +39,11 @@ _lock = threading.Lock()
 _corpora: dict[str, object] = {}
 _profiles: dict[tuple[str, str], object] = {}
 _faces: dict = {}
-_renderers: dict[tuple, object] = {}
+#: Renderers (Mitsuba scenes) a worker keeps, least recently used dropped first: each holds
+#: about 6 MB, and a night's worker meets every subject, view and face (measured: 120 scenes,
+#: 1.03 GB). Sixteen cover a task file's four views for a few faces at once.
+RENDERERS_KEPT = 16
+_renderers: OrderedDict[tuple, object] = OrderedDict()
 
 
 def corpus_root(corpus: Path | str | None) -> Path:
@@ -124,10 +129,14 @@ def get_renderer(corpus, subject: str, face, view: str, preset: str, variant: st
     # cassi.versions.protocol.version_face): that face gets a scene of its own.
     key = (str(corpus.root), subject, view, preset, variant, face.vertex_count,
            hash(face.polygons))
-    if key not in _renderers:
-        topology = render_topology(face, half=(view == "half"))
-        _renderers[key] = FaceRenderer(topology, view, preset, variant)
-    return _renderers[key]
+    if key in _renderers:
+        _renderers.move_to_end(key)
+        return _renderers[key]
+    topology = render_topology(face, half=(view == "half"))
+    _renderers[key] = renderer = FaceRenderer(topology, view, preset, variant)
+    while len(_renderers) > RENDERERS_KEPT:
+        _renderers.popitem(last=False)
+    return renderer
 
 
 def cache_sizes() -> dict[str, int]:

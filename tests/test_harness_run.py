@@ -94,8 +94,8 @@ def test_render_stages_reuse_one_renderer_per_view(tmp_path):
         job = Job("render", "JW12", 2, 1, "cassi-2.1", "front", chunk, i, parents=(geom.key,))
         assert execute_job(P.render_stage, job, ctx, f"r{i}").state.value == "done"
         keys.append(job.key)
-    assert P.cache_sizes()["renderers"] == before + 1
-    renderer = next(iter(P._renderers.values()))
+    assert P.cache_sizes()["renderers"] == min(before + 1, P.RENDERERS_KEPT)
+    renderer = next(reversed(P._renderers.values()))  # the most recently used
     assert renderer.loads == 1
     image = Job("image", "JW12", 2, 1, "cassi-2.1", "front", tuple(sorted(set(sum(chunks, ())))),
                 parents=tuple(keys))
@@ -104,6 +104,23 @@ def test_render_stages_reuse_one_renderer_per_view(tmp_path):
     rows = pd.read_parquet(OutputStore(tmp_path).path(
         OutputStore(tmp_path).read_manifest(image.key)["outputs"]["rows"]))
     assert (rows.view == "front").all() and (rows.frame == -1).any()
+
+
+def test_a_worker_keeps_a_bounded_number_of_renderers(monkeypatch):
+    """Scenes are dropped least recently used first, so a worker that meets every subject and
+    view of a night does not grow by a scene (~6 MB) each time."""
+    monkeypatch.setattr(P, "RENDERERS_KEPT", 2)
+    monkeypatch.setattr(P, "_renderers", P.OrderedDict())
+    c = P.get_corpus(None)
+    profile = P.get_profile(c, "JW12")
+    face = P.get_face(c, "JW12", profile)
+    front = P.get_renderer(c, "JW12", face, "front", "preview", None)
+    side = P.get_renderer(c, "JW12", face, "side", "preview", None)
+    assert P.get_renderer(c, "JW12", face, "front", "preview", None) is front  # used again
+    P.get_renderer(c, "JW12", face, "top", "preview", None)
+    assert P.cache_sizes()["renderers"] == 2
+    assert P.get_renderer(c, "JW12", face, "front", "preview", None) is front
+    assert P.get_renderer(c, "JW12", face, "side", "preview", None) is not side  # was dropped
 
 
 def test_extreme_frames_prefer_checks_that_fired():
