@@ -331,12 +331,17 @@ class StoredFrame:
 def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> StageOutput:
     """Render ``job.frames`` of ``job.view``.
 
-    Outputs: one PNG per frame (``render-<frame>``) and ``masks-<frame>`` (npz: ``mask`` uint8
-    (H, W) part ids, ``depth`` float32 (H, W) Parke units, ``part_names``) for the image checks.
+    Outputs: one PNG per frame (``render-<frame>``) and, in the views the task's image checks
+    judge, ``masks-<frame>`` (npz: ``mask`` uint8 (H, W) part ids, ``depth`` float32 (H, W)
+    Parke units, ``part_names``). Nothing else reads masks, and a night's masks of every view
+    were 6.9 GB written and hashed.
     """
     import io  # noqa: PLC0415
 
+    from cassi.harness.rubric import checks_for  # noqa: PLC0415
     from cassi.versions.registry import get_version  # noqa: PLC0415
+
+    judged = job.view in {c.view for c in checks_for(kind="image", task=job.task)}
 
     data = np.load(io.BytesIO(inputs["keyframes"]))
     all_frames = data["frames"].tolist()
@@ -354,6 +359,8 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
                 "version": job.version, "view": job.view, "frame": f,
                 "synthetic": ctx.synthetic}
         files[f"render-{f:06d}"] = (_png_bytes(res.srgb8(), {**res.metadata(), **meta}), ".png")
+        if not judged:
+            continue
         mask = np.asarray(res.mask)
         if mask.max(initial=0) > 255:
             raise ValueError("more than 255 parts: masks are stored as uint8")

@@ -104,6 +104,14 @@ def test_render_stages_reuse_one_renderer_per_view(tmp_path):
     rows = pd.read_parquet(OutputStore(tmp_path).path(
         OutputStore(tmp_path).read_manifest(image.key)["outputs"]["rows"]))
     assert (rows.view == "front").all() and (rows.frame == -1).any()
+    # masks are kept only where image checks judge them (the front view), PNGs everywhere
+    outputs = OutputStore(tmp_path).read_manifest(keys[0])["outputs"]
+    assert any(n.startswith("masks-") for n in outputs)
+    side = Job("render", "JW12", 2, 1, "cassi-2.1", "side", chunks[0], 0, parents=(geom.key,))
+    assert execute_job(P.render_stage, side, ctx, "s").state.value == "done"
+    outputs = OutputStore(tmp_path).read_manifest(side.key)["outputs"]
+    assert any(n.startswith("render-") for n in outputs)
+    assert not any(n.startswith("masks-") for n in outputs)
 
 
 def test_a_worker_keeps_a_bounded_number_of_renderers(monkeypatch):
