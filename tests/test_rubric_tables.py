@@ -138,3 +138,16 @@ def test_history_totals_and_empty_inputs():
     assert t["cassi-1.0"] == 2 and t["cassi-2.0"] == 0       # Table A + Table C
     assert R.component_ratings(pd.DataFrame()).empty and R.verdicts(pd.DataFrame()).empty
     assert R.version_summaries(pd.DataFrame()) == []
+
+
+def test_versions_whose_checks_agree_are_said_to_match_whatever_table_c_rule_added():
+    """Table C charges each version against the one before it; two versions with the same
+    negatives on every check 'match', and the sentence says where the totals' gap comes from."""
+    from cassi.harness.rubric import tables as T
+
+    v = pd.DataFrame({"version": ["b", "c"], "table": ["C", "C"], "check": ["lips_never_touch"] * 2,
+                      "negatives": [2, 2]})
+    both = T._per_check(v, "C", "b", "c")
+    assert (both["a"] == both["b"]).all()
+    note = T._rule_note(pd.Series({"b": 3}), "b", "c")
+    assert note == " (every check agrees; Table C's comparison rule: b +3 against the version before it)"

@@ -243,13 +243,18 @@ def version_totals(results: pd.DataFrame) -> pd.DataFrame:
     return t.reindex(order_versions(t.index)).rename("negatives").reset_index()
 
 
-def _deciding(v: pd.DataFrame, table: str, prev: str, cur: str, *, limit: int = 4) -> str:
-    """The checks that tell two versions apart in a table (negatives summed over subjects), or,
-    when none does, the checks that fired for both."""
+def _per_check(v: pd.DataFrame, table: str, prev: str, cur: str) -> pd.DataFrame:
+    """Negatives per check of two versions in a table, summed over subjects: columns a, b."""
     t = v[v["table"] == table]
     a = t[t["version"] == prev].groupby("check")["negatives"].sum()
     b = t[t["version"] == cur].groupby("check")["negatives"].sum()
-    both = pd.concat([a.rename("a"), b.rename("b")], axis=1).fillna(0).astype(int)
+    return pd.concat([a.rename("a"), b.rename("b")], axis=1).fillna(0).astype(int)
+
+
+def _deciding(v: pd.DataFrame, table: str, prev: str, cur: str, *, limit: int = 4) -> str:
+    """The checks that tell two versions apart in a table (negatives summed over subjects), or,
+    when none does, the checks that fired for both."""
+    both = _per_check(v, table, prev, cur)
     diff = both[both["a"] != both["b"]].copy()
     if len(diff):
         diff["d"] = (diff["b"] - diff["a"]).abs()
@@ -261,6 +266,14 @@ def _deciding(v: pd.DataFrame, table: str, prev: str, cur: str, *, limit: int = 
         return "no check fired for either"
     return "the same faults decided both: " + ", ".join(
         f"{k} ({_n(r.a)} each)" for k, r in same.head(limit).iterrows())
+
+
+def _rule_note(adjust: pd.Series, prev: str, cur: str) -> str:
+    """Why two versions whose checks all agree have different totals: what Table C's comparison
+    rule added to each (summed over subjects)."""
+    parts = [f"{name} {int(adjust.get(name, 0)):+d} against the version before it"
+             for name in (prev, cur) if int(adjust.get(name, 0))]
+    return f" (every check agrees; Table C's comparison rule: {', '.join(parts)})"
 
 
 def _list(names: list[str]) -> str:
@@ -287,6 +300,8 @@ def version_comparisons(results: pd.DataFrame) -> list[tuple[str, str]]:
     if cr.empty:
         return []
     v = verdicts(results)
+    rule = table_c_rule(results)
+    adjust = rule.groupby("version")["adjust"].sum() if len(rule) else pd.Series(dtype=int)
     out = []
     for table in sorted(cr["table"].unique()):
         sub = cr[cr["table"] == table]
@@ -297,7 +312,14 @@ def version_comparisons(results: pd.DataFrame) -> list[tuple[str, str]]:
         topic = TABLE_TOPICS.get(str(table), f"table {table}")
         for prev, cur in zip(names, names[1:]):
             ga, gb, na, nb = int(good[prev]), int(good[cur]), int(neg[prev]), int(neg[cur])
-            if gb != ga:
+            both = _per_check(v, table, prev, cur)
+            rule = ""
+            if (gb != ga or nb != na) and (both["a"] == both["b"]).all():
+                # Every check agrees: the totals differ only by Table C's rule, which charges
+                # each version against the one before it, not against this pair.
+                verb = "matches"
+                rule = _rule_note(adjust, prev, cur)
+            elif gb != ga:
                 verb = "improves" if gb > ga else "worsens"
             elif nb != na:
                 verb = ("improves (same ratings, fewer negatives)" if nb < na
@@ -305,7 +327,7 @@ def version_comparisons(results: pd.DataFrame) -> list[tuple[str, str]]:
             else:
                 verb = "matches"
             out.append((table, f"{cur} {verb} {topic} over {prev}: {gb} VERY GOOD/EXCELLENT cells "
-                               f"against {ga}, {_n(nb)} against {na}; "
+                               f"against {ga}, {_n(nb)} against {na}{rule}; "
                                f"{_deciding(v, table, prev, cur)}"))
         if table == "F" and len(names) > 1:
             n = neg.reindex(names).astype(int)
