@@ -175,25 +175,28 @@ def _wall(positions: np.ndarray, edges: np.ndarray, y: np.ndarray, z: np.ndarray
     """For points (F, E): x of the front-most quad of ``edges`` at (|y|, z) (each edge
     extended vertically) and the z of that quad's tip at |y|; +inf / NaN where none spans |y|.
     Each quad's span is widened by ``slit`` on both sides, so that the slits between
-    neighbouring teeth (0.8 Parke units each side in the generated face) are no way through."""
-    if len(edges) == 0:
-        shape = np.shape(y)
-        return np.full(shape, np.inf), np.full(shape, np.nan)
-    tip = positions[:, edges[:, :, 0]]                     # (F, Q, 2, 3)
-    gum = positions[:, edges[:, :, 1]]
-    dz = gum[..., 2] - tip[..., 2]
-    zz = z[:, :, None, None]                                # (F, E, 1, 1)
-    t = np.clip((zz - tip[:, None, ..., 2]) / np.where(np.abs(dz) > 1e-12, dz, 1.0)[:, None],
-                0.0, 1.0)                                    # (F, E, Q, 2)
-    ex = tip[:, None, ..., 0] + t * (gum - tip)[:, None, ..., 0]
-    ey = np.abs(tip[:, None, ..., 1] + t * (gum - tip)[:, None, ..., 1])
-    ay = y[:, :, None]
-    y0, y1 = ey[..., 0], ey[..., 1]
-    span = (ay >= np.minimum(y0, y1) - slit) & (ay <= np.maximum(y0, y1) + slit)
-    s = (ay - y0) / np.where(np.abs(y1 - y0) > 1e-12, y1 - y0, 1.0)
-    x = np.where(span, ex[..., 0] + s * (ex[..., 1] - ex[..., 0]), np.inf)
-    tz = tip[:, None, :, 0, 2] + s * (tip[:, None, :, 1, 2] - tip[:, None, :, 0, 2])
-    q = np.argmin(x, axis=-1)[..., None]
-    wall = np.take_along_axis(x, q, -1)[..., 0]
-    tipz = np.where(np.isfinite(wall), np.take_along_axis(tz, q, -1)[..., 0], np.nan)
-    return wall, tipz
+    neighbouring teeth (0.8 Parke units each side in the generated face) are no way through.
+
+    One quad at a time on (F, E) arrays, keeping the front-most so far: the few front quads
+    (3 per arch) make the loop short, and (F, E, Q, 2) temporaries would not stay in cache."""
+    shape = np.shape(y)
+    wall, tipz = np.full(shape, np.inf), np.full(shape, np.nan)
+    for quad in edges:
+        ends = []
+        for tip_row, gum_row in quad:
+            tip = np.asarray(positions[:, tip_row], np.float64)[:, None]          # (F, 1, 3)
+            gum = np.asarray(positions[:, gum_row], np.float64)[:, None]
+            d = gum - tip
+            dz = d[..., 2]
+            t = np.clip((z - tip[..., 2]) / np.where(np.abs(dz) > 1e-12, dz, 1.0), 0.0, 1.0)
+            ends.append((tip[..., 0] + t * d[..., 0], np.abs(tip[..., 1] + t * d[..., 1]),
+                         tip[..., 2]))
+        (x0, y0, z0), (x1, y1, z1) = ends
+        span = (y >= np.minimum(y0, y1) - slit) & (y <= np.maximum(y0, y1) + slit)
+        dy = y1 - y0
+        s = (y - y0) / np.where(np.abs(dy) > 1e-12, dy, 1.0)
+        x = np.where(span, x0 + s * (x1 - x0), np.inf)
+        ahead = x < wall            # strict: on a tie the earlier quad stays, as argmin would
+        wall = np.where(ahead, x, wall)
+        tipz = np.where(ahead, z0 + s * (z1 - z0), tipz)
+    return wall, np.where(np.isfinite(wall), tipz, np.nan)
