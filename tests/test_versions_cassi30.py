@@ -209,17 +209,49 @@ def test_keep_out_holds_the_tongue_behind_the_teeth_or_in_their_gap():
                   [11.0, 2.0, -9.0],     # through the lower tooth
                   [8.0, 2.0, 5.0],       # behind
                   [12.0, 20.0, 5.0]])    # beside the teeth
-    pos = np.broadcast_to(v, (2, 8, 3))
-    inside, protruded = teeth.keep_out(pos, np.stack([p, p]), 1.0,
-                                       protruding=np.array([False, True]))
+    pos = np.broadcast_to(v, (4, 8, 3))
+    inside, turning, out, edging = teeth.keep_out(
+        pos, np.stack([p, p, p, p]), 1.0, toward_gap=np.array([0.0, 0.5, 1.0, 1.0]),
+        release=np.array([0.0, 0.0, 100.0, 0.5]))
     # in the mouth: everything in front of the teeth goes back, whatever its height
     np.testing.assert_allclose(inside[:3, 0], [9.0, 9.0, 9.0])
     np.testing.assert_allclose(inside[3:], p[3:])
-    # protruded: what is in front of the teeth passes through the gap
-    np.testing.assert_allclose(protruded[0], [12.0, 2.0, -1.0])
-    np.testing.assert_allclose(protruded[1], p[1])
-    np.testing.assert_allclose(protruded[2], [11.0, 2.0, -5.0])
-    np.testing.assert_allclose(protruded[3:], p[3:])
+    # turning toward the gap: half way there in z, still held behind the teeth in x
+    np.testing.assert_allclose(turning[0], [9.0, 2.0, 2.0])
+    np.testing.assert_allclose(turning[2], [9.0, 2.0, -7.0])
+    # on its way out: what is in front of the teeth passes through the gap
+    np.testing.assert_allclose(out[0], [12.0, 2.0, -1.0])
+    np.testing.assert_allclose(out[1], p[1])
+    np.testing.assert_allclose(out[2], [11.0, 2.0, -5.0])
+    np.testing.assert_allclose(out[3:], p[3:])
+    # ... only as far in front of the teeth as the release lets it
+    np.testing.assert_allclose(edging[:3, 0], [9.5, 9.5, 9.5])
+
+
+def test_slew_follows_at_the_rate_and_carries_over_chunks():
+    from cassi30.version import slew
+
+    t = np.arange(10) * 0.01
+    target = np.array([0, 0, 1, 1, 1, 1, 0, 0, 0, 0], float)
+    whole = slew(target, t, 25.0, {}, "k")                  # 0.25 per 10 ms
+    np.testing.assert_allclose(whole, [0, 0, .25, .5, .75, 1, .75, .5, .25, 0], atol=1e-12)
+    carried: dict = {}
+    parts = [slew(target[a:a + 3], t[a:a + 3], 25.0, carried, "k") for a in range(0, 10, 3)]
+    np.testing.assert_array_equal(np.concatenate(parts), whole)
+
+
+def test_the_tongue_heads_out_and_back_without_jumps(protrusion, corpus, version):
+    """The way out between the teeth is continuous: no vertex of the tongue moves more in a
+    frame than 2.5 times the fastest pellet (T1-T4) of that task (4.9 mm against 2.5 mm when
+    written; an on/off switch moved the front by 11.5 mm in a frame)."""
+    anim, face, profile = protrusion
+    rows = tongue_rows(face.vertex_count)
+    pos = anim.positions.astype(np.float64)
+    step = np.linalg.norm(np.diff(pos[:, rows], axis=0), axis=-1).max(axis=1)
+    ctx = version.context(profile, face, corpus.subject("JW11").load(118))
+    pellet = np.linalg.norm(np.diff(ctx.pellets[:, 2:6], axis=0), axis=-1).max(axis=1)
+    assert anim.diagnostics["tongue_protruded"].sum() > 50
+    assert step.max() < 2.5 * pellet.max()
 
 
 def test_the_projection_is_smooth_in_time():

@@ -1,6 +1,6 @@
 """Collision handling of CASSI 3.0: the tongue is kept under the palate and in front of the
 pharyngeal wall by a *soft* projection, and out of the front teeth by a projection onto their
-surface (or, when the tongue is protruded, into the gap between them).
+surface (or, as the tongue heads out, into the gap between them, continuously).
 
 Soft: a coordinate ``v`` bounded above by ``b`` becomes ``b - w * log(1 + exp((b - v) / w))``:
 equal to ``v`` (within ``w * exp(-(b - v) / w)``) when it is clear of the bound, ``b`` when the
@@ -124,15 +124,17 @@ class FrontTeeth:
         return np.asarray(keep, np.int64).reshape(-1, 2, 2)
 
     def keep_out(self, positions: np.ndarray, p: np.ndarray, margin: float, *,
-                 protruding: np.ndarray) -> np.ndarray:
+                 toward_gap: np.ndarray, release: np.ndarray) -> np.ndarray:
         """Keep the points out of the front teeth.
 
-        In a frame where the tongue stays in the mouth, a point in front of a front tooth's
-        surface (within ``margin``; the surface extended up and down, so no edge between two
-        points can cross it) moves back behind it. In a frame where the tongue is protruded, a
-        point in front of a tooth's surface moves up or down into the gap between the upper
-        and the lower teeth's tips (the tongue passes between them); where the gap is shut it
-        moves back instead.
+        A point in front of a front tooth's surface (within ``margin``; the surface extended up
+        and down, so no edge between two points can cross it) moves toward the gap between the
+        upper and the lower teeth's tips by the frame's ``toward_gap`` weight (0: the tongue
+        stays in the mouth; 1: it is on its way out), then back behind the surface, except by
+        up to the frame's ``release`` where it is at the gap's height (below the upper tooth's
+        tip and above the lower's). So a point is in front of a tooth only between their tips,
+        and everything changes continuously with the weights; where the gap is shut no point
+        is between the tips, and every point is behind one of the two surfaces.
 
         Parameters
         ----------
@@ -142,7 +144,9 @@ class FrontTeeth:
             The points (left half), changed in place and returned.
         margin : float
             Parke units; it also closes the slits between neighbouring teeth.
-        protruding : bool (F,)
+        toward_gap : float (F,) in [0, 1]
+        release : float (F,) >= 0
+            Parke units.
 
         Returns
         -------
@@ -151,22 +155,22 @@ class FrontTeeth:
         y = np.abs(p[..., 1])
         wu, tu = _wall(positions, self.upper, y, p[..., 2], margin)
         wl, tl = _wall(positions, self.lower, y, p[..., 2], margin)
-        out = protruding[:, None]
         # the gap's ends; a set that does not span |y| leaves that end open
         lo = np.where(np.isnan(tl), -np.inf, tl + margin)
         hi = np.where(np.isnan(tu), np.inf, tu - margin)
+        x, z = p[..., 0], p[..., 2]
         # down from the upper teeth's height in front of the upper teeth, up from the lower's
         # in front of the lower teeth (each set's own surface: the jaw moves the lower one)
-        open_ = out & (hi > lo)
-        z = p[..., 2]
-        z = np.where(open_ & (p[..., 0] > wu - margin) & (z > hi), hi, z)
-        p[..., 2] = np.where(open_ & (p[..., 0] > wl - margin) & (z < lo), lo, z)
-        # what is still in front of a tooth at its height (or anywhere, inside the mouth)
-        z = p[..., 2]
-        in_upper = ~out | (z > tu - margin)
-        in_lower = ~out | (z < tl + margin)
-        for w, at in ((wu, in_upper), (wl, in_lower)):
-            p[..., 0] = np.where(at & (p[..., 0] > w - margin), w - margin, p[..., 0])
+        target = np.where((x > wu - margin) & (z > hi), hi,
+                          np.where((x > wl - margin) & (z < lo), lo, z))
+        z = z + toward_gap[:, None] * (target - z)
+        # let forward only at the gap's height (within the margin: below a tooth's tip)
+        let = release[:, None]
+        up = np.clip(1.0 - (z - hi) / margin, 0.0, 1.0)
+        down = np.clip(1.0 - (lo - z) / margin, 0.0, 1.0)
+        x = np.minimum(x, wu - margin + let * up)
+        p[..., 0] = np.minimum(x, wl - margin + let * down)
+        p[..., 2] = z
         return p
 
 

@@ -71,12 +71,35 @@ SOFTNESS_MM = 0.15
 #: Stations held behind (or between) the front teeth: tip, T1, between T1 and T2, T2. Behind T2
 #: the tongue is ~25 mm behind the incisors at rest; only the front of the arch can be passed.
 TEETH_STATIONS = 4
-#: When the tongue is protruded (its tip and T1 out between the open teeth: the XRMB protocol's
-#: tongue protrusion, task 118) and T2 is still behind the teeth, the station between T1 and T2
-#: is put where the tongue passes the teeth: this far behind the upper incisors' surface, at the
-#: gap's height (half of it: 3 mm, half a real incisor crown's labio-lingual thickness of
-#: ~6-7 mm; Parke's teeth are only their labial faces), when T2 is behind that place.
+#: When the tongue is protruded (T1 out between the open teeth: the XRMB protocol's tongue
+#: protrusion, task 118) and T2 is still behind the teeth, the station between T1 and T2 is put
+#: where the tongue passes the teeth: this far behind the upper incisors' surface, at the gap's
+#: height (half of it: 3 mm, half a real incisor crown's labio-lingual thickness of ~6-7 mm;
+#: Parke's teeth are only their labial faces), when T2 is behind that place.
 PROTRUSION_ZONE_MM = 6.0
+#: The tongue heads for the gap over the last 8 mm of T1's approach to the upper incisors' front
+#: (its front moves to the gap's height over that distance, continuously; an on/off switch made
+#: it jump by up to 11 mm in one frame). 8 mm: the tip leads T1 by that much
+#: (cassi.versions.constants.TONGUE_TIP_AHEAD_MM), so from there on the tongue's front is at the
+#: teeth; and the front moves down to the gap about as fast as T1 moves forward.
+PROTRUSION_RAMP_MM = 8.0
+#: How far along its way out the tongue is (TURN_MM, then how far it may be in front of the
+#: teeth) changes no faster than this (subject mm/s), so a gap that opens in one frame under a
+#: T1 already past the teeth (the data and the teeth disagree) does not fling the tongue out,
+#: nor pull it in at once: 400 mm/s, above the peak tongue-tip speeds of speech (150-250 mm/s;
+#: McClean 2000, JSLHR 43:205; Westbury, Lindstrom & McClean 2002, JSLHR 45:651; the same
+#: figures calibrate the synthetic corpus, cassi.data.synth_motion), so a real tongue's own
+#: motion is never slowed; only the jumps that come from the teeth are.
+TONGUE_SPEED_MM_S = 400.0
+#: The first part of the tongue's way out (subject mm, at TONGUE_SPEED_MM_S) turns its front
+#: toward the gap; only then may it pass the teeth (and on the way back it is behind them before
+#: its front leaves the gap's height): 12 mm, about how far the station between T1 and T2 goes
+#: to where the tongue passes the teeth, so no part moves much faster than the tongue (~50 ms).
+TURN_MM = 12.0
+#: The gap between the incisor tips (less the margins) must be open by this much before the
+#: tongue heads out in full; a narrower gap lets it go part of the way (continuously), a shut
+#: one not at all. 1 mm, the collision margin.
+GAP_OPEN_MM = 1.0
 #: A teeth quad is the arch's front (a wall the tongue could pass forward through) when its
 #: outward normal is at least this much forward (|n_x|, 60 degrees off straight ahead); the rest
 #: run along the cheek. The same value CASSI 1.0 uses for its arch (versions.constants

@@ -16,6 +16,7 @@ from cassi.data.face import FaceModel
 from cassi.versions.cassi10 import (NoseClearanceStage, incisor_wall_x, parameters_frame,
                                     place_tongue_tip)
 from cassi.versions.cassi21 import Cassi21
+from cassi.versions import constants as cassi10_constants
 from cassi.versions.protocol import Stage, TaskContext
 
 from cassi30 import constants as K
@@ -24,7 +25,7 @@ from cassi30.face import lower_arch, thick_tongue_face, tongue_rows
 from cassi30.shape import (PELLET_STATIONS, arch_half_width, back_points, centre_stations,
                            normals, sections, station_thickness_mm)
 
-__all__ = ["Cassi30", "ThickTongueStage"]
+__all__ = ["Cassi30", "ThickTongueStage", "slew"]
 
 _PELLETS = ("T1", "T2", "T3", "T4")
 #: Frames the tongue is computed for at a time: every frame is independent of the others, and
@@ -46,6 +47,32 @@ def _pharynx(ctx: TaskContext) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     order = np.argsort(xz[:, 1])
     d = xz[order[0]] - xz[order[-1]]
     return xz[order, 1], xz[order, 0], d / np.hypot(*d)
+
+
+def slew(target: np.ndarray, time_s: np.ndarray, rate: float, carried: dict, key: str
+         ) -> np.ndarray:
+    """``target`` (F,) followed at no more than ``rate`` per second, up or down (the first
+    frame of a task takes its target); ``carried[key]`` holds the last value and time for the
+    frames that follow, so chunks give the values of the whole task. A loop over the frames,
+    about a microsecond each."""
+    out = np.empty_like(target)
+    prev, prev_t = carried.get(key, (None, None))
+    t_list, g_list = time_s.tolist(), target.tolist()
+    for f, (t, g) in enumerate(zip(t_list, g_list)):
+        if prev is not None and g != prev:
+            step = rate * (t - prev_t)
+            g = min(max(g, prev - step), prev + step)
+        out[f] = prev = g
+        prev_t = t
+    if len(out):
+        carried[key] = (prev, prev_t)
+    return out
+
+
+def _gap(teeth: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """The low and high end of the jaw's gap between the incisor tips, less the margin (F,)."""
+    return (teeth[:, N.LOWER_INCISOR_TIP - 1, 2] + margin,
+            teeth[:, N.UPPER_INCISOR_TIP - 1, 2] - margin)
 
 
 class ThickTongueStage:
@@ -79,8 +106,8 @@ class ThickTongueStage:
             ctx.state["tongue30"] = plan
         return plan
 
-    def tongue(self, ctx: TaskContext, pellets: np.ndarray, teeth: np.ndarray
-               ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    def tongue(self, ctx: TaskContext, pellets: np.ndarray, teeth: np.ndarray,
+               time_s: np.ndarray, carried: dict) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """The tongue's vertices for each frame.
 
         Parameters
@@ -89,6 +116,10 @@ class ThickTongueStage:
             T1-T4, Parke (x, z).
         teeth : float (F, V, 3)
             Positions with the teeth placed (the jaw stage's work).
+        time_s : float (F,)
+            The frames' times, seconds.
+        carried : dict
+            What the frames before these leave for them (:func:`slew`).
 
         Returns
         -------
@@ -107,22 +138,35 @@ class ThickTongueStage:
         wall_x = np.interp(back[..., 1], pz, px)
         back[..., 0] = soft_above(back[..., 0], wall_x + K.PHARYNX_CLEARANCE_MM * scale, w)
         st = centre_stations(tip, pellets, back)
-        out = self._protruded(tip, pellets[:, 0], incisors, margin)
-        passing, lo, hi = self._pass_between_teeth(st, out, incisors, margin,
-                                                    K.PROTRUSION_ZONE_MM * scale)
+        ramp = K.PROTRUSION_RAMP_MM * scale
+        approach, allowance = self._protrusion(pellets[:, 0], incisors, margin, ramp, scale)
+        lo, hi = _gap(incisors, margin)
+        gap_open = np.clip((hi - lo) / (K.GAP_OPEN_MM * scale), 0.0, 1.0)
+        # How far along its way out the tongue is, moving no faster than a tongue: the first
+        # TURN_MM turn its front toward the gap, the rest is how far it may be in front of the
+        # teeth. One quantity, so the front is at the gap's height before it passes the teeth
+        # and stays there until it is back behind them.
+        turn = K.TURN_MM * scale
+        way = slew(gap_open * (turn * approach + allowance), time_s,
+                   K.TONGUE_SPEED_MM_S * scale, carried, "way out")
+        toward, release = np.minimum(way / turn, 1.0), np.maximum(way - turn, 0.0)
+        passing = self._pass_between_teeth(st, toward, incisors, margin,
+                                           K.PROTRUSION_ZONE_MM * scale, ramp)
         width = arch_half_width(*plan["arch"], st[..., 0], scale=scale)
         width[:, 0] = K.HALF_WIDTH_TIP_MM * scale
         v = sections(st, normals(st), width, plan["thickness"])
-        # In a protruded frame, the whole section of each front station near or past the
-        # teeth fits in the gap (the underside behind the teeth would otherwise hang below
-        # the lower incisors' tip, and its edges to the points in the gap cut through them).
+        # As the tongue heads out, the whole section of each front station near or past the
+        # teeth moves into the gap (the underside behind the teeth would otherwise hang below
+        # the lower incisors' tip, and its edges to the points in the gap cut through them);
+        # by ramps, so the sections move there continuously.
         near = incisors[:, [N.UPPER_INCISOR_TIP - 1, N.LOWER_INCISOR_TIP - 1], 0].min(axis=1)
-        squeeze = (out & (hi > lo))[:, None] & (
-            st[:, :K.TEETH_STATIONS, 0] > (near - 0.5 * K.PROTRUSION_ZONE_MM * scale)[:, None])
-        squeeze[:, 2] |= passing
+        start = near - 0.5 * K.PROTRUSION_ZONE_MM * scale - ramp
+        nearness = np.clip((st[:, :K.TEETH_STATIONS, 0] - start[:, None]) / ramp, 0.0, 1.0)
+        nearness[:, 2] = np.maximum(nearness[:, 2], passing)
+        weight = (toward[:, None] * nearness)[..., None]
         part = v[:, :K.TEETH_STATIONS, :, 2]
-        v[:, :K.TEETH_STATIONS, :, 2] = np.where(
-            squeeze[..., None], np.clip(part, lo[:, None, None], hi[:, None, None]), part)
+        inside = np.clip(part, lo[:, None, None], np.maximum(hi, lo)[:, None, None])
+        v[:, :K.TEETH_STATIONS, :, 2] = part + weight * (inside - part)
         # Under the palate: each dorsum point, and the underside point below it moves with it
         # (the tongue is pressed down, not flattened).
         top = v[..., :K.DORSUM_COLUMNS, :]
@@ -134,62 +178,77 @@ class ThickTongueStage:
         # Behind the front teeth, or between them.
         front = v[:, :K.TEETH_STATIONS].reshape(v.shape[0], -1, 3)
         before = front.copy()
-        plan["teeth"].keep_out(teeth, front, margin, protruding=out)
+        plan["teeth"].keep_out(teeth, front, margin, toward_gap=toward, release=release)
         v[:, :K.TEETH_STATIONS] = front.reshape(v.shape[0], K.TEETH_STATIONS, -1, 3)
         dx = np.linalg.norm(front - before, axis=-1)
         sites = v[:, list(PELLET_STATIONS), 0][..., [0, 2]]
-        diag = {"tongue_protruded": out,
+        diag = {"tongue_protruded": release > 0, "tongue_gap_weight": toward,
+                "tongue_release_mm": release / scale,
                 "tongue_palate_push_mm": -dz.min(axis=(1, 2)) / scale,
                 "tongue_teeth_push_mm": dx.max(axis=1) / scale,
                 "tongue_site_shift_mm": np.linalg.norm(sites - pellets, axis=-1).max(1) / scale}
         return v, diag
 
     @staticmethod
-    def _protruded(tip: np.ndarray, t1: np.ndarray, teeth: np.ndarray, margin: float
-                   ) -> np.ndarray:
-        """bool (F,): the tongue is out between the teeth. The tip (placed ahead of T1, behind
-        the incisors unless T1 itself is there) is in front of the incisors' surface and T1 is
-        at the height of the jaw's gap or in front of the upper incisors: a T1 behind the teeth
-        and above the gap (an alveolar contact) keeps the tip behind the teeth instead, so no
-        edge from T1 to the tip cuts through the upper incisors."""
-        hi = teeth[:, N.UPPER_INCISOR_TIP - 1, 2] - margin
-        lo = teeth[:, N.LOWER_INCISOR_TIP - 1, 2] + margin
-        ahead = tip[:, 0] > incisor_wall_x(teeth, tip[:, 1]) - margin
-        t1_through = ((t1[:, 1] >= lo) & (t1[:, 1] <= hi)) | (
-            t1[:, 0] > teeth[:, N.UPPER_INCISOR_TIP - 1, 0] - margin)
-        return ahead & t1_through
+    def _protrusion(t1: np.ndarray, teeth: np.ndarray, margin: float, ramp: float, scale: float
+                    ) -> tuple[np.ndarray, np.ndarray]:
+        """How far the data puts the tongue on its way out between the teeth, per frame,
+        continuously (an on/off switch made the front jump by up to 11 mm in the frame it
+        flipped).
+
+        ``e`` is how far T1 is past the upper incisors' front less the margin. Over the last
+        ``ramp`` of T1's approach (``-ramp < e < 0``) ``approach`` rises smoothly from 0 to 1
+        (the front of the tongue heads for the gap); past the front (``e > 0``) the tongue may
+        be twice ``e`` in front of the teeth's surface until that is the tip's lead on T1
+        (``TONGUE_TIP_AHEAD_MM``), then ``e`` plus that lead: so it reaches the data's positions
+        within T1's first 8 mm past them, and never needs more.
+
+        Returns
+        -------
+        approach : float (F,) in [0, 1]
+        allowance : float (F,) >= 0, Parke units
+        """
+        e = t1[:, 0] - (teeth[:, N.UPPER_INCISOR_TIP - 1, 0] - margin)
+        s = np.clip(e / ramp + 1.0, 0.0, 1.0)
+        e = np.maximum(e, 0.0)
+        return s * s * (3.0 - 2.0 * s), e + np.minimum(e, cassi10_constants.TONGUE_TIP_AHEAD_MM * scale)
 
     @staticmethod
-    def _pass_between_teeth(st: np.ndarray, out: np.ndarray, teeth: np.ndarray, margin: float,
-                            zone: float) -> None:
-        """In a protruded frame whose T1 is past the upper incisors and whose T2 is not, the
-        station between them (no pellet site) is where the tongue passes the teeth: just
-        behind the upper incisors, within the zone, at a height inside the jaw's gap, so that
-        neither of its neighbours' edges cuts through a tooth. ``st`` changes in place.
+    def _pass_between_teeth(st: np.ndarray, toward: np.ndarray, teeth: np.ndarray,
+                            margin: float, zone: float, ramp: float) -> np.ndarray:
+        """As the tongue heads out while T2 is behind the teeth, the station between T1 and T2
+        (no pellet site) moves to where the tongue passes the teeth: just behind the upper
+        incisors, within the zone, at a height inside the jaw's gap, so that neither of its
+        neighbours' edges cuts through a tooth. By the weight ``toward`` times how far T2 is
+        behind that place (a ramp), so it moves there continuously. ``st`` changes in place.
 
-        Returns the frames where it did, bool (F,), and the gap's low and high ends (F,)."""
-        x_upper = teeth[:, N.UPPER_INCISOR_TIP - 1, 0]
-        hi = teeth[:, N.UPPER_INCISOR_TIP - 1, 2] - margin
-        lo = teeth[:, N.LOWER_INCISOR_TIP - 1, 2] + margin
-        place = x_upper - 0.5 * zone
-        fix = out & (st[:, 1, 0] > x_upper - margin) & (st[:, 3, 0] < place - margin) & (hi > lo)
-        st[fix, 2, 0] = place[fix]
-        st[fix, 2, 1] = np.clip(st[fix, 2, 1], lo[fix], hi[fix])
-        return fix, lo, hi
+        Returns the weight it moved by, float (F,)."""
+        lo, hi = _gap(teeth, margin)
+        # never ahead of T1 (a tongue drawn back while its front is still at the gap's height)
+        place = np.minimum(teeth[:, N.UPPER_INCISOR_TIP - 1, 0] - 0.5 * zone, st[:, 1, 0] - margin)
+        behind = np.clip((place - margin - st[:, 3, 0]) / ramp, 0.0, 1.0)
+        w = toward * behind
+        z = np.clip(st[:, 2, 1], lo, np.maximum(hi, lo))
+        st[:, 2, 0] += w * (place - st[:, 2, 0])
+        st[:, 2, 1] += w * (z - st[:, 2, 1])
+        return w
 
     def initialise(self, ctx: TaskContext) -> None:
         plan = self._setup(ctx)
         first = np.stack([ctx.pellet(p)[:1] for p in _PELLETS], axis=1)      # (1, 4, 2)
-        v, _ = self.tongue(ctx, first, ctx.start[None])
+        t0 = np.asarray(ctx.rec.time_us, np.float64)[ctx.rows[:1]] * 1e-6
+        v, _ = self.tongue(ctx, first, ctx.start[None], t0, {})
         ctx.start[plan["rows"]] = v.reshape(-1, 3)
 
     def animate(self, ctx: TaskContext, positions: np.ndarray) -> None:
         plan = self._setup(ctx)
         pellets = np.stack([ctx.pellet(p) for p in _PELLETS], axis=1)        # (F, 4, 2)
+        time_s = np.asarray(ctx.rec.time_us, np.float64)[ctx.rows] * 1e-6
+        carried = plan.setdefault("carried", {})        # from one chunk of frames to the next
         diags = []
         for a in range(0, len(positions), BLOCK_FRAMES):
             b = a + BLOCK_FRAMES
-            v, diag = self.tongue(ctx, pellets[a:b], positions[a:b])
+            v, diag = self.tongue(ctx, pellets[a:b], positions[a:b], time_s[a:b], carried)
             positions[a:b, plan["rows"]] = v.reshape(v.shape[0], -1, 3)
             diags.append(diag)
         ctx.diagnostics.update({k: np.concatenate([d[k] for d in diags]) for k in diags[0]})
