@@ -268,6 +268,22 @@ def test_the_projection_is_smooth_in_time():
     np.testing.assert_allclose(soft[clear], v[clear], atol=1e-3)   # far from it: untouched
 
 
+def test_no_new_jitter_where_the_tongue_touches_the_teeth(sentence, version):
+    """JW11 task 19 (sentences) brings the tongue to the teeth and the jaw shut on it several
+    times. The tongue's shake beyond its pellets' (the rubric's lip-jitter measure,
+    ``excess_jitter``, on the tongue) stays under 2.5 mm in every frame and above 1 mm in few
+    (0.5 mm at most, 0 frames, when written; the on/off switch before gave 3.9 mm and 17)."""
+    from cassi.harness.rubric.registry import JITTER_ORDER, JITTER_WINDOW
+
+    anim, face, profile, rec = sentence
+    rows = tongue_rows(face.vertex_count)
+    pos = anim.positions.astype(np.float64)
+    mm = G.mm_per_unit(face.vertices, profile.jaw_length_mm)
+    excess = G.excess_jitter(pos, rows, np.asarray(N.TONGUE_PELLETS) - 1,
+                             window=JITTER_WINDOW, order=JITTER_ORDER) * mm
+    assert excess.max() < 2.5 and (excess > 1.0).sum() <= 5
+
+
 def test_pellet_sites_stay_on_the_pellets_unless_the_palate_is_in_the_way(sentence, version):
     """T3 and T4 (behind the teeth: only the palate bounds them): on their pellets (within
     5e-4 mm, constants.SOFTNESS_MM's promise) wherever the pellet is clear of the palate's

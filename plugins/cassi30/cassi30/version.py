@@ -157,11 +157,13 @@ class ThickTongueStage:
         v = sections(st, normals(st), width, plan["thickness"])
         # As the tongue heads out, the whole section of each front station near or past the
         # teeth moves into the gap (the underside behind the teeth would otherwise hang below
-        # the lower incisors' tip, and its edges to the points in the gap cut through them);
-        # by ramps, so the sections move there continuously.
+        # the lower incisors' tip, and its edges to the points in the gap cut through them):
+        # in part within a crown's thickness (PROTRUSION_ZONE_MM) behind the teeth's front, in
+        # full from half of it, so the sections move there continuously.
         near = incisors[:, [N.UPPER_INCISOR_TIP - 1, N.LOWER_INCISOR_TIP - 1], 0].min(axis=1)
-        start = near - 0.5 * K.PROTRUSION_ZONE_MM * scale - ramp
-        nearness = np.clip((st[:, :K.TEETH_STATIONS, 0] - start[:, None]) / ramp, 0.0, 1.0)
+        half_zone = 0.5 * K.PROTRUSION_ZONE_MM * scale
+        nearness = np.clip((st[:, :K.TEETH_STATIONS, 0] - (near - 2.0 * half_zone)[:, None])
+                           / half_zone, 0.0, 1.0)
         nearness[:, 2] = np.maximum(nearness[:, 2], passing)
         weight = (toward[:, None] * nearness)[..., None]
         part = v[:, :K.TEETH_STATIONS, :, 2]
@@ -211,7 +213,8 @@ class ThickTongueStage:
         e = t1[:, 0] - (teeth[:, N.UPPER_INCISOR_TIP - 1, 0] - margin)
         s = np.clip(e / ramp + 1.0, 0.0, 1.0)
         e = np.maximum(e, 0.0)
-        return s * s * (3.0 - 2.0 * s), e + np.minimum(e, cassi10_constants.TONGUE_TIP_AHEAD_MM * scale)
+        lead = cassi10_constants.TONGUE_TIP_AHEAD_MM * scale
+        return s * s * (3.0 - 2.0 * s), e + np.minimum(e, lead)
 
     @staticmethod
     def _pass_between_teeth(st: np.ndarray, toward: np.ndarray, teeth: np.ndarray,
