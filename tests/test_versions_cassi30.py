@@ -228,6 +228,39 @@ def test_keep_out_holds_the_tongue_behind_the_teeth_or_in_their_gap():
     np.testing.assert_allclose(edging[:3, 0], [9.5, 9.5, 9.5])
 
 
+def test_keep_out_skips_only_points_no_wall_can_reach():
+    """keep_out works only on the points in front of a lower bound of the walls
+    (``_lowest_wall``); on random teeth and points the bound never exceeds a wall, and the
+    result equals working on every point."""
+    from cassi30.collision import _lowest_wall, _wall
+
+    rng = np.random.default_rng(3)
+    F, E = 40, 60
+    pos = np.zeros((F, 12, 3))
+    for q in range(3):                              # three quads, leaning, moving per frame
+        y0, y1 = 8.0 * q, 8.0 * q + rng.uniform(3, 8)
+        x = 30.0 - 6.0 * q + rng.normal(0, 1, (F, 1))
+        tip = np.stack([x + rng.normal(0, 1, (F, 2)), np.broadcast_to([y0, y1], (F, 2)),
+                        np.zeros((F, 2))], -1)
+        gum = tip + np.array([1.5, 0.5, 10.0]) + rng.normal(0, 0.5, (F, 2, 3))
+        pos[:, 4 * q:4 * q + 2], pos[:, 4 * q + 2:4 * q + 4] = tip, gum
+    edges = np.array([[[4 * q, 4 * q + 2], [4 * q + 1, 4 * q + 3]] for q in range(3)])
+    p = np.stack([rng.uniform(15, 40, (F, E)), rng.uniform(-30, 30, (F, E)),
+                  rng.uniform(-5, 15, (F, E))], -1)
+    y = np.abs(p[..., 1])
+    fi, ei = np.nonzero(np.ones((F, E), bool))
+    wall, _ = _wall(pos, edges, fi, y[fi, ei], p[fi, ei, 2], 0.8)
+    bound = _lowest_wall(pos, edges, y, 0.8)[fi, ei]
+    assert np.isfinite(wall).sum() > 100
+    assert np.all(bound <= wall)
+    assert (p[fi, ei, 0] <= bound - 0.8).sum() > 100          # some are skipped
+    teeth = FrontTeeth(edges[:2], edges[2:])
+    kw = dict(toward_gap=rng.uniform(0, 1, F), release=rng.uniform(0, 3, F))
+    every = teeth._keep_out(pos, p[fi, ei].copy(), fi, 0.8, kw["toward_gap"][fi],
+                            kw["release"][fi]).reshape(F, E, 3)
+    np.testing.assert_array_equal(teeth.keep_out(pos, p.copy(), 0.8, **kw), every)
+
+
 def test_slew_follows_at_the_rate_and_carries_over_chunks():
     from cassi30.version import slew
 

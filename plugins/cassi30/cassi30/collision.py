@@ -152,49 +152,86 @@ class FrontTeeth:
         -------
         p
         """
+        # Only points that may be in front of a wall (most are well behind the teeth): a
+        # point at or behind every quad's lowest possible x, less the margin, stays as it is.
         y = np.abs(p[..., 1])
-        wu, tu = _wall(positions, self.upper, y, p[..., 2], margin)
-        wl, tl = _wall(positions, self.lower, y, p[..., 2], margin)
+        lowest = np.minimum(_lowest_wall(positions, self.upper, y, margin),
+                            _lowest_wall(positions, self.lower, y, margin))
+        fi, ei = np.nonzero(p[..., 0] > lowest - margin)
+        if len(fi) == 0:
+            return p
+        p[fi, ei] = self._keep_out(positions, p[fi, ei], fi, margin, toward_gap[fi],
+                                   release[fi])
+        return p
+
+    def _keep_out(self, positions, p, frames, margin, toward_gap, release):
+        """:meth:`keep_out` for points (P, 3) of the frames ``frames`` (P,); returns them."""
+        y = np.abs(p[:, 1])
+        wu, tu = _wall(positions, self.upper, frames, y, p[:, 2], margin)
+        wl, tl = _wall(positions, self.lower, frames, y, p[:, 2], margin)
         # the gap's ends; a set that does not span |y| leaves that end open
         lo = np.where(np.isnan(tl), -np.inf, tl + margin)
         hi = np.where(np.isnan(tu), np.inf, tu - margin)
-        x, z = p[..., 0], p[..., 2]
+        x, z = p[:, 0], p[:, 2]
         # down from the upper teeth's height in front of the upper teeth, up from the lower's
         # in front of the lower teeth (each set's own surface: the jaw moves the lower one)
         target = np.where((x > wu - margin) & (z > hi), hi,
                           np.where((x > wl - margin) & (z < lo), lo, z))
-        z = z + toward_gap[:, None] * (target - z)
+        z = z + toward_gap * (target - z)
         # let forward only at the gap's height (within the margin: below a tooth's tip)
-        let = release[:, None]
         up = np.clip(1.0 - (z - hi) / margin, 0.0, 1.0)
         down = np.clip(1.0 - (lo - z) / margin, 0.0, 1.0)
-        x = np.minimum(x, wu - margin + let * up)
-        p[..., 0] = np.minimum(x, wl - margin + let * down)
-        p[..., 2] = z
+        x = np.minimum(x, wu - margin + release * up)
+        p[:, 0] = np.minimum(x, wl - margin + release * down)
+        p[:, 2] = z
         return p
 
 
-def _wall(positions: np.ndarray, edges: np.ndarray, y: np.ndarray, z: np.ndarray,
-          slit: float) -> tuple[np.ndarray, np.ndarray]:
-    """For points (F, E): x of the front-most quad of ``edges`` at (|y|, z) (each edge
-    extended vertically) and the z of that quad's tip at |y|; +inf / NaN where none spans |y|.
-    Each quad's span is widened by ``slit`` on both sides, so that the slits between
-    neighbouring teeth (0.8 Parke units each side in the generated face) are no way through.
+def _lowest_wall(positions: np.ndarray, edges: np.ndarray, y: np.ndarray, slit: float
+                 ) -> np.ndarray:
+    """A lower bound of the x :func:`_wall` gives points (F, E) at ``y`` = |y|, from each
+    quad's corners: its x is interpolated between its two edges, and extrapolated beyond them
+    by at most ``slit`` in |y| (x spread * slit / |y| gap; no bound where the edges may meet in
+    |y|); only quads whose |y| range (widened by ``slit``) holds the point count. +inf where
+    none does."""
+    out = np.full(np.shape(y), np.inf)
+    for quad in edges:
+        v = np.asarray(positions[:, quad.reshape(-1)], np.float64).reshape(-1, 2, 2, 3)
+        x, ay = v[..., 0], np.abs(v[..., 1])                          # (F, 2 edges, 2)
+        same = np.sign(v[..., 0, 1]) * np.sign(v[..., 1, 1]) >= 0
+        ylo, yhi = np.where(same, ay.min(-1), 0.0), ay.max(-1)         # (F, 2 edges)
+        xlo, xhi = x.min(-1), x.max(-1)
+        spread = np.maximum(xhi[:, 1] - xlo[:, 0], xhi[:, 0] - xlo[:, 1])
+        gap = np.maximum(np.maximum(ylo[:, 1] - yhi[:, 0], ylo[:, 0] - yhi[:, 1]), 0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            reach = np.where(gap > 0.0, spread * slit / gap, np.inf)
+        bound = (xlo.min(-1) - reach)[:, None]
+        inside = (y >= ylo.min(-1)[:, None] - slit) & (y <= yhi.max(-1)[:, None] + slit)
+        out = np.where(inside & (bound < out), bound, out)
+    return out
 
-    One quad at a time on (F, E) arrays, keeping the front-most so far: the few front quads
-    (3 per arch) make the loop short, and (F, E, Q, 2) temporaries would not stay in cache."""
+
+def _wall(positions: np.ndarray, edges: np.ndarray, frames: np.ndarray, y: np.ndarray,
+          z: np.ndarray, slit: float) -> tuple[np.ndarray, np.ndarray]:
+    """For points (P,) of the frames ``frames``: x of the front-most quad of ``edges`` at
+    (|y|, z) (each edge extended vertically) and the z of that quad's tip at |y|; +inf / NaN
+    where none spans |y|. Each quad's span is widened by ``slit`` on both sides, so that the
+    slits between neighbouring teeth (0.8 Parke units each side in the generated face) are no
+    way through.
+
+    One quad at a time, keeping the front-most so far: the few front quads (3 per arch) make
+    the loop short, and (points, quads, 2) temporaries would not stay in cache."""
     shape = np.shape(y)
     wall, tipz = np.full(shape, np.inf), np.full(shape, np.nan)
     for quad in edges:
         ends = []
         for tip_row, gum_row in quad:
-            tip = np.asarray(positions[:, tip_row], np.float64)[:, None]          # (F, 1, 3)
-            gum = np.asarray(positions[:, gum_row], np.float64)[:, None]
+            tip = np.asarray(positions[frames, tip_row], np.float64)           # (P, 3)
+            gum = np.asarray(positions[frames, gum_row], np.float64)
             d = gum - tip
-            dz = d[..., 2]
-            t = np.clip((z - tip[..., 2]) / np.where(np.abs(dz) > 1e-12, dz, 1.0), 0.0, 1.0)
-            ends.append((tip[..., 0] + t * d[..., 0], np.abs(tip[..., 1] + t * d[..., 1]),
-                         tip[..., 2]))
+            dz = d[:, 2]
+            t = np.clip((z - tip[:, 2]) / np.where(np.abs(dz) > 1e-12, dz, 1.0), 0.0, 1.0)
+            ends.append((tip[:, 0] + t * d[:, 0], np.abs(tip[:, 1] + t * d[:, 1]), tip[:, 2]))
         (x0, y0, z0), (x1, y1, z1) = ends
         span = (y >= np.minimum(y0, y1) - slit) & (y <= np.maximum(y0, y1) + slit)
         dy = y1 - y0
