@@ -461,6 +461,40 @@ def test_mm_per_unit_scales_lengths():
     assert df.loc[df["frame"] == -1, "value"].iloc[0] == pytest.approx(1.1, abs=0.01)
 
 
+def test_surface_hits_equals_solving_every_point_triangle_pair():
+    """The bounding-box broad phase skips only pairs that cannot hit: on random moving
+    triangles (a repeated one, a degenerate one, two sharing an edge points sit on) the
+    crossings equal those of every pair solved, exactly."""
+    rng = np.random.default_rng(5)
+    F, P, T = 6, 300, 40
+    tri = rng.uniform(-10, 10, (F, T, 3, 3))
+    tri[:, 1] = tri[:, 0]                                       # a repeated triangle
+    tri[:, 4, 2] = tri[:, 4, 1]                                 # a degenerate one
+    tri[:, 2, 0], tri[:, 2, 1] = tri[:, 3, 0], tri[:, 3, 1]     # two corners shared with the next
+    pts = rng.uniform(-10, 10, (F, P, 3))
+    pts[:, :20, 1:] = 0.5 * (tri[:, 3, 0, 1:] + tri[:, 3, 1, 1:])[:, None]    # on the shared edge
+    for axis in (0, 2):
+        u, v = {0: (1, 2), 2: (0, 1)}[axis]
+        a, b, c = (tri[:, None, :, k] for k in range(3))
+        p = pts[:, :, None]
+        (au, av), (bu, bv), (cu, cv), (pu, pv) = ((q[..., u], q[..., v]) for q in (a, b, c, p))
+        den = (bu - au) * (cv - av) - (cu - au) * (bv - av)
+        ok = np.abs(den) > 1e-9
+        den = np.where(ok, den, 1.0)
+        w1 = ((bu - pu) * (cv - pv) - (cu - pu) * (bv - pv)) / den
+        w2 = ((cu - pu) * (av - pv) - (au - pu) * (cv - pv)) / den
+        w3 = 1.0 - w1 - w2
+        inside = ok & (w1 >= -1e-7) & (w2 >= -1e-7) & (w3 >= -1e-7)
+        val = w1 * a[..., axis] + w2 * b[..., axis] + w3 * c[..., axis]
+        with np.errstate(invalid="ignore"):
+            want_lo = np.where(inside.any(-1), np.where(inside, val, np.inf).min(-1), np.nan)
+            want_hi = np.where(inside.any(-1), np.where(inside, val, -np.inf).max(-1), np.nan)
+        lo, hi = G.surface_hits(pts, tri, axis=axis, chunk=50_000)
+        assert np.isfinite(lo).sum() > 100
+        np.testing.assert_array_equal(lo, want_lo)
+        np.testing.assert_array_equal(hi, want_hi)
+
+
 def test_surface_hits_against_a_unit_square():
     tri = np.array([[[0, 0, 0], [0, 1, 0], [0, 1, 1]], [[0, 0, 0], [0, 1, 1], [0, 0, 1]]], float)
     tri[..., 0] = [[1, 1, 2], [1, 2, 1]]  # a sloped plane x = 1 + z

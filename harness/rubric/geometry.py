@@ -265,14 +265,23 @@ def surface_hits(points: np.ndarray, tri_pos: np.ndarray, *, axis: int = 0,
     step = max(1, chunk // max(1, P * T))
     for s in range(0, F, step):
         e = min(F, s + step)
-        a = tri_pos[s:e, None, :, 0]          # (f, 1, T, 3)
-        b = tri_pos[s:e, None, :, 1]
-        c = tri_pos[s:e, None, :, 2]
-        p = points[s:e, :, None, :]          # (f, P, 1, 3)
-        au, av = a[..., u], a[..., v]
-        bu, bv = b[..., u], b[..., v]
-        cu, cv = c[..., u], c[..., v]
-        pu, pv = p[..., u], p[..., v]
+        tri = tri_pos[s:e]                                         # (f, T, 3, 3)
+        # Broad phase: only the (point, triangle) pairs whose (u, v) falls in the triangle's
+        # bounding box (widened past the barycentric tolerance) are solved, usually a few per
+        # point: the same values as solving every pair, at a fraction of the work.
+        tu, tv = tri[..., u], tri[..., v]
+        umin, umax, vmin, vmax = tu.min(-1), tu.max(-1), tv.min(-1), tv.max(-1)
+        pad = 1e-6 * (umax - umin + vmax - vmin) + 1e-9
+        pu, pv = points[s:e, :, None, u], points[s:e, :, None, v]  # (f, P, 1)
+        cand = ((pu >= (umin - pad)[:, None]) & (pu <= (umax + pad)[:, None])
+                & (pv >= (vmin - pad)[:, None]) & (pv <= (vmax + pad)[:, None]))
+        fi, pi, ti = np.nonzero(cand)
+        a, b, c = (tri[fi, ti, k] for k in range(3))                # (K, 3)
+        p = points[s + fi, pi]
+        au, av = a[:, u], a[:, v]
+        bu, bv = b[:, u], b[:, v]
+        cu, cv = c[:, u], c[:, v]
+        pu, pv = p[:, u], p[:, v]
         den = (bu - au) * (cv - av) - (cu - au) * (bv - av)
         ok = np.abs(den) > eps
         den = np.where(ok, den, 1.0)
@@ -281,10 +290,13 @@ def surface_hits(points: np.ndarray, tri_pos: np.ndarray, *, axis: int = 0,
         w3 = 1.0 - w1 - w2
         tol = -1e-7
         inside = ok & (w1 >= tol) & (w2 >= tol) & (w3 >= tol)
-        val = w1 * a[..., axis] + w2 * b[..., axis] + w3 * c[..., axis]
-        with np.errstate(invalid="ignore"):
-            lo[s:e] = np.where(inside.any(-1), np.where(inside, val, np.inf).min(-1), np.nan)
-            hi[s:e] = np.where(inside.any(-1), np.where(inside, val, -np.inf).max(-1), np.nan)
+        val = (w1 * a[:, axis] + w2 * b[:, axis] + w3 * c[:, axis])[inside]
+        at = (fi[inside], pi[inside])
+        low, high = np.full((e - s, P), np.inf), np.full((e - s, P), -np.inf)
+        np.minimum.at(low, at, val)
+        np.maximum.at(high, at, val)
+        lo[s:e] = np.where(np.isfinite(low), low, np.nan)
+        hi[s:e] = np.where(np.isfinite(high), high, np.nan)
     return lo, hi
 
 
