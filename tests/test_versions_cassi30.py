@@ -197,6 +197,20 @@ def test_the_tongue_stays_behind_the_teeth_or_passes_between_them(protrusion):
     assert (pos[out, N.T1 - 1, 0] > pos[out, N.UPPER_INCISOR_TIP - 1, 0]).sum() > 50
 
 
+def test_no_edge_cuts_the_teeth_while_t2_is_near_them(corpus, version):
+    """JW16 task 118: the tongue far out while T2 is only a few mm behind where it passes the
+    teeth; the station between T1 and T2 must be placed there in full, or the edge to T2
+    cuts the upper incisors (1.2 mm deep, in 200 frames, when its placement ramped over 8 mm
+    of T2's distance instead of 3). The rubric's measure samples the edges."""
+    profile, face, rec = _inputs(corpus, "JW16", 118)
+    anim = version.animate(profile, face, rec)
+    own = version_face(version, face)
+    depth = G.tongue_teeth_penetration(anim.positions.astype(np.float64), G.mouth_parts(own),
+                                       rest=own.vertices)
+    mm = G.mm_per_unit(own.vertices, profile.jaw_length_mm)
+    assert max(depth["upper"].max(), depth["lower"].max()) * mm < 0.05
+
+
 def test_keep_out_holds_the_tongue_behind_the_teeth_or_in_their_gap():
     """One upper and one lower incisor quad (vertical, x = 10, y 0..8): upper tip at z 0, gum
     10; lower tip at z -6, gum -16. Margin 1: the gap is z in [-5, -1]."""

@@ -151,7 +151,7 @@ class ThickTongueStage:
                    K.TONGUE_SPEED_MM_S * scale, carried, "way out")
         toward, release = np.minimum(way / turn, 1.0), np.maximum(way - turn, 0.0)
         passing = self._pass_between_teeth(st, toward, incisors, margin,
-                                           K.PROTRUSION_ZONE_MM * scale, ramp)
+                                           K.PROTRUSION_ZONE_MM * scale)
         width = arch_half_width(*plan["arch"], st[..., 0], scale=scale)
         width[:, 0] = K.HALF_WIDTH_TIP_MM * scale
         v = sections(st, normals(st), width, plan["thickness"])
@@ -218,18 +218,19 @@ class ThickTongueStage:
 
     @staticmethod
     def _pass_between_teeth(st: np.ndarray, toward: np.ndarray, teeth: np.ndarray,
-                            margin: float, zone: float, ramp: float) -> np.ndarray:
+                            margin: float, zone: float) -> np.ndarray:
         """As the tongue heads out while T2 is behind the teeth, the station between T1 and T2
         (no pellet site) moves to where the tongue passes the teeth: just behind the upper
         incisors, within the zone, at a height inside the jaw's gap, so that neither of its
         neighbours' edges cuts through a tooth. By the weight ``toward`` times how far T2 is
-        behind that place (a ramp), so it moves there continuously. ``st`` changes in place.
+        behind that place (in full from half the zone: a T2 that close to the teeth is in the
+        gap itself), so it moves there continuously. ``st`` changes in place.
 
         Returns the weight it moved by, float (F,)."""
         lo, hi = _gap(teeth, margin)
         # never ahead of T1 (a tongue drawn back while its front is still at the gap's height)
         place = np.minimum(teeth[:, N.UPPER_INCISOR_TIP - 1, 0] - 0.5 * zone, st[:, 1, 0] - margin)
-        behind = np.clip((place - margin - st[:, 3, 0]) / ramp, 0.0, 1.0)
+        behind = np.clip((place - margin - st[:, 3, 0]) / (0.5 * zone), 0.0, 1.0)
         w = toward * behind
         z = np.clip(st[:, 2, 1], lo, np.maximum(hi, lo))
         st[:, 2, 0] += w * (place - st[:, 2, 0])
