@@ -13,10 +13,9 @@ import numpy as np
 from cassi.data import numbering as N
 from cassi.data.errors import CassiInputError
 from cassi.data.face import FaceModel
-from cassi.versions.cassi10 import (NoseClearanceStage, incisor_wall_x, parameters_frame,
-                                    place_tongue_tip)
-from cassi.versions.cassi21 import Cassi21
 from cassi.versions import constants as cassi10_constants
+from cassi.versions.cassi10 import NoseClearanceStage, parameters_frame, place_tongue_tip
+from cassi.versions.cassi21 import Cassi21
 from cassi.versions.protocol import Stage, TaskContext
 
 from cassi30 import constants as K
@@ -229,7 +228,8 @@ class ThickTongueStage:
         Returns the weight it moved by, float (F,)."""
         lo, hi = _gap(teeth, margin)
         # never ahead of T1 (a tongue drawn back while its front is still at the gap's height)
-        place = np.minimum(teeth[:, N.UPPER_INCISOR_TIP - 1, 0] - 0.5 * zone, st[:, 1, 0] - margin)
+        place = np.minimum(teeth[:, N.UPPER_INCISOR_TIP - 1, 0] - 0.5 * zone,
+                           st[:, 1, 0] - margin)
         behind = np.clip((place - margin - st[:, 3, 0]) / (0.5 * zone), 0.0, 1.0)
         w = toward * behind
         z = np.clip(st[:, 2, 1], lo, np.maximum(hi, lo))
@@ -255,7 +255,8 @@ class ThickTongueStage:
             v, diag = self.tongue(ctx, pellets[a:b], positions[a:b], time_s[a:b], carried)
             positions[a:b, plan["rows"]] = v.reshape(v.shape[0], -1, 3)
             diags.append(diag)
-        ctx.diagnostics.update({k: np.concatenate([d[k] for d in diags]) for k in diags[0]})
+        ctx.diagnostics.update({k: np.concatenate([d[k] for d in diags])
+                                for k in (diags[0] if diags else ())})
         parameters_frame(ctx, {55: ("T1", 0), 56: ("T1", 1), 57: ("T2", 0), 58: ("T2", 1),
                                59: ("T3", 0), 60: ("T3", 1), 61: ("T4", 0), 62: ("T4", 1)})
 
