@@ -26,7 +26,8 @@ from .tables import (component_ratings, file_verdicts, negatives_text, order_ver
 __all__ = [
     "Check", "Measurement", "CHECKS", "TABLES", "TABLE_TOPICS", "RATINGS", "GOOD_RATINGS",
     "VERSION_ORDER", "MIN_FRAMES", "AGGREGATION_RULES", "rate", "table_title", "get_check",
-    "checks_for", "registry_table", "DIAGNOSTICS_READ", "run_geometry_checks", "run_image_checks", "file_verdicts",
+    "checks_for", "registry_table", "DIAGNOSTICS_READ", "run_geometry_checks",
+    "run_image_checks", "file_verdicts",
     "verdicts", "table_c_rule", "component_ratings", "rating_counts", "version_totals",
     "version_summaries", "version_comparisons", "negatives_text", "order_versions",
 ]

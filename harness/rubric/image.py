@@ -26,7 +26,8 @@ from .model import Measurement
 from .registry import (CENTERING_OPEN_SHARE, LOWER_TEETH_MIN_PIXELS, OPEN_MIN_HEIGHT,
                        OPEN_MIN_PIXELS, TEETH_MIN_PIXELS, TONGUE_MIN_PIXELS, WIDE_OPEN_SHARE)
 
-__all__ = ["FrameMasks", "FrameStats", "ImageContext", "mouth_opening", "teeth_split", "opening_extent",
+__all__ = ["FrameMasks", "FrameStats", "ImageContext", "mouth_opening", "teeth_split",
+           "opening_extent",
            "m_centered_high", "m_centered_low", "m_centering_offset", "m_tongue_visible", "m_tongue_in_front",
            "m_lower_teeth_seen", "m_opening_extent"]
 

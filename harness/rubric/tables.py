@@ -313,12 +313,12 @@ def version_comparisons(results: pd.DataFrame) -> list[tuple[str, str]]:
         for prev, cur in zip(names, names[1:]):
             ga, gb, na, nb = int(good[prev]), int(good[cur]), int(neg[prev]), int(neg[cur])
             both = _per_check(v, table, prev, cur)
-            rule = ""
+            note = ""
             if (gb != ga or nb != na) and (both["a"] == both["b"]).all():
                 # Every check agrees: the totals differ only by Table C's rule, which charges
                 # each version against the one before it, not against this pair.
                 verb = "matches"
-                rule = _rule_note(adjust, prev, cur)
+                note = _rule_note(adjust, prev, cur)
             elif gb != ga:
                 verb = "improves" if gb > ga else "worsens"
             elif nb != na:
@@ -327,7 +327,7 @@ def version_comparisons(results: pd.DataFrame) -> list[tuple[str, str]]:
             else:
                 verb = "matches"
             out.append((table, f"{cur} {verb} {topic} over {prev}: {gb} VERY GOOD/EXCELLENT cells "
-                               f"against {ga}, {_n(nb)} against {na}{rule}; "
+                               f"against {ga}, {_n(nb)} against {na}{note}; "
                                f"{_deciding(v, table, prev, cur)}"))
         if table == "F" and len(names) > 1:
             n = neg.reindex(names).astype(int)

@@ -149,7 +149,7 @@ class ThickTongueStage:
         way = slew(gap_open * (turn * approach + allowance), time_s,
                    K.TONGUE_SPEED_MM_S * scale, carried, "way out")
         toward, release = np.minimum(way / turn, 1.0), np.maximum(way - turn, 0.0)
-        passing = self._pass_between_teeth(st, toward, incisors, margin,
+        passing = self._pass_between_teeth(st, toward, incisors, margin, lo, hi,
                                            K.PROTRUSION_ZONE_MM * scale)
         width = arch_half_width(*plan["arch"], st[..., 0], scale=scale)
         width[:, 0] = K.HALF_WIDTH_TIP_MM * scale
@@ -217,7 +217,8 @@ class ThickTongueStage:
 
     @staticmethod
     def _pass_between_teeth(st: np.ndarray, toward: np.ndarray, teeth: np.ndarray,
-                            margin: float, zone: float) -> np.ndarray:
+                            margin: float, lo: np.ndarray, hi: np.ndarray, zone: float
+                            ) -> np.ndarray:
         """As the tongue heads out while T2 is behind the teeth, the station between T1 and T2
         (no pellet site) moves to where the tongue passes the teeth: just behind the upper
         incisors, within the zone, at a height inside the jaw's gap, so that neither of its
@@ -225,8 +226,8 @@ class ThickTongueStage:
         behind that place (in full from half the zone: a T2 that close to the teeth is in the
         gap itself), so it moves there continuously. ``st`` changes in place.
 
-        Returns the weight it moved by, float (F,)."""
-        lo, hi = _gap(teeth, margin)
+        ``lo``, ``hi``: the jaw's gap (:func:`_gap`). Returns the weight it moved by, float
+        (F,)."""
         # never ahead of T1 (a tongue drawn back while its front is still at the gap's height)
         place = np.minimum(teeth[:, N.UPPER_INCISOR_TIP - 1, 0] - 0.5 * zone,
                            st[:, 1, 0] - margin)
