@@ -191,6 +191,21 @@ def test_a_slit_between_the_lips_is_not_an_open_mouth():
     assert ctx.stats[0].opening_px >= REG.OPEN_MIN_PIXELS and not ctx.open[0]
 
 
+def test_frame_stats_of_an_open_frame_are_its_masks_measures_and_a_closed_one_skips_them():
+    fm = I.FrameMasks.of(3, frame(open_h=16, upper=6, lower=6))
+    o = I.mouth_opening(fm.lips)
+    s = I.FrameStats.of(fm)
+    assert s.open and s.frame == 3
+    assert (s.upper_in_open, s.lower_in_open) == (int((fm.upper_teeth & o).sum()),
+                                                  int((fm.lower_teeth & o).sum()))
+    assert s.tongue_patch == I._largest(fm.tongue & o) > 0
+    assert (s.region_area, s.region_extent) == I.opening_extent(o)
+    shut = I.FrameStats.of(I.FrameMasks.of(4, frame(open_h=0)))
+    assert not shut.open
+    assert (shut.upper_in_open, shut.lower_in_open, shut.tongue_patch, shut.region_area) == (0,) * 4
+    assert np.isnan(shut.region_extent)
+
+
 def test_centering_is_judged_on_the_wide_open_frames():
     # many slits showing only the upper teeth's edge, two wide-open frames evenly centered
     slits = [frame(open_h=3.5, upper=2, lower=0, tongue=False) for _ in range(6)]

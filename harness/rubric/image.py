@@ -15,6 +15,7 @@ All thresholds and windows live in :mod:`cassi.harness.rubric.registry`.
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any, Iterable, Mapping
 
@@ -159,25 +160,34 @@ def opening_extent(opening: np.ndarray) -> tuple[float, float]:
 @dataclass(frozen=True)
 class FrameStats:
     """What the image measures need of one frame: a few numbers, so a view's frames are judged
-    one at a time and memory does not grow with the number of rendered frames."""
+    one at a time and memory does not grow with the number of rendered frames.
+
+    The measures judge the teeth, the tongue patch and the opening's shape in open frames only,
+    so a closed frame gets 0 (nan for the extent) there without computing them: the two
+    labellings cost about 0.9 ms of a frame's 4.3 ms."""
 
     frame: int
     opening_px: int         # pixels enclosed by the lips
     opening_height: int     # tallest column of the opening, px
-    upper_in_open: int      # upper-teeth pixels inside the opening
-    lower_in_open: int      # lower-teeth pixels inside the opening
-    tongue_patch: int       # largest connected patch of tongue inside the opening, px
     tongue_in_front: int    # tongue pixels nearer than the front teeth (m_tongue_in_front)
-    region_area: float      # area of the largest opening region, px
-    region_extent: float    # its extent (area / bounding box; nan without an opening)
+    upper_in_open: int = 0  # upper-teeth pixels inside the opening (open frames)
+    lower_in_open: int = 0  # lower-teeth pixels inside the opening (open frames)
+    tongue_patch: int = 0   # largest connected patch of tongue inside the opening, px (open)
+    region_area: float = 0.0             # area of the largest opening region, px (open)
+    region_extent: float = float("nan")  # its extent, area / bounding box (open)
 
     @classmethod
     def of(cls, f: FrameMasks) -> "FrameStats":
         o = mouth_opening(f.lips)
+        base = cls(f.frame, int(o.sum()), int(o.sum(axis=0).max(initial=0)),
+                   _tongue_in_front(f))
+        if not base.open:
+            return base
         area, extent = opening_extent(o)
-        return cls(f.frame, int(o.sum()), int(o.sum(axis=0).max(initial=0)),
-                   int((f.upper_teeth & o).sum()), int((f.lower_teeth & o).sum()),
-                   _largest(f.tongue & o), _tongue_in_front(f), area, extent)
+        return dataclasses.replace(
+            base, upper_in_open=int((f.upper_teeth & o).sum()),
+            lower_in_open=int((f.lower_teeth & o).sum()), tongue_patch=_largest(f.tongue & o),
+            region_area=area, region_extent=extent)
 
     @property
     def open(self) -> bool:
