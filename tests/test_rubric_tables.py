@@ -151,3 +151,16 @@ def test_versions_whose_checks_agree_are_said_to_match_whatever_table_c_rule_add
     assert (both["a"] == both["b"]).all()
     note = T._rule_note(pd.Series({"b": 3}), "b", "c")
     assert note == " (every check agrees; Table C's comparison rule: b +3 against the version before it)"
+
+
+def test_the_sentence_says_what_table_c_rule_added_when_every_check_agrees():
+    """End to end: 2.0 fires in more shared files than 1.0 at the same rating (+1 against 1.0);
+    2.1 has 2.0's negatives on every check, so it 'matches' 2.0 and the sentence names the +1."""
+    res = pd.concat([_two_files("cassi-1.0", [("lips_never_touch", 1)], [("lips_never_touch", 0)]),
+                     _two_files("cassi-2.0", [("lips_never_touch", 1)], [("lips_never_touch", 1)]),
+                     _two_files("cassi-2.1", [("lips_never_touch", 1)], [("lips_never_touch", 1)])])
+    assert cell(res, "C", "cassi-2.0")["adjust"] == 1 and cell(res, "C", "cassi-2.1")["adjust"] == 0
+    s = [x for x in R.version_summaries(res) if "lip placement over cassi-2.0" in x][0]
+    assert s.startswith("cassi-2.1 matches lip placement over cassi-2.0"), s
+    assert "(every check agrees; Table C's comparison rule: cassi-2.0 +1 against the version " \
+           "before it)" in s, s

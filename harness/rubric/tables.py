@@ -251,10 +251,9 @@ def _per_check(v: pd.DataFrame, table: str, prev: str, cur: str) -> pd.DataFrame
     return pd.concat([a.rename("a"), b.rename("b")], axis=1).fillna(0).astype(int)
 
 
-def _deciding(v: pd.DataFrame, table: str, prev: str, cur: str, *, limit: int = 4) -> str:
-    """The checks that tell two versions apart in a table (negatives summed over subjects), or,
+def _deciding(both: pd.DataFrame, *, limit: int = 4) -> str:
+    """The checks that tell two versions apart in a table (``both``: :func:`_per_check`), or,
     when none does, the checks that fired for both."""
-    both = _per_check(v, table, prev, cur)
     diff = both[both["a"] != both["b"]].copy()
     if len(diff):
         diff["d"] = (diff["b"] - diff["a"]).abs()
@@ -300,8 +299,9 @@ def version_comparisons(results: pd.DataFrame) -> list[tuple[str, str]]:
     if cr.empty:
         return []
     v = verdicts(results)
-    rule = table_c_rule(results)
-    adjust = rule.groupby("version")["adjust"].sum() if len(rule) else pd.Series(dtype=int)
+    # Table C's rule, as component_ratings applied it: once per subject and version
+    rule = cr[cr["table"] == "C"].drop_duplicates(["subject", "version"])
+    adjust = rule.groupby("version")["adjust"].sum()
     out = []
     for table in sorted(cr["table"].unique()):
         sub = cr[cr["table"] == table]
@@ -328,7 +328,7 @@ def version_comparisons(results: pd.DataFrame) -> list[tuple[str, str]]:
                 verb = "matches"
             out.append((table, f"{cur} {verb} {topic} over {prev}: {gb} VERY GOOD/EXCELLENT cells "
                                f"against {ga}, {_n(nb)} against {na}{note}; "
-                               f"{_deciding(v, table, prev, cur)}"))
+                               f"{_deciding(both)}"))
         if table == "F" and len(names) > 1:
             n = neg.reindex(names).astype(int)
             worst = [k for k in names if n[k] == n.max()]
