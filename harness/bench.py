@@ -359,8 +359,14 @@ def headline(benchmarks: dict) -> dict:
     return out
 
 
-#: The benchmarks of ``cassi bench``, in the order they run (``--only`` picks some).
-BENCHMARKS = ("geometry", "render", "geometry_memory", "image_memory", "farm_preview", "farm")
+#: The benchmarks of ``cassi bench``, in the order they run (``--only`` picks some): the module
+#: and function of each registered one; ``farm`` is this module's :func:`bench_farm`.
+BENCHMARKS = {"geometry": ("cassi.versions.bench", "bench_geometry"),
+              "render": ("cassi.renderer.bench", "bench_render"),
+              "geometry_memory": ("cassi.harness.bench_memory", "bench_geometry_memory"),
+              "image_memory": ("cassi.harness.bench_memory", "bench_image_memory"),
+              "farm_preview": ("cassi.harness.bench", "bench_farm_preview"),
+              "farm": None}
 
 
 def run_benchmarks(*, quick: bool = False, only=None) -> dict:
@@ -370,14 +376,9 @@ def run_benchmarks(*, quick: bool = False, only=None) -> dict:
               "cpus_usable": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
               "python": platform.python_version(), "machine": platform.machine(),
               "variant": _variant(), "benchmarks": {}, "only": list(chosen)}
-    registered = {"geometry": ("cassi.versions.bench", "bench_geometry"),
-                  "render": ("cassi.renderer.bench", "bench_render"),
-                  "geometry_memory": ("cassi.harness.bench_memory", "bench_geometry_memory"),
-                  "image_memory": ("cassi.harness.bench_memory", "bench_image_memory"),
-                  "farm_preview": ("cassi.harness.bench", "bench_farm_preview")}
     for name in chosen:
-        if name in registered:
-            report["benchmarks"][name] = _registered(*registered[name], quick)
+        if BENCHMARKS[name] is not None:
+            report["benchmarks"][name] = _registered(*BENCHMARKS[name], quick)
     if "farm" in chosen:
         try:
             farm = bench_farm(quick, repeats=1 if quick else 2)  # --quick: under a minute in all

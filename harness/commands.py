@@ -53,7 +53,8 @@ def _add_bench(sub) -> None:
     p.add_argument("--quick", action="store_true", help="small sizes (CI smoke test)")
     p.add_argument("--only", default=None, metavar="NAME[,NAME]",
                    help="run only these benchmarks (geometry, render, geometry_memory, "
-                        "farm_preview, farm); e.g. --only render,farm_preview")
+                        "image_memory, farm_preview, farm: cassi.harness.bench.BENCHMARKS); "
+                        "e.g. --only render,farm_preview")
     p.set_defaults(func=cmd_bench)
 
 

@@ -36,6 +36,18 @@ def test_help_on_every_command(command, capsys):
     assert "usage: cassi " + " ".join(command) in capsys.readouterr().out
 
 
+def test_bench_help_names_every_benchmark(capsys):
+    """The parser does not import the benchmarks (pandas, the executors): its list is checked
+    against theirs here."""
+    from cassi.harness.bench import BENCHMARKS
+
+    with pytest.raises(SystemExit):
+        main(["bench", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    listed = text.split("run only these benchmarks (", 1)[1].split(":", 1)[0]
+    assert listed.split(", ") == list(BENCHMARKS)
+
+
 def test_exit_codes_bad_input_and_unknown_command(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["no-such-command"])
