@@ -65,8 +65,8 @@ class RunConfig:
     extremes: int = 4
     animate_stride: int = 0
     #: Versions whose task videos show all four views (None: every version); the others are
-    #: rendered at ``animate_stride`` in the front view of tasks 106 and 118 only, for the
-    #: side-by-side version comparisons.
+    #: rendered at ``animate_stride`` in the view the image checks judge (front), so those
+    #: checks judge every version on the same frames, and it shows the versions side by side.
     video_versions: tuple[str, ...] | None = None
     chunk: int = 16
     preset: str = "preview"

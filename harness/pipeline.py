@@ -35,6 +35,16 @@ VIDEO_VIEWS = ("front", "side", "half", "top")
 COMPARED_TASKS = (106, 118)
 COMPARISON_VIEW = "front"
 
+
+def image_views(task: int) -> set[str]:
+    """The views the task's image checks judge (the front view): the only views whose masks are
+    kept, and the views every version renders on the video grid, so that the image checks
+    judge every version on the same frames."""
+    from cassi.harness.rubric import checks_for  # noqa: PLC0415
+
+    return {c.view for c in checks_for(kind="image", task=task)}
+
+
 _lock = threading.Lock()
 _corpora: dict[str, object] = {}
 _profiles: dict[tuple[str, str], object] = {}
@@ -191,9 +201,11 @@ def render_budget(rows_of, tasks, versions, views, *, stride: int, extremes: int
         rows = rows_of[(t.subject, t.task, t.rep)]
         base = 1 + (rows // stride if stride > 0 else 0) + max(0, extremes)
         video = rows // animate_stride + 1 if animate_stride > 0 else 0
+        judged = image_views(t.task)
         for version in versions:
             for view in views:
                 shows = (video_versions is None or version in video_versions
+                         or view in judged
                          or (t.task in COMPARED_TASKS and view == COMPARISON_VIEW))
                 total += base + (video if shows else 0)
     return total
@@ -290,8 +302,10 @@ def _geometry_output(job: Job, ctx: StageContext, rec, anim: StreamedAnimation,
     meta = {"render_frames": pick, "n_frames": int(frames.size)}
     # Every task file is also shown as a video (four views side by side, cassi.reports.media):
     # the video versions get every `animate_stride`-th frame in every view, the others in the
-    # front view of tasks 106 and 118 (the version comparisons); the same frames for every
-    # version, so videos of a task compare frame for frame.
+    # views the image checks judge (else those checks would judge the video versions on every
+    # grid frame and the others on a first frame and an extreme or two) and in the front view
+    # of tasks 106 and 118 (the version comparisons); the same frames for every version, so
+    # videos of a task compare frame for frame.
     step = int(ctx.option("animate_stride", 0) or 0)
     video_versions = ctx.option("video_versions")
     if step > 0:
@@ -300,7 +314,8 @@ def _geometry_output(job: Job, ctx: StageContext, rec, anim: StreamedAnimation,
         if video_versions is None or job.version in video_versions:
             views = VIDEO_VIEWS
         else:
-            views = (COMPARISON_VIEW,) if job.task in COMPARED_TASKS else ()
+            views = tuple(v for v in VIDEO_VIEWS if v in image_views(job.task)
+                          or (job.task in COMPARED_TASKS and v == COMPARISON_VIEW))
         if views:
             meta["render_frames_by_view"] = {view: sorted(set(pick) | grid) for view in views}
     keep = sorted(set(pick).union(*meta.get("render_frames_by_view", {}).values()))
@@ -338,10 +353,9 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
     """
     import io  # noqa: PLC0415
 
-    from cassi.harness.rubric import checks_for  # noqa: PLC0415
     from cassi.versions.registry import get_version  # noqa: PLC0415
 
-    judged = job.view in {c.view for c in checks_for(kind="image", task=job.task)}
+    judged = job.view in image_views(job.task)
 
     data = np.load(io.BytesIO(inputs["keyframes"]))
     all_frames = data["frames"].tolist()

@@ -34,8 +34,8 @@ def register(sub) -> None:
                         f"(default {NIGHTLY_ANIMATE_STRIDE}; 0: no videos)")
     p.add_argument("--video-versions", dest="video_versions", default=",".join(NIGHTLY_VIDEO_VERSIONS),
                    help="versions with a four-view video of every task file, comma-separated "
-                        f"(default {','.join(NIGHTLY_VIDEO_VERSIONS)}; the others: front view of "
-                        "tasks 106 and 118 for the comparisons)")
+                        f"(default {','.join(NIGHTLY_VIDEO_VERSIONS)}; the others: the front view, "
+                        "which the image checks judge, for the comparisons)")
     p.add_argument("--common-only", action="store_true", dest="common_only",
                    help="when the previous night covered other task files, versions or views, "
                         "gate only what both nights share (default: such a night fails its gate)")

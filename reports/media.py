@@ -1,5 +1,5 @@
 """Pictures for reports from a run's renders: copied thumbnails, contact sheets, a four-view
-video of every task file and side-by-side version comparisons of tasks 106 and 118, each panel
+video of every task file and side-by-side version comparisons (front view), each panel
 labelled, in real time, with the task's sound when the corpus has it. Reads image files (and
 the corpus's WAV files) only; never re-renders."""
 from __future__ import annotations

@@ -27,7 +27,7 @@ from cassi.reports.tables import markdown_table
 #: subject page (the rest link to the frame's number only).
 MAX_SHEETS_PER_VERSION = 12
 #: The view in which versions are compared side by side (where the farm rendered the video
-#: frames of several versions in it: tasks 106 and 118 in a nightly).
+#: frames of several versions in it: every task file in a nightly).
 COMPARISON_VIEW = "front"
 #: The order of a task video's panels.
 VIDEO_VIEWS = ("front", "side", "half", "top")

@@ -1,6 +1,6 @@
 """Task videos: the farm renders every view at the video stride (the same frames for every
 version), the report turns each task file into a four-view video per version and compares the
-versions of tasks 106 and 118 side by side; videos play in real time, panels are labelled, and
+versions side by side in the front view; videos play in real time, panels are labelled, and
 a task's WAV is carried in sync."""
 from __future__ import annotations
 
@@ -94,21 +94,28 @@ def test_video_frames_keep_only_the_common_grid():
 @pytest.mark.render
 def test_every_task_file_becomes_a_video_and_versions_compare(tmp_path):
     """cassi-2.0 is the video version: all views on the grid and a two-view video; cassi-1.0
-    only gets the comparison view (task 118), and both appear side by side."""
+    gets the grid in the view the image checks judge (front) in every task file, so those
+    checks judge both versions on the same frames, and both appear side by side."""
     from cassi.harness.config import RunConfig
     from cassi.harness.farm import run
+    from cassi.harness.pipeline import image_views
     from cassi.reports.report import write_report
 
-    cfg = RunConfig(out=tmp_path / "run", subjects=("JW45",), tasks=(118,),
+    cfg = RunConfig(out=tmp_path / "run", subjects=("JW45",), tasks=(5, 118),
                     versions=("cassi-1.0", "cassi-2.0"), views=("front", "half"), stride=0,
                     extremes=1, animate_stride=300, video_versions=("cassi-2.0",), workers=1)
     assert run(cfg, progress=False).ok
     renders = pd.read_parquet(tmp_path / "run" / "renders.parquet")
-    frames = renders.groupby(["version", "view"])["frame"].apply(set)
-    shared = frames[("cassi-1.0", "front")] & frames[("cassi-2.0", "front")] & frames[("cassi-2.0", "half")]
-    assert len(shared) >= 4  # first frame + every 300th of ~1,470 rows
-    assert len(frames[("cassi-1.0", "half")]) <= 2  # first frame + one extreme: no video frames
+    for task in (5, 118):
+        assert image_views(task) == {"front"}
+        frames = renders[renders["task"] == task].groupby(["version", "view"])["frame"].apply(set)
+        shared = (frames[("cassi-1.0", "front")] & frames[("cassi-2.0", "front")]
+                  & frames[("cassi-2.0", "half")])
+        assert len(shared) >= 4  # first frame + every 300th of 1,100-1,470 rows
+        assert len(frames[("cassi-1.0", "half")]) <= 2  # first frame + one extreme: no video
     index = write_report(tmp_path / "run", tmp_path / "report").read_text()
+    assert (tmp_path / "report" / "animations" / "JW45_005_1_front.mp4").is_file()
+    renders = renders[renders["task"] == 118]
     grid = media.video_frames(renders[renders["version"] == "cassi-2.0"], stride=300)
     video = tmp_path / "report" / "videos" / "JW45_118_1_cassi-2.0.mp4"
     assert video.is_file() and "videos/JW45_118_1_cassi-2.0.mp4" in index
