@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 EXIT_OK, EXIT_BAD_INPUT = 0, 2
 
@@ -95,7 +95,7 @@ def _task_list(text: str) -> list[int]:
 
 # ----------------------------------------------------------------------------- make
 def cmd_make(args) -> int:
-    from cassi.data.synth import make_corpus  # lazy: the generator is heavy and optional here
+    from cassi.data.synth.corpus import make_corpus  # lazy: the generator is heavy and optional here
 
     if args.alignments is not None and not args.alignments.is_dir():
         raise CassiInputError("alignments directory not found", path=args.alignments)
@@ -108,8 +108,10 @@ def cmd_make(args) -> int:
 # ----------------------------------------------------------------------------- check
 def _check_single_file(path: Path) -> tuple[list[dict], list[str]]:
     """Check one file by its kind (task file, PAL/PHA.DAT, Mis.dat, head measures, tables)."""
-    from cassi.data import alignment, headmeasures, mis, profile, xrmb
-    from cassi.data.corpus import Corpus, check_task_file
+    from cassi.data.corpus import profile
+    from cassi.data.xrmb import alignment, headmeasures, mis
+    from cassi.data.xrmb import files as xrmb
+    from cassi.data.corpus.disk import Corpus, check_task_file
 
     name = path.name.lower()
     record = {"path": str(path), "subject": None, "task": None, "rep": None, "frames": None,
@@ -149,7 +151,7 @@ def _check_single_file(path: Path) -> tuple[list[dict], list[str]]:
 
 
 def cmd_check(args) -> int:
-    from cassi.data.corpus import Corpus, check_corpus
+    from cassi.data.corpus.disk import Corpus, check_corpus
 
     path: Path = args.path
     if not path.exists():
@@ -209,9 +211,9 @@ def _print_table(records: list[dict], *, synthetic: bool) -> None:
 
 # ----------------------------------------------------------------------------- preprocess
 def cmd_preprocess(args) -> int:
-    from cassi.data.atomic import atomic_open
-    from cassi.data.corpus import Corpus
-    from cassi.data.profile import preprocess, write_lipthick, write_maxprotru
+    from cassi.common.atomic import atomic_open
+    from cassi.data.corpus.disk import Corpus
+    from cassi.data.corpus.profile import preprocess, write_lipthick, write_maxprotru
 
     corpus = Corpus(args.corpus)
     if not corpus.subjects:
@@ -251,8 +253,8 @@ def _fmt(v: float) -> str:
 
 
 def cmd_stats(args) -> int:
-    from cassi.data.corpus import Corpus
-    from cassi.data.stats import PELLET_COLUMNS, SCALARS, UNITS, compare, corpus_stats
+    from cassi.data.corpus.disk import Corpus
+    from cassi.data.corpus.stats import PELLET_COLUMNS, SCALARS, UNITS, compare, corpus_stats
 
     a = corpus_stats(args.path, tasks=args.tasks)
     b = None if args.compare is None else corpus_stats(args.compare, tasks=args.tasks)

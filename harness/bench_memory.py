@@ -31,8 +31,8 @@ IMAGE_FRAMES = ROWS // 50
 def long_task_corpus(root: Path, *, rows: int = ROWS, subject: str = "JW12", task: int = 2) -> Path:
     """A corpus in ``root`` holding ``subject`` of the embedded corpus with task ``task``
     lengthened to ``rows`` rows (copies: a corpus refuses links that lead outside it)."""
-    from cassi.data.synth import default_corpus  # noqa: PLC0415
-    from cassi.data.xrmb import NOMINAL_PERIOD_US, read_txy, task_file_name, write_txy  # noqa: PLC0415
+    from cassi.data.synth.corpus import default_corpus  # noqa: PLC0415
+    from cassi.data.xrmb.files import NOMINAL_PERIOD_US, read_txy, task_file_name, write_txy  # noqa: PLC0415
 
     src = Path(default_corpus())
     dest = root / subject

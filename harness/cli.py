@@ -11,7 +11,7 @@ import logging
 import sys
 from importlib.metadata import entry_points, version
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 

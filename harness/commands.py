@@ -5,8 +5,8 @@ import argparse
 import json
 from pathlib import Path
 
-from cassi.data.atomic import atomic_write_text
-from cassi.data.errors import CassiInputError
+from cassi.common.atomic import atomic_write_text
+from cassi.common.errors import CassiInputError
 
 from . import config as C
 

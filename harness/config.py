@@ -35,7 +35,7 @@ from typing import Any, Mapping
 
 import yaml
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 from .jobs import GEOMETRY_VIEW
 

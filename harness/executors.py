@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from multiprocessing.connection import wait as mp_wait
 from typing import Any, Callable
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 
 @dataclass

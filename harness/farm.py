@@ -10,7 +10,7 @@ import os
 import sys
 import time
 
-from cassi.data.atomic import atomic_write_text
+from cassi.common.atomic import atomic_write_text
 
 from . import config as C
 from .evalset import default_tasks, explicit_tasks

@@ -11,8 +11,8 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
-from cassi.data.corpus import check_task_file
-from cassi.data.errors import CassiInputError
+from cassi.data.corpus.disk import check_task_file
+from cassi.common.errors import CassiInputError
 
 from .plan import TaskSpec
 from .provenance import task_inputs_digest
@@ -36,7 +36,7 @@ def check_inputs(corpus, tasks: list[TaskSpec], *, get_profile) -> CheckedInputs
 
     Parameters
     ----------
-    corpus : cassi.data.corpus.Corpus
+    corpus : cassi.data.corpus.disk.Corpus
     tasks : list of TaskSpec
         The run's task files (unusable ones included; they stay as they are).
     get_profile : callable (corpus, subject) -> SubjectProfile

@@ -20,7 +20,7 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 from .jobs import Job, SkipJob, StageContext, StageOutput, npz_bytes, select_frames
 from .runner import Pipeline
@@ -60,19 +60,19 @@ def corpus_root(corpus: Path | str | None) -> Path:
     """``corpus``, or the embedded default (synthetic) corpus when None."""
     if corpus is not None:
         return Path(corpus)
-    from cassi.data.synth import default_corpus  # noqa: PLC0415 - generated on first use
+    from cassi.data.synth.corpus import default_corpus  # noqa: PLC0415 - generated on first use
 
     return Path(default_corpus())
 
 
 def get_corpus(corpus: Path | str | None):
-    """This process's :class:`~cassi.data.corpus.Corpus` for ``corpus`` (cached).
+    """This process's :class:`~cassi.data.corpus.disk.Corpus` for ``corpus`` (cached).
 
     A cluster worker reads the corpus from the path the run declares: when it cannot see it,
     the error says so (outputs travel back to the driver, but the corpus is storage the
     cluster must share).
     """
-    from cassi.data.corpus import Corpus  # noqa: PLC0415
+    from cassi.data.corpus.disk import Corpus  # noqa: PLC0415
 
     root = str(corpus_root(corpus))
     if not os.path.isdir(root):
@@ -87,7 +87,7 @@ def get_corpus(corpus: Path | str | None):
 
 
 def get_profile(corpus, subject: str):
-    from cassi.data.profile import preprocess  # noqa: PLC0415
+    from cassi.data.corpus.profile import preprocess  # noqa: PLC0415
 
     key = (str(corpus.root), subject)
     if key not in _profiles:
@@ -96,7 +96,7 @@ def get_profile(corpus, subject: str):
 
 
 def get_face(corpus, subject: str, profile):
-    from cassi.data.face import build_face  # noqa: PLC0415
+    from cassi.data.face.model import build_face  # noqa: PLC0415
 
     key = (str(corpus.root), subject)
     if key not in _faces:
@@ -123,7 +123,7 @@ def get_version_face(corpus, subject: str, profile, version):
 
 def get_neutral():
     """Vertices of the neutral face (no subject palate): the rubric's Table B reference."""
-    from cassi.data.face import build_face  # noqa: PLC0415
+    from cassi.data.face.model import build_face  # noqa: PLC0415
 
     if "neutral" not in _faces:
         _faces["neutral"] = np.asarray(build_face().vertices)
@@ -132,7 +132,7 @@ def get_neutral():
 
 def get_renderer(corpus, subject: str, face, view: str, preset: str, variant: str | None):
     """The process's renderer for (subject, view, preset): its Mitsuba scene is loaded once."""
-    from cassi.data.topology import render_topology  # noqa: PLC0415
+    from cassi.data.face.topology import render_topology  # noqa: PLC0415
     from cassi.renderer.render import FaceRenderer  # noqa: PLC0415
 
     # A version may animate a face of its own (more vertices, other polygons: see

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 from tqdm import tqdm
 
-from cassi.data.atomic import atomic_write_text
+from cassi.common.atomic import atomic_write_text
 
 from .jobs import State
 from .store import OutputStore

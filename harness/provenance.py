@@ -95,7 +95,7 @@ def _array_bytes(a) -> bytes:
 
 
 def profile_digest(profile) -> str:
-    """Digest of a :class:`~cassi.data.profile.SubjectProfile`: every value the versions and
+    """Digest of a :class:`~cassi.data.corpus.profile.SubjectProfile`: every value the versions and
     the face read (maxprotru/lipthick values, jaw length, palate, head measures, the files
     selected)."""
     h = hashlib.sha256()

@@ -27,8 +27,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, Mapping
 
-from cassi.data.atomic import atomic_write_bytes, atomic_write_text
-from cassi.data.errors import CassiInputError
+from cassi.common.atomic import atomic_write_bytes, atomic_write_text
+from cassi.common.errors import CassiInputError
 
 LOCK_NAME = ".cassi-run.lock"
 

@@ -16,8 +16,8 @@ from typing import Mapping
 
 import pandas as pd
 
-from cassi.data.atomic import atomic_tmp_path, atomic_write_text
-from cassi.data.errors import CassiInputError
+from cassi.common.atomic import atomic_tmp_path, atomic_write_text
+from cassi.common.errors import CassiInputError
 
 from .store import sha256_bytes, sha256_file
 

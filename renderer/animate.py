@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from cassi.data.atomic import atomic_tmp_path
-from cassi.data.errors import CassiInputError
-from cassi.data.xrmb import NOMINAL_PERIOD_US  # the XRMB frame period, us
+from cassi.common.atomic import atomic_tmp_path
+from cassi.common.errors import CassiInputError
+from cassi.data.xrmb.files import NOMINAL_PERIOD_US  # the XRMB frame period, us
 
 from .images import to_srgb8
 from .views import VIEW_NAMES
@@ -101,10 +101,10 @@ def animate_positions(face, positions: np.ndarray, out: str | os.PathLike, *,
     """Render frames 0, stride, 2*stride, ... of ``positions`` (float (F, V, 3), Parke units) in
     ``views`` side by side and write the animation ``out`` (.mp4 or .gif).
 
-    ``face`` is the ``cassi.data.face.FaceModel`` whose topology the positions follow.
+    ``face`` is the ``cassi.data.face.model.FaceModel`` whose topology the positions follow.
     Returns a summary dict (frames written, views, fps, variant, path).
     """
-    from cassi.data.face import render_topology
+    from cassi.data.face.model import render_topology
 
     from .render import FaceRenderer
 
@@ -130,7 +130,7 @@ def views_sheet(face, positions: np.ndarray, *, views: Sequence[str] = VIEW_NAME
                 out: str | os.PathLike | None = None) -> np.ndarray:
     """All ``views`` of one frame (positions (V, 3)) side by side as a uint8 contact sheet; also
     written as PNG to ``out`` when given (metadata: views, preset, variant)."""
-    from cassi.data.face import render_topology
+    from cassi.data.face.model import render_topology
 
     from .images import write_contact_sheet
     from .render import FaceRenderer

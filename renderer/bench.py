@@ -53,7 +53,7 @@ def moving_positions(base: np.ndarray, k: int, *, period: int = 40, amplitude: f
 
 
 def _neutral():
-    from cassi.data.face import build_face, render_topology
+    from cassi.data.face.model import build_face, render_topology
 
     face = build_face()
     base = np.asarray(face.vertices, np.float32)
@@ -112,7 +112,7 @@ def bench_render(quick: bool = False, *, topology_for=None, positions=None,
     """Run the render benchmarks; see the module docstring. Returns a JSON-ready dict.
 
     ``topology_for(half: bool)`` and ``positions`` (V, 3) default to the neutral face of
-    ``cassi.data.face``.
+    ``cassi.data.face.model``.
     """
     from .variant import choose_variant
 

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 from .views import PRESET_NAMES, VIEW_NAMES
 
@@ -37,7 +37,7 @@ def _frame_index(frames: np.ndarray, frame: int) -> int:
 
 
 def _cmd_render(args, provider: PositionsProvider) -> int:
-    from cassi.data.face import render_topology
+    from cassi.data.face.model import render_topology
 
     from .images import write_exr, write_mask_png, write_png, write_sidecar
     from .render import FaceRenderer

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cassi.data.atomic import atomic_tmp_path, atomic_write_bytes, atomic_write_text
-from cassi.data.errors import CassiInputError
+from cassi.common.atomic import atomic_tmp_path, atomic_write_bytes, atomic_write_text
+from cassi.common.errors import CassiInputError
 
 __all__ = ["srgb_encode", "srgb_decode", "to_srgb8", "png_bytes", "write_exr", "write_png",
            "write_mask_png",

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 from . import raycast, scenes, shading
 from .variant import activate_variant, choose_variant
@@ -104,7 +104,7 @@ def part_triangles(topology) -> dict[str, np.ndarray]:
     expanded vertex array.
 
     Accepts ``topology.triangles`` (a mapping part -> triangles) or ``topology.parts`` (a mapping
-    part -> object with ``.triangles``), which is how ``cassi.data.face.RenderTopology`` and the
+    part -> object with ``.triangles``), which is how ``cassi.data.face.model.RenderTopology`` and the
     test meshes describe themselves.
     """
     tri = getattr(topology, "triangles", None)
@@ -141,7 +141,7 @@ class FaceRenderer:
     Parameters
     ----------
     topology
-        A ``cassi.data.face.RenderTopology`` (use ``half=True`` for the ``half`` view): per part
+        A ``cassi.data.face.model.RenderTopology`` (use ``half=True`` for the ``half`` view): per part
         triangles and ``expand(positions (V, 3)) -> dict[part, float32 (W, 3)]``.
     view, preset
         Names from :mod:`cassi.renderer.views` (or the objects).

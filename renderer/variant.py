@@ -13,7 +13,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 __all__ = ["VARIANTS", "LLVMLibrary", "find_libllvm", "choose_variant", "activate_variant",
            "MIN_LLVM_VERSION"]

@@ -197,7 +197,7 @@ class Material:
         return max(1.0, 2.0 / self.alpha ** 2 - 2.0)
 
 
-#: Materials per part name (the part names of cassi.data.face.RenderTopology); linear RGB.
+#: Materials per part name (the part names of cassi.data.face.model.RenderTopology); linear RGB.
 MATERIALS: dict[str, Material] = {
     "skin": Material((0.62, 0.42, 0.33), alpha=0.45, specular=0.35),
     "lips": Material((0.55, 0.22, 0.22), alpha=0.30, specular=0.5),
@@ -258,7 +258,7 @@ def mouth_box(view: View, preset: Preset) -> tuple[int, int, int, int]:
 
 
 def view(name: str) -> View:
-    from cassi.data.errors import CassiInputError
+    from cassi.common.errors import CassiInputError
     try:
         return VIEWS[name]
     except KeyError:
@@ -266,7 +266,7 @@ def view(name: str) -> View:
 
 
 def preset(name: str) -> Preset:
-    from cassi.data.errors import CassiInputError
+    from cassi.common.errors import CassiInputError
     try:
         return PRESETS[name]
     except KeyError:

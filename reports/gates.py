@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from cassi.data.atomic import atomic_tmp_path, atomic_write_text
-from cassi.data.errors import CassiInputError
+from cassi.common.atomic import atomic_tmp_path, atomic_write_text
+from cassi.common.errors import CassiInputError
 from cassi.reports.media import read_rgb8
 from cassi.reports.runio import Run, load_run
 from cassi.harness.rubric import CHECKS, verdicts

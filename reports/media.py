@@ -12,8 +12,8 @@ import imageio.v3 as iio
 import numpy as np
 import pandas as pd
 
-from cassi.data.atomic import atomic_tmp_path
-from cassi.data.xrmb import NOMINAL_PERIOD_US
+from cassi.common.atomic import atomic_tmp_path
+from cassi.data.xrmb.files import NOMINAL_PERIOD_US
 
 
 def copy_image(src: str | os.PathLike, dest: Path) -> Path:
@@ -56,7 +56,7 @@ def contact_sheet(paths: list[str], dest: Path, *, columns: int = 4) -> Path:
     return dest
 
 
-#: The XRMB pellet time base: one recording row every 6866 us (cassi.data.xrmb).
+#: The XRMB pellet time base: one recording row every 6866 us (cassi.data.xrmb.files).
 ROW_US = NOMINAL_PERIOD_US
 LABEL_PX = 14
 

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from cassi.data.atomic import atomic_write_text
+from cassi.common.atomic import atomic_write_text
 from cassi.harness.config import RunConfig
 from cassi.harness.tableset import SET_FILE as TABLE_SET
 from cassi.reports.gates import (GOLDEN_MARK, GateResult, MismatchedBaseline, gate, job_gates,

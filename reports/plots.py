@@ -11,7 +11,7 @@ matplotlib.use("Agg")  # reports run headless (nightly jobs, CI)
 import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from cassi.data.atomic import atomic_tmp_path  # noqa: E402
+from cassi.common.atomic import atomic_tmp_path  # noqa: E402
 from cassi.harness.rubric import CHECKS, RATINGS  # noqa: E402
 
 #: One colour per rating, green (EXCELLENT) to red (UNACCEPTABLE).

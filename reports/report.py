@@ -14,7 +14,7 @@ from pathlib import Path
 import jinja2
 import pandas as pd
 
-from cassi.data.atomic import atomic_write_text
+from cassi.common.atomic import atomic_write_text
 from cassi.reports import compare as cmp
 from cassi.reports import media, plots
 from cassi.reports.runio import Run, load_run, order_versions
@@ -236,7 +236,7 @@ def _audio_for(run: Run):
     cannot be opened: the videos are then silent, and say so)."""
     root = run.meta.get("corpus_resolved")
     try:
-        from cassi.data.corpus import Corpus  # noqa: PLC0415
+        from cassi.data.corpus.disk import Corpus  # noqa: PLC0415
 
         corpus = Corpus(root) if root else None
     except Exception:  # noqa: BLE001 - a moved corpus must not stop the report

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 from cassi.harness.results import read_results
 from cassi.harness.runner import RENDER_COLUMNS  # the render index the farm writes
 from cassi.harness.tableset import SUMMARY_FILE, verify_table_set

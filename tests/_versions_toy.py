@@ -3,7 +3,7 @@
 The stand-in face places the vertices the versions use where Parke's model roughly has them
 (Parke units ~10 per mm, X forward, Y left, Z up; the tongue and lips on the midline, the molars
 off it) so the geometry can be checked by hand; the integration tests use the real face model
-(``cassi.data.face.build_face``) when it is installed. The recording's first rows copy the JW45
+(``cassi.data.face.model.build_face``) when it is installed. The recording's first rows copy the JW45
 excerpt of thesis Figure 3.9 (tests/../shared/reference/xrmb/JW45/JW45_013.TXY), mm.
 """
 from __future__ import annotations
@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cassi.data.headmeasures import HeadMeasures
-from cassi.data.profile import SubjectProfile
-from cassi.data.xrmb import TaskRecording
+from cassi.data.xrmb.headmeasures import HeadMeasures
+from cassi.data.corpus.profile import SubjectProfile
+from cassi.data.xrmb.files import TaskRecording
 
 N_VERTICES = 310          # 1-300 as CONTRACTS numbers them, 301-310 a stand-in palate
 

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cassi.data.mis import MistrackEntry, write_mis
-from cassi.data.xrmb import (NOMINAL_PERIOD_US, PELLETS, TaskRecording, task_file_name, write_pal,
+from cassi.data.xrmb.mis import MistrackEntry, write_mis
+from cassi.data.xrmb.files import (NOMINAL_PERIOD_US, PELLETS, TaskRecording, task_file_name, write_pal,
                              write_pha, write_txy)
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures"

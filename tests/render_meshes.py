@@ -1,4 +1,4 @@
-"""Small meshes for the renderer tests, independent of cassi.data.face.
+"""Small meshes for the renderer tests, independent of cassi.data.face.model.
 
 ``SimpleTopology`` follows the RenderTopology protocol the renderer uses: ``triangles`` (part ->
 int (T, 3)), ``expand(positions (V, 3)) -> dict[part, float32 (W, 3)]`` (one gather per part) and

@@ -9,7 +9,7 @@ import pytest
 from data_helpers import FIXTURES, JW45_EXCERPT, recording, write_metadata, write_subject
 
 from cassi.data.commands import main
-from cassi.data.profile import read_lipthick, read_maxprotru
+from cassi.data.corpus.profile import read_lipthick, read_maxprotru
 
 
 @pytest.fixture
@@ -112,7 +112,7 @@ def test_help_everywhere(capsys):
 
 
 def test_make_then_check_and_preprocess(tmp_path, capsys):
-    importlib.import_module("cassi.data.synth")
+    importlib.import_module("cassi.data.synth.corpus")
     out = tmp_path / "synth"
     assert main(["make", "--out", str(out), "--subjects", "JW45", "--seed", "1"]) == 0
     assert "written" in capsys.readouterr().out
@@ -139,7 +139,7 @@ def test_copy_of_reference_subject_checks(tmp_path, capsys):
 def test_file_without_valid_row_is_unusable_not_malformed(corpus_dir, capsys):
     """The thesis's JW29/JW32: the MNM pellet removed, so no row has all eight pellets valid.
     The file is well-formed: reported UNUSABLE with the reason; exit 2 only with --strict."""
-    from cassi.data.xrmb import write_txy
+    from cassi.data.xrmb.files import write_txy
 
     write_txy(corpus_dir / "JW12" / "tp020.txy", recording(task=20, lost=("MNM", 0)))
     assert main(["check", str(corpus_dir), "--json"]) == 0

@@ -9,9 +9,9 @@ import pandas as pd
 import pytest
 from data_helpers import FIXTURES, recording, write_metadata, write_subject
 
-from cassi.data.corpus import Corpus, check_corpus, read_alignment
-from cassi.data.errors import CassiInputError
-from cassi.data.xrmb import PELLETS
+from cassi.data.corpus.disk import Corpus, check_corpus, read_alignment
+from cassi.common.errors import CassiInputError
+from cassi.data.xrmb.files import PELLETS
 
 
 @pytest.fixture

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 from data_helpers import FIXTURES, JW45_EXCERPT, REST, recording, write_subject
 
-from cassi.data.corpus import Corpus
-from cassi.data.errors import CassiInputError
-from cassi.data.profile import (MaxProtru, file_measures, parse_maxprotru, preprocess,
+from cassi.data.corpus.disk import Corpus
+from cassi.common.errors import CassiInputError
+from cassi.data.corpus.profile import (MaxProtru, file_measures, parse_maxprotru, preprocess,
                                 read_lipthick, read_maxprotru, write_lipthick, write_maxprotru)
-from cassi.data.xrmb import read_txy
+from cassi.data.xrmb.files import read_txy
 
 D_REST = math.hypot(*(REST[6] - REST[7]))  # MNI-MNM of the helper's rest posture, mm
 LIP_REST = math.hypot(*(REST[0] - REST[1]))

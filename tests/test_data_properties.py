@@ -11,13 +11,13 @@ from hypothesis import strategies as st
 
 from data_helpers import FIXTURES
 
-from cassi.data.alignment import parse_alignment
-from cassi.data.errors import CassiInputError
-from cassi.data.headmeasures import HeadMeasures, format_head_measures, parse_head_measures
-from cassi.data.mis import MistrackEntry, format_mis, parse_mis
-from cassi.data.profile import (MaxProtru, format_lipthick, format_maxprotru, parse_lipthick,
+from cassi.data.xrmb.alignment import parse_alignment
+from cassi.common.errors import CassiInputError
+from cassi.data.xrmb.headmeasures import HeadMeasures, format_head_measures, parse_head_measures
+from cassi.data.xrmb.mis import MistrackEntry, format_mis, parse_mis
+from cassi.data.corpus.profile import (MaxProtru, format_lipthick, format_maxprotru, parse_lipthick,
                                 parse_maxprotru)
-from cassi.data.xrmb import PELLETS, TaskRecording, format_outline, format_txy, parse_outline, parse_txy
+from cassi.data.xrmb.files import PELLETS, TaskRecording, format_outline, format_txy, parse_outline, parse_txy
 
 FAST = settings(max_examples=int(os.environ.get("CASSI_FUZZ_EXAMPLES", 150)), deadline=2000, suppress_health_check=[HealthCheck.too_slow])
 

@@ -1,4 +1,4 @@
-"""Kinematic statistics (cassi.data.stats) on hand-made trajectories, on the real JW45 excerpt
+"""Kinematic statistics (cassi.data.corpus.stats) on hand-made trajectories, on the real JW45 excerpt
 (thesis Figure 3.9), and the ``cassi corpus stats`` command."""
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ import pytest
 from data_helpers import JW45_EXCERPT
 
 from cassi.data.commands import main
-from cassi.data.errors import CassiInputError
-from cassi.data.stats import compare, corpus_stats, recording_stats, summarise
-from cassi.data.xrmb import PELLETS, TaskRecording, format_txy
+from cassi.common.errors import CassiInputError
+from cassi.data.corpus.stats import compare, corpus_stats, recording_stats, summarise
+from cassi.data.xrmb.files import PELLETS, TaskRecording, format_txy
 
 DT_US = 6866
 DT = DT_US * 1e-6
@@ -168,8 +168,8 @@ def test_cli_stats_bad_input_exits_2_with_file_and_line(capsys, tmp_path):
 
 
 def test_cli_stats_on_a_generated_subject(tmp_path, capsys):
-    from cassi.data.synth import generate_task
-    from cassi.data.synth_subjects import SUBJECTS
+    from cassi.data.synth.corpus import generate_task
+    from cassi.data.synth.subjects import SUBJECTS
     t, xy = generate_task(SUBJECTS["JW45"], 105)
     rec = TaskRecording(None, "JW45", 105, 1, t, xy, np.ones(xy.shape[:2], bool))
     (tmp_path / "JW45").mkdir()

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from data_helpers import FIXTURES, JW45_EXCERPT, recording
 
-from cassi.data.errors import CassiInputError
-from cassi.data.headmeasures import HeadMeasures
-from cassi.data.xrmb import (BAD_VALUE, PELLETS, TaskRecording, format_txy, parse_mis,
+from cassi.common.errors import CassiInputError
+from cassi.data.xrmb.headmeasures import HeadMeasures
+from cassi.data.xrmb.files import (BAD_VALUE, PELLETS, TaskRecording, format_txy, parse_mis,
                              parse_outline, parse_task_name, parse_txy, read_head_measures,
                              read_mis, read_pal, read_pha, read_txy, write_head_measures,
                              write_mis, write_pal, write_txy)

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cassi.data.errors import CassiInputError
-from cassi.data.parke_io import (Polygon, PtsFile, TopFile, read_pts, read_top, write_pts,
+from cassi.common.errors import CassiInputError
+from cassi.data.xrmb.parke_io import (Polygon, PtsFile, TopFile, read_pts, read_top, write_pts,
                                  write_top)
 
 # Thesis Figure 3.2: the first vertices of Parke's st1.pts.

@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cassi.data import numbering as N
-from cassi.data.errors import CassiInputError
-from cassi.data.face import FaceModel, build_face
-from cassi.data.face_build import (CENTRE, EYEBALL_RADIUS, EYELID_RADIUS, PARKE_EXCERPT,
+from cassi.data.face import numbering as N
+from cassi.common.errors import CassiInputError
+from cassi.data.face.model import FaceModel, build_face
+from cassi.data.face.build import (CENTRE, EYEBALL_RADIUS, EYELID_RADIUS, PARKE_EXCERPT,
                                    arch_points)
-from cassi.data.topology import (boundary_loops, inconsistent_edges, nonmanifold_edges,
+from cassi.data.face.topology import (boundary_loops, inconsistent_edges, nonmanifold_edges,
                                  render_topology, signed_volume)
 
 
@@ -270,7 +270,7 @@ def test_teeth_split_into_upper_and_lower(face, half):
     """The face's one teeth material renders as two parts: every teeth triangle lies in exactly
     one of ``teeth_upper`` (Parke's 223-254, with the incisor tip 226) and ``teeth_lower``
     (255-286, with MANi 258 and the MANm pair 281/286), and only the lower part follows the jaw."""
-    from cassi.data.topology import PARTS
+    from cassi.data.face.topology import PARTS
     t = render_topology(face, half=half)
     assert "teeth" not in t.parts
     assert {"teeth_upper", "teeth_lower"} <= set(t.parts)
@@ -362,7 +362,7 @@ def test_face_files_round_trip(face, tmp_path):
     assert back.polygons == face.polygons
     np.testing.assert_allclose(back.eye_centres, face.eye_centres, atol=1e-6)
     assert back.regions == face.regions
-    from cassi.data.face_params import apply_parameters
+    from cassi.data.face.params import apply_parameters
     np.testing.assert_array_equal(apply_parameters(back, {1: 0.3, 4: 10}).vertices,
                                   apply_parameters(face, {1: 0.3, 4: 10}).vertices)
     paths["meta"].write_text("{not json")
@@ -375,7 +375,7 @@ def test_parke_sized_files_load(tmp_path):
     verts = np.full((287, 3), np.nan)
     for n, xyz in PARKE_EXCERPT.items():
         verts[n - 1] = xyz
-    from cassi.data.parke_io import Polygon, write_pts, write_top
+    from cassi.data.xrmb.parke_io import Polygon, write_pts, write_top
     write_pts(tmp_path / "st1.pts", verts, "st1.pts - first vertices set FIP 10 May 90")
     write_top(tmp_path / "stt.top", [Polygon(1, (1, 6, 7, 2)), Polygon(1, (7, 8, 2)),
                                      Polygon(1, (2, 8, 3))], "stt.top - simple face")

@@ -6,11 +6,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cassi.data import eyes as E
-from cassi.data import numbering as N
-from cassi.data.errors import CassiInputError
-from cassi.data.face import build_face
-from cassi.data.face_params import (PARAMETERS, apply_parameters, check_parameters,
+from cassi.data.face import eyes as E
+from cassi.data.face import numbering as N
+from cassi.common.errors import CassiInputError
+from cassi.data.face.model import build_face
+from cassi.data.face.params import (PARAMETERS, apply_parameters, check_parameters,
                                     jaw_rotation, look_at, start_values)
 
 
@@ -205,7 +205,7 @@ def test_eyeball_construction():
     assert local.shape == (E.VERTS_PER_EYE, 3)
     polys = E.eyeball_polygons(1)
     mats = [m for m, _ in polys]
-    from cassi.data.face_build import FRINGE, IRIS, PUPIL, REFLECTION
+    from cassi.data.face.build import FRINGE, IRIS, PUPIL, REFLECTION
     assert mats.count(PUPIL) == E.SIDES and mats.count(IRIS) == E.SIDES
     assert mats.count(FRINGE) == E.SIDES and mats.count(REFLECTION) == E.SPOT_SIDES
     # all ball vertices on the sphere; pupil, fringe-inner and iris rings at their fractions
@@ -233,7 +233,7 @@ def test_eye_parameters_rebuild_the_eyeball(face):
 
 def test_parameters_on_a_parke_sized_model(face):
     """Parke's own files: 287 vertices, some undefined, no eyes, no region names."""
-    from cassi.data.face import FaceModel
+    from cassi.data.face.model import FaceModel
     st1 = face.st1[:287].copy()
     st1[[101, 102, 103, 104, 105]] = np.nan          # vertices 102-106 undefined
     parke = FaceModel(st1, (), st1=st1, st2=st1.copy())
@@ -248,7 +248,7 @@ def test_parameters_on_a_parke_sized_model(face):
 @pytest.mark.parametrize("opening", [0.0, 0.5, 0.9, 1.0])
 def test_skin_clears_the_eyeball(face, opening):
     """No skin (lids included) dips into the eyeball at any eyelid opening."""
-    from cassi.data.topology import render_topology
+    from cassi.data.face.topology import render_topology
     f = apply_parameters(face, {1: opening})
     topo = render_topology(f, half=True)
     verts, tri, part = topo.mesh(f.vertices)

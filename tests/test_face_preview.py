@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from cassi.data.face import FaceModel, build_face, main
-from cassi.data.preview import preview_png
+from cassi.data.face.model import FaceModel, build_face, main
+from cassi.data.face.preview import preview_png
 
 
 def test_generator_writes_parke_files_with_a_subject_palate(tmp_path, capsys):

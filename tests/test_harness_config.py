@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 from cassi.harness import config as C
 from cassi.harness.commands import config_from_args, register
 from cassi.harness.evalset import TABLE_5_1

@@ -6,8 +6,8 @@ import shutil
 
 import pytest
 
-from cassi.data.corpus import Corpus
-from cassi.data.synth import make_corpus
+from cassi.data.corpus.disk import Corpus
+from cassi.data.synth.corpus import make_corpus
 from cassi.harness.evalset import EXTRA_TASKS, TABLE_5_1, default_tasks, explicit_tasks, task_catalog
 
 
@@ -50,7 +50,7 @@ def test_explicit_tasks_skip_what_is_not_there(small_corpus):
 
 
 def test_default_corpus_follows_table_5_1():
-    from cassi.data.synth import default_corpus
+    from cassi.data.synth.corpus import default_corpus
 
     corpus = Corpus(default_corpus())
     specs = default_tasks(corpus)

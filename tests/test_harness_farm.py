@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 from cassi.harness import results as R
 from cassi.harness.executors import LocalExecutor
 from cassi.harness.jobs import Job, SkipJob, StageContext, StageOutput, State, npz_bytes, select_frames

@@ -14,9 +14,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from cassi.data.atomic import atomic_write_text
-from cassi.data.errors import CassiInputError
-from cassi.data.synth import make_corpus
+from cassi.common.atomic import atomic_write_text
+from cassi.common.errors import CassiInputError
+from cassi.data.synth.corpus import make_corpus
 from cassi.harness import provenance, rubric
 from cassi.harness.cli import main as cli_main
 from cassi.harness.config import RunConfig

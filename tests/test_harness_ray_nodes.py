@@ -17,7 +17,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from cassi.data.synth import make_corpus
+from cassi.data.synth.corpus import make_corpus
 
 pytestmark = [pytest.mark.ray, pytest.mark.slow]
 

@@ -8,7 +8,7 @@ import json
 import pandas as pd
 import pytest
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 from cassi.harness import pipeline as P
 from cassi.harness.commands import register
 from cassi.harness.config import RunConfig

@@ -15,14 +15,14 @@ pytestmark = pytest.mark.render
 
 @pytest.fixture(scope="module")
 def corpus(tmp_path_factory):
-    importlib.import_module("cassi.data.face")
-    from cassi.data.synth import make_corpus
+    importlib.import_module("cassi.data.face.model")
+    from cassi.data.synth.corpus import make_corpus
 
     return make_corpus(tmp_path_factory.mktemp("corpus"), subjects=["JW45"])
 
 
 def _first_task(corpus):
-    from cassi.data.corpus import Corpus
+    from cassi.data.corpus.disk import Corpus
 
     return Corpus(corpus).subject("JW45").tasks()[0][0]
 

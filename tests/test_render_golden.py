@@ -1,4 +1,4 @@
-"""Golden images of the neutral face (cassi.data.face.build_face()) in all four views, preview preset.
+"""Golden images of the neutral face (cassi.data.face.model.build_face()) in all four views, preview preset.
 
 References live in tests/golden/: ``neutral_<view>.png`` (sRGB colour) and
 ``neutral_<view>.mask.png`` (part ids). They are regenerated only on purpose, after looking at
@@ -40,7 +40,7 @@ REGEN = os.environ.get("CASSI_REGEN_GOLDEN", "") not in ("", "0")
 
 @pytest.fixture(scope="module")
 def neutral():
-    face_mod = importlib.import_module("cassi.data.face")
+    face_mod = importlib.import_module("cassi.data.face.model")
     face = face_mod.build_face()
     return face, np.asarray(face.vertices)
 
@@ -60,7 +60,7 @@ def _failure_dir(tmp_path: Path) -> Path:
 
 @pytest.mark.parametrize("view", ["front", "side", "half", "top"])
 def test_neutral_face_matches_golden(neutral, view, tmp_path):
-    from cassi.data.face import render_topology
+    from cassi.data.face.model import render_topology
     from cassi.renderer.render import FaceRenderer
 
     face, pos = neutral
@@ -106,7 +106,7 @@ def test_neutral_face_matches_golden(neutral, view, tmp_path):
 def test_render_is_reproducible(neutral):
     """A new renderer, and the same renderer after another frame, give the same bits (vertex
     normals are summed in a fixed order, see scenes.vertex_normals)."""
-    from cassi.data.face import render_topology
+    from cassi.data.face.model import render_topology
     from cassi.renderer.render import FaceRenderer
 
     face, pos = neutral
@@ -123,7 +123,7 @@ def test_render_is_reproducible(neutral):
 
 def test_neutral_views_show_what_they_should(neutral):
     """The parts each view exists for are visible in it (what the rubric reads from masks)."""
-    from cassi.data.face import render_topology
+    from cassi.data.face.model import render_topology
     from cassi.renderer.render import FaceRenderer
 
     face, pos = neutral
@@ -148,7 +148,7 @@ def test_colour_comparison_fires_on_a_planted_defect(neutral, monkeypatch):
     """The other variant passes; a skin 2% darker, or the lights mirrored, does not."""
     import dataclasses
 
-    from cassi.data.face import render_topology
+    from cassi.data.face.model import render_topology
     from cassi.renderer import views
     from cassi.renderer.render import FaceRenderer
 
@@ -177,7 +177,7 @@ def test_colour_comparison_fires_on_a_planted_defect(neutral, monkeypatch):
 def test_final_preset_path_traces(neutral):
     """``final`` stays path-traced (shadows, interreflection): its colour is not the raycast
     shading, while mask and depth come from the same kind of pass."""
-    from cassi.data.face import render_topology
+    from cassi.data.face.model import render_topology
     from cassi.renderer import views
     from cassi.renderer.render import FaceRenderer
     import dataclasses

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 from cassi.renderer import images
 from cassi.renderer.animate import realtime_fps, side_by_side, write_animation
 

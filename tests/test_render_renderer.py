@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from render_meshes import toy_head
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 from cassi.renderer import images, views
 from cassi.renderer.images import FrameWriter, read_image, read_metadata
 from cassi.renderer.render import FaceRenderer

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 from cassi.renderer import variant as V
 
 pytestmark = pytest.mark.render

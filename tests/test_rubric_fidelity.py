@@ -8,8 +8,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from cassi.data import numbering as N
-from cassi.data.face import build_face
+from cassi.data.face import numbering as N
+from cassi.data.face.model import build_face
 from cassi.harness import rubric as R
 from cassi.harness.rubric import fidelity as FI
 from cassi.versions.mapping import XrmbToParke

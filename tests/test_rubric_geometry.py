@@ -505,7 +505,7 @@ def test_surface_hits_against_a_unit_square():
 
 
 def test_bad_positions_raise_input_error():
-    from cassi.data.errors import CassiInputError
+    from cassi.common.errors import CassiInputError
 
     a = S.copy(BASE[5])
     a.positions[3, 0, 0] = np.nan
@@ -549,7 +549,7 @@ def test_tongue_back_v_is_measured_not_counted():
 
 
 def test_too_few_vertices_raise_input_error():
-    from cassi.data.errors import CassiInputError
+    from cassi.common.errors import CassiInputError
 
     a = S.copy(BASE[5])
     a.positions = a.positions[:, :10]

@@ -21,10 +21,10 @@ VERSIONS = ("parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1")
 
 @pytest.fixture(scope="module")
 def subject():
-    from cassi.data.corpus import Corpus
-    from cassi.data.face import build_face
-    from cassi.data.profile import preprocess
-    from cassi.data.synth import default_corpus
+    from cassi.data.corpus.disk import Corpus
+    from cassi.data.face.model import build_face
+    from cassi.data.corpus.profile import preprocess
+    from cassi.data.synth.corpus import default_corpus
 
     corpus = Corpus(default_corpus())
     prof = preprocess(corpus, ["JW11"])["JW11"]

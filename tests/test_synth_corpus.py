@@ -19,20 +19,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cassi.data.corpus import Corpus
-from cassi.data.errors import CassiInputError
-from cassi.data.profile import preprocess, read_lipthick, read_maxprotru
-from cassi.data.synth import (GENERATOR_VERSION, JW32_MNM_LOST_FROM_TASK, PROTECTED_TASKS,
+from cassi.data.corpus.disk import Corpus
+from cassi.common.errors import CassiInputError
+from cassi.data.corpus.profile import preprocess, read_lipthick, read_maxprotru
+from cassi.data.synth.corpus import (GENERATOR_VERSION, JW32_MNM_LOST_FROM_TASK, PROTECTED_TASKS,
                               TABLE_5_1_TASKS, default_corpus, generate_task, make_corpus)
-from cassi.data.stats import corpus_stats
-from cassi.data.synth_motion import KINEMATIC_TARGETS
-from cassi.data.synth_subjects import SUBJECTS
-from cassi.data.xrmb import PELLETS, read_head_measures, read_mis
+from cassi.data.corpus.stats import corpus_stats
+from cassi.data.synth.motion import KINEMATIC_TARGETS
+from cassi.data.synth.subjects import SUBJECTS
+from cassi.data.xrmb.files import PELLETS, read_head_measures, read_mis
 
 TOL = 0.03          # the issue's calibration tolerance (profile units: divided by jaw length)
 TOL_MIN = 0.05      # MIN UL / MIN LL (issue 10)
 #: Published MIN UL above 0.1 of the jaw length: reproduced; the others are near-zero values no
-#: gesture reaches (cassi.data.synth_subjects' docstring gives the numbers).
+#: gesture reaches (cassi.data.synth.subjects' docstring gives the numbers).
 MIN_UL_REPRODUCED = ("JW18", "JW19", "JW32", "JW41", "JW502")
 
 
@@ -99,7 +99,7 @@ def test_layout_and_metadata_say_synthetic(small, corpus):
 
 def test_cache_directory_is_named_by_generator_version(tmp_path, monkeypatch):
     # a corpus cached by an older generator version is never reused
-    import cassi.data.synth as synth
+    import cassi.data.synth.corpus as synth
     monkeypatch.setenv("CASSI_CACHE", str(tmp_path))
     stale = tmp_path / f"corpus-{GENERATOR_VERSION}-0"
     stale.mkdir()
@@ -272,8 +272,8 @@ def test_jw45_at_rest_is_like_the_real_excerpt(small, fixtures_dir):
     """Real-data check: thesis Figure 3.9 prints the first 13 valid rows of the real JW45 task 13
     (at rest). The same rows of the synthetic JW45 task 13 have the same lips and jaw within
     tenths of a millimetre and tracking noise (second differences) within a factor of 3."""
-    from cassi.data.stats import summarise
-    from cassi.data.xrmb import read_txy
+    from cassi.data.corpus.stats import summarise
+    from cassi.data.xrmb.files import read_txy
 
     real = read_txy(fixtures_dir / "xrmb" / "JW45" / "JW45_013.TXY")
     syn = Corpus(small).load("JW45", 13)
@@ -380,7 +380,7 @@ def test_cli_make_writes_the_same_corpus(small, tmp_path):
 @pytest.mark.slow
 def test_full_default_corpus_fast_cached_concurrent_and_calibrated(tmp_path, fixtures_dir):
     env = dict(os.environ, CASSI_CACHE=str(tmp_path / "cache"))
-    code = ("import sys, time; from cassi.data.synth import default_corpus; "
+    code = ("import sys, time; from cassi.data.synth.corpus import default_corpus; "
             "t = time.perf_counter(); p = default_corpus(); "
             "print(p, time.perf_counter() - t)")
     t0 = time.perf_counter()

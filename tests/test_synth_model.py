@@ -11,14 +11,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cassi.data.profile import read_lipthick, read_maxprotru
-from cassi.data.synth import PERIOD_S, generate_task
-from cassi.data.synth_motion import (DIPHTHONGS, OMEGA, PHONE_SPECS, Anatomy, expand_phones, jaw_transform,
+from cassi.data.corpus.profile import read_lipthick, read_maxprotru
+from cassi.data.synth.corpus import PERIOD_S, generate_task
+from cassi.data.synth.motion import (DIPHTHONGS, OMEGA, PHONE_SPECS, Anatomy, expand_phones, jaw_transform,
                                      pellets, segment_targets, smooth)
-from cassi.data.synth_subjects import (LOW_LIP_LIPTHICK, LOW_LIP_SUBJECTS, SUBJECTS, palate_y,
+from cassi.data.synth.subjects import (LOW_LIP_LIPTHICK, LOW_LIP_SUBJECTS, SUBJECTS, palate_y,
                                       subject_figures)
-from cassi.data.synth_tasks import LEXICON, TASKS, word_phones
-from cassi.data.xrmb import read_pal, read_txy
+from cassi.data.synth.tasks import LEXICON, TASKS, word_phones
+from cassi.data.xrmb.files import read_pal, read_txy
 
 
 # ----------------------------------------------------------------------------- subject table
@@ -132,8 +132,8 @@ def test_only_the_low_lip_subjects_meet_the_cassi_2_1_criterion():
     """Thesis 4.3.1, as cassi.versions applies it: with 2.0's equal lips (Thick = lipthick p / 2,
     Parke units), the upper lip's inside edge starts more than 20 units below vertex 226 (the
     incisor tip, where the XRMB origin maps). Checked on each subject's Table 5.1 files."""
-    from cassi.data.face import build_face
-    from cassi.data.synth import TABLE_5_1_TASKS
+    from cassi.data.face.model import build_face
+    from cassi.data.synth.corpus import TABLE_5_1_TASKS
     from cassi.versions.lips_thickness import is_low_lips, thick_from_lipthick
 
     p = build_face().jaw_length

@@ -1,7 +1,7 @@
 """CASSI 1.0 (thesis 4.1), the XRMB -> Parke mapping and the Parke baseline (3.1.3).
 
 Unit tests run on the stand-in face of ``_versions_toy`` (vertices placed by hand so results can be
-derived); ``test_real_face_*`` run on the face model when ``cassi.data.face`` is installed.
+derived); ``test_real_face_*`` run on the face model when ``cassi.data.face.model`` is installed.
 """
 from __future__ import annotations
 
@@ -10,13 +10,13 @@ import math
 
 import numpy as np
 
-from cassi.data import numbering as N
+from cassi.data.face import numbering as N
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from _versions_toy import JW45_ROW, ToyFace, toy_profile, toy_recording, toy_vertices
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 from cassi.versions import constants as K
 from cassi.versions.cassi10 import Cassi10, check_parameters, tongue_followers
 from cassi.versions.mapping import XrmbToParke, model_jaw_length
@@ -240,7 +240,7 @@ def test_tongue_tip_stays_behind_the_incisors_on_the_real_face():
     # front of T1 but behind the incisors' lingual surface by the clearance, and the edge vertices
     # inside the arch of the bottom teeth.
     from cassi.versions.cassi10 import arch_wall_x, incisor_wall_x
-    face_mod = importlib.import_module("cassi.data.face")
+    face_mod = importlib.import_module("cassi.data.face.model")
     face = face_mod.build_face()
     v = np.asarray(face.vertices, dtype=np.float64)
     prof = toy_profile()
@@ -349,8 +349,8 @@ def test_lip_corners_take_half_of_each_lip(anim10):
 def test_head_measures_equal_to_the_model_change_nothing(face, rec):
     # Head measures placed exactly where the model's gnathion and gonion already are
     # (mapped back to XRMB mm) give theta = 0: the chin and jaw keep Parke's placement.
-    from cassi.data.headmeasures import HeadMeasures
-    from cassi.data.profile import SubjectProfile
+    from cassi.data.xrmb.headmeasures import HeadMeasures
+    from cassi.data.corpus.profile import SubjectProfile
     from dataclasses import replace
 
     prof = toy_profile()

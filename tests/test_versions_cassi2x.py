@@ -1,7 +1,7 @@
 """CASSI 2.0 and 2.1 as versions (thesis 4.2-4.3): the lip stage inside CASSI 1.0's pipeline.
 
 Pipeline tests run on the stand-in face of ``_versions_toy``; ``test_real_face_*`` run on the
-face model (``cassi.data.face.build_face``) and skip while it is not installed.
+face model (``cassi.data.face.model.build_face``) and skip while it is not installed.
 """
 from __future__ import annotations
 
@@ -49,7 +49,7 @@ def protrusion_recording(profile, n=600, wag_deg=2.0):
 
 
 #: The stand-in face is built at ~10 units per mm; CASSI 2.0's key c values (65, 0, 85) and the
-#: limits of step 7 are in Parke's units, ~4 per mm (cassi.data.numbering.MM_PER_UNIT), so the
+#: limits of step 7 are in Parke's units, ~4 per mm (cassi.data.face.numbering.MM_PER_UNIT), so the
 #: stand-in is scaled to that before the lips run on it.
 TOY_TO_PARKE = 0.4
 
@@ -175,7 +175,7 @@ def _concavity(p, a, m, b):
 def test_below_lip_bound_keeps_41_to_43_from_folding():
     # Regression for 41-43 pulled by half the lower lip's movement into a fold of the chin
     # (task 106): on the face model, 41-43 pushed 8 mm forward, 8 mm back, or left alone.
-    face_mod = importlib.import_module("cassi.data.face")
+    face_mod = importlib.import_module("cassi.data.face.model")
     from cassi.versions.lips import LIP_VERTICES, bound_below_lip
     rest = np.asarray(face_mod.build_face().vertices, dtype=np.float64)
     out = np.repeat(rest[None], 3, axis=0)
@@ -234,7 +234,7 @@ def test_2_1_thins_the_upper_lip_of_low_lip_subjects(face, rec):
 # --- on the face model ------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def real_face():
-    from cassi.data.face import build_face
+    from cassi.data.face.model import build_face
 
     return build_face()
 
@@ -245,7 +245,7 @@ def test_real_face_lips_stay_in_front_of_the_upper_teeth(real_face, profile):
     outline goes behind the teeth's labial surface, while the lips round and stretch. (Where the
     pellet itself is at or behind the incisors, as the stretched end of this task puts it, the
     thesis promises nothing.)"""
-    from cassi.data import numbering as N
+    from cassi.data.face import numbering as N
 
     rec = protrusion_recording(profile)
     anim = Cassi20().animate(profile, real_face, rec)

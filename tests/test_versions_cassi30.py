@@ -19,7 +19,7 @@ import pytest
 
 cassi30 = pytest.importorskip("cassi30", reason="the cassi-3.0 plug-in is not installed")
 
-from cassi.data import numbering as N  # noqa: E402
+from cassi.data.face import numbering as N  # noqa: E402
 from cassi.harness.pipeline import get_corpus, get_face, get_profile  # noqa: E402
 from cassi.harness.rubric import geometry as G  # noqa: E402
 from cassi.versions.protocol import version_face  # noqa: E402
@@ -94,7 +94,7 @@ def test_other_versions_animate_the_shared_face(corpus):
 
 
 def test_a_face_hook_that_drops_vertices_is_refused(corpus):
-    from cassi.data.errors import CassiInputError
+    from cassi.common.errors import CassiInputError
 
     profile, face, _ = _inputs(corpus, "JW45", 106)
 
@@ -112,7 +112,7 @@ def test_a_face_hook_that_drops_vertices_is_refused(corpus):
 # --- the face ----------------------------------------------------------------------------------
 
 def test_the_face_keeps_the_shared_numbers_and_adds_a_closed_tongue(corpus, version):
-    from cassi.data.topology import boundary_edges, render_topology
+    from cassi.data.face.topology import boundary_edges, render_topology
 
     profile, face, _ = _inputs(corpus, "JW16", 3)
     own = version_face(version, face)
@@ -148,7 +148,7 @@ def test_the_tongue_polygons_face_outward(corpus, version):
 
 def test_the_palate_never_reaches_below_the_incisor_tip(corpus, version):
     """Every subject of the corpus, and a planted outline that dips 3 mm below the tip."""
-    from cassi.data.face import build_face
+    from cassi.data.face.model import build_face
 
     faces = [get_face(corpus, s, get_profile(corpus, s)) for s in corpus.subjects[:6]]
     low = np.array([(-2.0, -3.0), (-6.0, 2.0), (-15.0, 14.0), (-30.0, 20.0), (-50.0, 19.0)])
@@ -392,7 +392,7 @@ def test_back_points_follow_t3_t4_along_pha_without_a_v(sentence):
 
 
 def test_a_subject_without_pha_dat_is_refused(corpus, version):
-    from cassi.data.errors import CassiInputError
+    from cassi.common.errors import CassiInputError
 
     profile, face, rec = _inputs(corpus, "JW45", 106)
     with pytest.raises(CassiInputError, match="PHA.DAT"):

@@ -1,7 +1,7 @@
 """The versions on real inputs: the thesis's JW45 excerpt, the synthetic corpus, the face model.
 
-Nothing here is mocked: recordings come from ``cassi.data.xrmb``/``cassi.data.synth``, profiles
-from ``cassi.data.profile.preprocess``, the face from ``cassi.data.face.build_face`` (the tests
+Nothing here is mocked: recordings come from ``cassi.data.xrmb.files``/``cassi.data.synth.corpus``, profiles
+from ``cassi.data.corpus.profile.preprocess``, the face from ``cassi.data.face.model.build_face`` (the tests
 that need it skip while that module is not installed).
 """
 from __future__ import annotations
@@ -19,9 +19,9 @@ BUILTIN = ["parke-1974", "cassi-1.0"]
 
 @pytest.fixture(scope="module")
 def synth(tmp_path_factory):
-    from cassi.data.corpus import Corpus
-    from cassi.data.profile import preprocess
-    from cassi.data.synth import make_corpus
+    from cassi.data.corpus.disk import Corpus
+    from cassi.data.corpus.profile import preprocess
+    from cassi.data.synth.corpus import make_corpus
 
     root = make_corpus(tmp_path_factory.mktemp("corpus") / "c", subjects=["JW45"], seed=0)
     corpus = Corpus(root)
@@ -30,7 +30,7 @@ def synth(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def real_face(synth):
-    face_mod = importlib.import_module("cassi.data.face")
+    face_mod = importlib.import_module("cassi.data.face.model")
     _, profile = synth
     return face_mod.build_face(palate_mm=profile.palate_mm, head_measures=profile.head_measures)
 
@@ -38,7 +38,7 @@ def real_face(synth):
 def test_thesis_excerpt_first_valid_row(shared_dir):
     # Thesis Figure 3.9: JW45 task 13's first row with all eight pellets valid is at 27464 us.
     from _versions_toy import ToyFace, toy_profile, toy_vertices
-    from cassi.data.xrmb import read_txy
+    from cassi.data.xrmb.files import read_txy
 
     rec = read_txy(shared_dir / "reference" / "xrmb" / "JW45" / "JW45_013.TXY", subject="JW45")
     anim = get_version("cassi-1.0").animate(toy_profile(), ToyFace(toy_vertices()), rec)

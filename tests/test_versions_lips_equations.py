@@ -12,7 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 from cassi.versions import lips_constants as K
 from cassi.versions.lips_ellipse import (
     BRANCH_LABELS,

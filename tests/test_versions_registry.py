@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 from cassi.versions import registry as R
 from cassi.versions.protocol import Version
 

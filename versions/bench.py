@@ -24,8 +24,8 @@ _JW45_ROW = np.array([[15.757, 11.596], [12.175, -9.772], [-7.786, 5.158], [-27.
 
 
 def long_task(n_frames: int, *, seed: int = 0):
-    """A deterministic :class:`~cassi.data.xrmb.TaskRecording` of ``n_frames`` rows."""
-    from cassi.data.xrmb import NOMINAL_PERIOD_US, TaskRecording
+    """A deterministic :class:`~cassi.data.xrmb.files.TaskRecording` of ``n_frames`` rows."""
+    from cassi.data.xrmb.files import NOMINAL_PERIOD_US, TaskRecording
 
     rng = np.random.default_rng(seed)
     t = np.arange(n_frames, dtype=np.float64)
@@ -53,8 +53,8 @@ def bench_profile():
     """JW45's published profile (thesis Figures 4.16, 4.25), jaw length from Figure 3.9's row,
     and the synthetic corpus's JW45 pharynx outline (the thesis does not print a PHA.DAT; versions
     that place the tongue's back along it need one)."""
-    from cassi.data.profile import SubjectProfile
-    from cassi.data.synth_subjects import subject_figures
+    from cassi.data.corpus.profile import SubjectProfile
+    from cassi.data.synth.subjects import subject_figures
 
     d = float(np.hypot(*(_JW45_ROW[6] - _JW45_ROW[7])))
     return SubjectProfile(subject="JW45", jaw_length_mm=d, rest_ul=0.462957, rest_ll=0.355955,
@@ -64,8 +64,8 @@ def bench_profile():
 
 
 def bench_face():
-    """The neutral face model (``cassi.data.face.build_face()``)."""
-    from cassi.data.face import build_face
+    """The neutral face model (``cassi.data.face.model.build_face()``)."""
+    from cassi.data.face.model import build_face
 
     return build_face()
 

@@ -17,7 +17,7 @@ The version is four stages run in order (see :class:`~cassi.versions.protocol.St
    vertices follow their nearest centre vertex (the one beside the tip, the tip), the back stays
    anchored.
 
-The palate comes with the face (``cassi.data.face.build_face(palate_mm=...)``); Table 4.2's
+The palate comes with the face (``cassi.data.face.model.build_face(palate_mm=...)``); Table 4.2's
 disabled parameters are listed in :mod:`cassi.versions.constants` and refused by
 :func:`check_parameters`.
 """
@@ -27,8 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cassi.data import numbering as N
-from cassi.data.errors import CassiInputError
+from cassi.data.face import numbering as N
+from cassi.common.errors import CassiInputError
 from cassi.versions import constants as K
 from cassi.versions.jaw import apply_zones, solve_jaw_motion
 from cassi.versions.protocol import StagedVersion, Stage, TaskContext
@@ -71,7 +71,7 @@ def jaw_reference_vertices(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray
     """Parke (x, z) of the model's gnathion (point 1) and gonion (point 2).
 
     The thesis gives no vertex numbers for them; the face model names them
-    (``cassi.data.numbering.GNATHION``, ``GONION``).
+    (``cassi.data.face.numbering.GNATHION``, ``GONION``).
     """
     return _vertex_xz(vertices, N.GNATHION), _vertex_xz(vertices, N.GONION)
 

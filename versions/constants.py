@@ -10,10 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cassi.data import numbering as N
+from cassi.data.face import numbering as N
 
 # --- vertices the thesis associates with pellets (4.1.1, Figures 4.4-4.7) -------------------
-# The face model's numbering (cassi.data.numbering) is the one source of vertex numbers.
+# The face model's numbering (cassi.data.face.numbering) is the one source of vertex numbers.
 #: Bottom of the top front teeth: the XRMB origin is translated here (4.1.1 "Mapping").
 V_UPPER_INCISOR_TIP = N.UPPER_INCISOR_TIP          # 226
 #: The MANi pellet's vertex (4.1.1, Figure 4.7).

@@ -31,8 +31,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from cassi.data import numbering as N
-from cassi.data.errors import CassiInputError
+from cassi.data.face import numbering as N
+from cassi.common.errors import CassiInputError
 
 from . import lips_constants as K
 from .lips_ellipse import (
@@ -76,7 +76,7 @@ __all__ = [
 ]
 
 # --- vertex roles (thesis Figures 4.5 and 4.17) ----------------------------------------------
-# Local names for the face numbering's outlines (one source of truth: cassi.data.numbering).
+# Local names for the face numbering's outlines (one source of truth: cassi.data.face.numbering).
 V_UL, V_LL, V_CORNER, V_INNER_CORNER, V_MID_CORNER = N.UL, N.LL, N.CORNER, N.INNER_CORNER, N.CORNER_MIDDLE
 V_TEETH_TIP = N.TEETH_TIP
 OUTER_UPPER, OUTER_LOWER = N.UPPER_OUTER, N.LOWER_OUTER
@@ -114,7 +114,7 @@ class LipSubject:
 
 
 def lip_subject(profile, parke_jaw_distance: float, x_origin: float) -> LipSubject:
-    """Map a :class:`~cassi.data.profile.SubjectProfile`'s lip values into Parke space.
+    """Map a :class:`~cassi.data.corpus.profile.SubjectProfile`'s lip values into Parke space.
 
     maxprotru.txt and lipthick.txt hold values divided by the XRMB jaw length; "scaling them
     according to Parke's jaw distance and translating them to the top front tooth, vertex 226"

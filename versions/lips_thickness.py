@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 from . import lips_constants as K
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 from . import lips_constants as K
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 from cassi.versions import constants as K
 
 __all__ = ["XrmbToParke", "model_jaw_length"]

@@ -25,12 +25,12 @@ from typing import TYPE_CHECKING, Any, Iterator, Protocol, runtime_checkable
 import numpy as np
 import pandas as pd
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 if TYPE_CHECKING:  # only for annotations: the data layer owns these types
-    from cassi.data.face import FaceModel
-    from cassi.data.profile import SubjectProfile
-    from cassi.data.xrmb import TaskRecording
+    from cassi.data.face.model import FaceModel
+    from cassi.data.corpus.profile import SubjectProfile
+    from cassi.data.xrmb.files import TaskRecording
 
     from cassi.versions.mapping import XrmbToParke
 
@@ -45,7 +45,7 @@ __all__ = [
     "version_face",
 ]
 
-#: Column of each pellet in ``TaskRecording.xy_mm`` (order of ``cassi.data.xrmb.PELLETS``).
+#: Column of each pellet in ``TaskRecording.xy_mm`` (order of ``cassi.data.xrmb.files.PELLETS``).
 PELLET_INDEX = {"UL": 0, "LL": 1, "T1": 2, "T2": 3, "T3": 4, "T4": 5, "MNI": 6, "MNM": 7}
 
 
@@ -127,7 +127,7 @@ def version_face(version: Any, face: "FaceModel") -> "FaceModel":
     ----------
     version : Version
     face : FaceModel
-        The subject's face (``cassi.data.face.build_face``).
+        The subject's face (``cassi.data.face.model.build_face``).
 
     Returns
     -------
@@ -294,7 +294,7 @@ class StagedVersion:
         if xy_mm.ndim != 3 or xy_mm.shape[1:] != (8, 2):
             raise CassiInputError(f"pellets must be (F, 8, 2) mm, got {xy_mm.shape}",
                                   path=getattr(rec, "path", None))
-        from cassi.data import numbering
+        from cassi.data.face import numbering
 
         n_vertices = np.shape(face.vertices)[0]
         if n_vertices < numbering.CORNER_MIDDLE:

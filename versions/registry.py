@@ -18,7 +18,7 @@ import threading
 from importlib.metadata import entry_points
 from typing import Any, Generic, Iterator, TypeVar
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 __all__ = ["Registry", "VERSIONS", "get_version", "available_versions", "register_version"]
 

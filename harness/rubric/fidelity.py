@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cassi.data import numbering as N
-from cassi.data.errors import CassiInputError
+from cassi.data.face import numbering as N
+from cassi.common.errors import CassiInputError
 
 from .frames import Frames
 from .model import Measurement
@@ -28,7 +28,7 @@ __all__ = ["ARTICULATORS", "TRACT_VARIABLES", "FidelityContext", "virtual_pellet
            "tract_variables", "traces", "m_lips_error", "m_tongue_error", "m_jaw_error", "m_lip_aperture",
            "m_lip_aperture_range", "m_lip_protrusion", "m_jaw_opening", "m_jaw_opening_range"]
 
-#: Pellets in the order of ``cassi.data.xrmb.PELLETS``.
+#: Pellets in the order of ``cassi.data.xrmb.files.PELLETS``.
 PELLETS = ("UL", "LL", "T1", "T2", "T3", "T4", "MNI", "MNM")
 #: Which pellets make each articulator of Table F.
 ARTICULATORS = {"lips": ("UL", "LL"), "tongue": ("T1", "T2", "T3", "T4"), "jaw": ("MNI", "MNM")}

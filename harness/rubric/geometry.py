@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 __all__ = [
     "MouthParts", "mouth_parts", "mm_per_unit", "surface_hits", "front_triangles",
@@ -137,7 +137,7 @@ def _material_name(materials, mat) -> str | None:
             return m if isinstance(m, str) else getattr(m, "name", None)
         except (KeyError, IndexError, TypeError):
             pass
-    from cassi.data.face_build import MATERIAL_NAMES  # noqa: PLC0415 - the face's own names
+    from cassi.data.face.build import MATERIAL_NAMES  # noqa: PLC0415 - the face's own names
     return MATERIAL_NAMES.get(int(mat))
 
 
@@ -157,15 +157,15 @@ def _polys_by_material(face, wanted) -> np.ndarray:
 
 
 def mouth_parts(face) -> MouthParts:
-    """The :class:`MouthParts` of a :class:`cassi.data.face.FaceModel`.
+    """The :class:`MouthParts` of a :class:`cassi.data.face.model.FaceModel`.
 
-    Vertex numbers come from :mod:`cassi.data.numbering` (thesis Figures 3.7, 4.4-4.7, 4.17,
+    Vertex numbers come from :mod:`cassi.data.face.numbering` (thesis Figures 3.7, 4.4-4.7, 4.17,
     Table 3.2). Teeth, tongue and palate surfaces come from the face's polygons by material
     (the tongue's vertices: 288-299, then those its polygons add);
     teeth polygons using the lower teeth's vertices (255-286) are the lower set. The occlusal
     line ends are the tips of tooth quad 7 (the second molars) and of quad 0 (the incisors).
     """
-    from cassi.data import numbering as N  # noqa: PLC0415 - data layer, imported lazily
+    from cassi.data.face import numbering as N  # noqa: PLC0415 - data layer, imported lazily
 
     V = np.asarray(face.vertices).shape[0]
     teeth = _polys_by_material(face, {"teeth"})

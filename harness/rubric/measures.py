@@ -13,7 +13,7 @@ import functools
 import numpy as np
 import pandas as pd
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 from . import geometry as G
 from .frames import ArrayFrames, Frames

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 __all__ = ["RATINGS", "GOOD_RATINGS", "TABLES", "TABLE_TOPICS", "VERSION_ORDER", "rate",
            "table_title", "Measurement", "Check"]

@@ -24,7 +24,7 @@ import difflib
 
 import pandas as pd
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 from .model import Check
 

@@ -12,7 +12,7 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 import pandas as pd
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 from . import geometry as G
 from .frames import ArrayFrames, Frames
@@ -56,15 +56,15 @@ def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | N
     ----------
     anim : cassi.versions.protocol.Animation
         ``positions`` float32 (F, V, 3) Parke units, ``diagnostics``, ``frames``, ``version``.
-    face : cassi.data.face.FaceModel
+    face : cassi.data.face.model.FaceModel
         The face the version animated (its ``vertices`` are the rest shape).
-    profile : cassi.data.profile.SubjectProfile or None
+    profile : cassi.data.corpus.profile.SubjectProfile or None
         Gives the subject and the jaw length (mm per Parke unit).
     task : int
         Task number (118 and 106 add Tables D and E).
     parts, mm_per_unit, neutral : optional
         Overrides (tests); by default from the face, the profile and ``build_face()``.
-    recording : cassi.data.xrmb.TaskRecording, optional
+    recording : cassi.data.xrmb.files.TaskRecording, optional
         The recording the version animated: its pellets are what Table F compares the face
         with (needs ``face`` and the profile's jaw length for the 4.1.1 mapping). Without it
         Table F is not measured.
@@ -87,7 +87,7 @@ def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | N
         jaw = getattr(profile, "jaw_length_mm", None) if profile is not None else None
         mm_per_unit = G.mm_per_unit(rest if rest is not None else pos.frame(0), jaw)
     if neutral is None and face is not None:
-        from cassi.data.face import build_face  # noqa: PLC0415 - Table B's reference only
+        from cassi.data.face.model import build_face  # noqa: PLC0415 - Table B's reference only
 
         neutral = build_face().vertices
     ctx = GeometryContext(pos, parts, rest=rest, mm_per_unit=mm_per_unit,

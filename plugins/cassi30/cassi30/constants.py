@@ -88,7 +88,7 @@ PROTRUSION_RAMP_MM = 8.0
 #: T1 already past the teeth (the data and the teeth disagree) does not fling the tongue out,
 #: nor pull it in at once: 400 mm/s, above the peak tongue-tip speeds of speech (150-250 mm/s;
 #: McClean 2000, JSLHR 43:205; Westbury, Lindstrom & McClean 2002, JSLHR 45:651; the same
-#: figures calibrate the synthetic corpus, cassi.data.synth_motion), so a real tongue's own
+#: figures calibrate the synthetic corpus, cassi.data.synth.motion), so a real tongue's own
 #: motion is never slowed; only the jumps that come from the teeth are.
 TONGUE_SPEED_MM_S = 400.0
 #: The first part of the tongue's way out (subject mm, at TONGUE_SPEED_MM_S) turns its front

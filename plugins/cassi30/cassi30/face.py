@@ -12,9 +12,9 @@ import dataclasses
 
 import numpy as np
 
-from cassi.data import numbering as N
-from cassi.data.face import FaceModel
-from cassi.data.parke_io import Polygon
+from cassi.data.face import numbering as N
+from cassi.data.face.model import FaceModel
+from cassi.data.xrmb.parke_io import Polygon
 
 from cassi30 import constants as K
 from cassi30.shape import (BACK_STATION, PELLET_STATIONS, STATIONS, arch_half_width,

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from cassi.data import numbering as N
-from cassi.data.errors import CassiInputError
-from cassi.data.face import FaceModel
+from cassi.data.face import numbering as N
+from cassi.common.errors import CassiInputError
+from cassi.data.face.model import FaceModel
 from cassi.versions import constants as cassi10_constants
 from cassi.versions.cassi10 import NoseClearanceStage, parameters_frame, place_tongue_tip
 from cassi.versions.cassi21 import Cassi21

@@ -1,13 +1,13 @@
 """The Parke-compatible face model: :class:`FaceModel` and :func:`build_face`.
 
 Conventions (thesis 3.1.1): X forward, Y to the face's left, Z up, Parke units
-(:data:`cassi.data.numbering.MM_PER_UNIT` mm each). ``vertices[i]`` is vertex ``i + 1``. The
+(:data:`cassi.data.face.numbering.MM_PER_UNIT` mm each). ``vertices[i]`` is vertex ``i + 1``. The
 polygons describe the LEFT half (plus both eyes, which Parke does not mirror); the right half is
-the mirror y -> -y (see :mod:`cassi.data.topology`). Numbering: :mod:`cassi.data.numbering`.
+the mirror y -> -y (see :mod:`cassi.data.face.topology`). Numbering: :mod:`cassi.data.face.numbering`.
 
 Files: ``st1.pts`` (base vertices: eyelids open), ``st2.pts`` (the second extremes used by
 interpolation: eyelids closed) and ``stt.top`` (polygons), in Parke's formats
-(:mod:`cassi.data.parke_io`). Parke's own files load unchanged with :meth:`FaceModel.read`.
+(:mod:`cassi.data.xrmb.parke_io`). Parke's own files load unchanged with :meth:`FaceModel.read`.
 """
 from __future__ import annotations
 
@@ -17,14 +17,14 @@ from pathlib import Path
 
 import numpy as np
 
-from cassi.data import numbering as N
-from cassi.data.errors import CassiInputError
-from cassi.data.face_build import (EYE_CENTRE, EYEBALL_RADIUS, MATERIAL_NAMES,
+from cassi.data.face import numbering as N
+from cassi.common.errors import CassiInputError
+from cassi.data.face.build import (EYE_CENTRE, EYEBALL_RADIUS, MATERIAL_NAMES,
                                    PARKE_MATERIAL_NAMES, UNMIRRORED_MATERIALS, build_layout,
                                    xrmb_to_parke_xz)
-from cassi.data.parke_io import (Polygon, PtsFile, TopFile, read_pts, read_top, write_pts,
+from cassi.data.xrmb.parke_io import (Polygon, PtsFile, TopFile, read_pts, read_top, write_pts,
                                  write_top)
-from cassi.data.topology import RenderTopology, render_topology  # noqa: F401  (re-export)
+from cassi.data.face.topology import RenderTopology, render_topology  # noqa: F401  (re-export)
 
 __all__ = ["FaceModel", "Material", "build_face", "parke_parameters", "RenderTopology",
            "render_topology", "default_gaze_target"]
@@ -33,8 +33,8 @@ __all__ = ["FaceModel", "Material", "build_face", "parke_parameters", "RenderTop
 def parke_parameters(face: "FaceModel", values: dict[int, float] | None = None, *,
                      clamp: bool = False, gaze_target=None) -> "FaceModel":
     """``face`` with Parke's parameters (thesis Table 3.1 numbers -> values) applied; see
-    :func:`cassi.data.face_params.apply_parameters`."""
-    from cassi.data.face_params import apply_parameters
+    :func:`cassi.data.face.params.apply_parameters`."""
+    from cassi.data.face.params import apply_parameters
     return apply_parameters(face, values or {}, clamp=clamp, gaze_target=gaze_target)
 
 
@@ -42,7 +42,7 @@ def parke_parameters(face: "FaceModel", values: dict[int, float] | None = None, 
 class Material:
     """A material number's meaning: ``name`` is the render part (skin, lips, ...; the ``teeth``
     material renders as two parts, ``teeth_upper`` and ``teeth_lower``, see
-    :mod:`cassi.data.topology`), ``parke_name`` Parke's word for it where he had one."""
+    :mod:`cassi.data.face.topology`), ``parke_name`` Parke's word for it where he had one."""
 
     number: int
     name: str
@@ -149,7 +149,7 @@ class FaceModel:
         parameters act on, the eyes); :meth:`read` picks it up when it sits beside stt.top."""
         import json
 
-        from cassi.data.atomic import atomic_write_text
+        from cassi.common.atomic import atomic_write_text
 
         d = Path(directory)
         d.mkdir(parents=True, exist_ok=True)
@@ -198,7 +198,7 @@ class FaceModel:
             else None
         centres = np.zeros((0, 3))
         if eyes_first is not None:
-            from cassi.data.eyes import VERTS_PER_EYE, WHITE_RINGS_DEG, SIDES
+            from cassi.data.face.eyes import VERTS_PER_EYE, WHITE_RINGS_DEG, SIDES
             back = 1 + SIDES * (3 + len(WHITE_RINGS_DEG))
             cs = []
             for k in range(2):
@@ -236,7 +236,7 @@ def _read_sidecar(path: Path, count: int, eyes_first, centres):
 
 
 def _verts_per_eye() -> int:
-    from cassi.data.eyes import VERTS_PER_EYE
+    from cassi.data.face.eyes import VERTS_PER_EYE
     return VERTS_PER_EYE
 
 
@@ -261,7 +261,7 @@ def build_face(*, palate_mm: np.ndarray | None = None, head_measures=None,
         geometry does not use it.
     jaw_length_mm : float, optional
         The subject's jaw length d (MNI-MNM, mm) for the palate's scale p / d; default the
-        model's own scale (:data:`cassi.data.numbering.UNITS_PER_MM`).
+        model's own scale (:data:`cassi.data.face.numbering.UNITS_PER_MM`).
     parameters : dict[int, float], optional
         Parke parameters (Table 3.1 numbers) overriding the start values.
     clamp : bool
@@ -272,7 +272,7 @@ def build_face(*, palate_mm: np.ndarray | None = None, head_measures=None,
     FaceModel
         ``vertices`` float64 (V, 3) with V = 360 + two eyeballs.
     """
-    from cassi.data.face_params import apply_parameters  # late: face_params imports face
+    from cassi.data.face.params import apply_parameters  # late: face_params imports face
 
     scale = None
     if palate_mm is not None:
@@ -312,7 +312,7 @@ def _base_face(palate_xz) -> FaceModel:
     key = None if palate_xz is None else np.asarray(palate_xz).tobytes()
     if key in _BASE_CACHE:
         return _BASE_CACHE[key]
-    from cassi.data.eyes import VERTS_PER_EYE, EyeParams, eyeball_polygons, place_eye
+    from cassi.data.face.eyes import VERTS_PER_EYE, EyeParams, eyeball_polygons, place_eye
 
     lay = build_layout(palate_xz=palate_xz)
     numbers = assign_numbers(lay)
@@ -390,7 +390,7 @@ def assign_numbers(lay) -> dict[str, int]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m cassi.data.face OUT_DIR [--palate PAL.DAT] [--jaw-length MM] [--preview PNG]``
+    """``python -m cassi.data.face.model OUT_DIR [--palate PAL.DAT] [--jaw-length MM] [--preview PNG]``
 
     Generate the face and write its ``st1.pts``, ``st2.pts`` and ``stt.top`` into OUT_DIR
     (optionally with a subject's palate and a wireframe preview).
@@ -398,7 +398,7 @@ def main(argv: list[str] | None = None) -> int:
     import argparse
     import sys
 
-    ap = argparse.ArgumentParser(prog="python -m cassi.data.face",
+    ap = argparse.ArgumentParser(prog="python -m cassi.data.face.model",
                                  description="write the generated face in Parke's formats")
     ap.add_argument("out_dir", help="folder for st1.pts, st2.pts and stt.top")
     ap.add_argument("--palate", help="a subject's PAL.DAT (XRMB micrometres)")
@@ -408,12 +408,12 @@ def main(argv: list[str] | None = None) -> int:
     try:
         palate = None
         if args.palate:
-            from cassi.data.xrmb import read_pal
+            from cassi.data.xrmb.files import read_pal
             palate = read_pal(args.palate)
         face = build_face(palate_mm=palate, jaw_length_mm=args.jaw_length)
         paths = face.write(args.out_dir)
         if args.preview:
-            from cassi.data.preview import preview_png
+            from cassi.data.face.preview import preview_png
             preview_png(face, args.preview)
     except CassiInputError as exc:
         print(f"error: {exc}", file=sys.stderr)

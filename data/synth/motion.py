@@ -67,7 +67,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import lfilter
 
-from cassi.data.synth_subjects import SubjectFigures, palate_y
+from cassi.data.synth.subjects import SubjectFigures, palate_y
 
 CHANNELS = ("jaw", "ulp", "ull", "llp", "llr", "tipx", "tipy", "bodx", "body")
 _IDX = {c: i for i, c in enumerate(CHANNELS)}
@@ -81,7 +81,7 @@ STAGE_FACTOR = 4.94 / 3.36
 #: so a gesture is half-way at its segment's start.
 ANTICIPATION = 3.67 / STAGE_FACTOR
 #: Calibration targets of the generated corpus: (figure, pellet or None, tasks, low, high). The
-#: figures are those of :mod:`cassi.data.stats`; see the module docstring for the sources.
+#: figures are those of :mod:`cassi.data.corpus.stats`; see the module docstring for the sources.
 KINEMATIC_TARGETS: tuple[tuple, ...] = (
     ("y_range", "MNI", (105,), 15.0, 25.0),
     ("speed_p99", "MNI", (105,), 150.0, 250.0),
@@ -265,7 +265,7 @@ def segment_targets(anat: Anatomy, segs: list[tuple[float, float, dict]],
     """Channel targets per segment.
 
     ``jaw_gain`` scales the phones' jaw angles (the task type's speaking style, see
-    :data:`cassi.data.synth_program.JAW_GAIN`).
+    :data:`cassi.data.synth.program.JAW_GAIN`).
 
     Returns
     -------

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cassi.data import numbering as N
+from cassi.data.face import numbering as N
 
 #: Render parts, in a fixed order (materials map to these names). ``teeth_upper`` takes the
 #: place the single ``teeth`` part had and ``teeth_lower`` comes last, so that every other part
@@ -132,7 +132,7 @@ def _teeth_part(vertex_numbers) -> str:
 
 
 def render_topology(face, *, half: bool = False) -> RenderTopology:
-    """Build the render topology of a :class:`cassi.data.face.FaceModel`.
+    """Build the render topology of a :class:`cassi.data.face.model.FaceModel`.
 
     Parameters
     ----------

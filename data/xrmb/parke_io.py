@@ -26,8 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cassi.data.atomic import atomic_write_text
-from cassi.data.errors import CassiInputError
+from cassi.common.atomic import atomic_write_text
+from cassi.common.errors import CassiInputError
 
 
 @dataclass(frozen=True)

@@ -23,9 +23,9 @@ import os
 import re
 from dataclasses import dataclass
 
-from cassi.data.atomic import atomic_write_text
-from cassi.data.errors import CassiInputError
-from cassi.data.textlines import INT_RE, decode_ascii, numbered_rows, read_bytes
+from cassi.common.atomic import atomic_write_text
+from cassi.common.errors import CassiInputError
+from cassi.data.xrmb.textlines import INT_RE, decode_ascii, numbered_rows, read_bytes
 
 #: Mis.dat pellet code -> task-file pellet name (None: a reference pellet, not in the .txy files).
 MISTRACK_PELLET_CODES: dict[str, str | None] = {

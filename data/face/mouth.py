@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from cassi.data import numbering as N
-from cassi.data.face_layout import PALATE, TEETH, TONGUE, Layout
+from cassi.data.face import numbering as N
+from cassi.data.face.layout import PALATE, TEETH, TONGUE, Layout
 
 
 #: Dental arches: tooth widths along the arch (mm) for Parke's 8 quads per quadrant. The first
@@ -180,7 +180,7 @@ def _palate(lay: Layout, palate_xz):
 
 def xrmb_to_parke_xz(xy_mm: np.ndarray, scale: float | None = None) -> np.ndarray:
     """XRMB midsagittal (x, y) mm -> Parke (x, z): origin at vertex 226, ``scale`` units/mm
-    (default :data:`cassi.data.numbering.UNITS_PER_MM`)."""
+    (default :data:`cassi.data.face.numbering.UNITS_PER_MM`)."""
     s = N.UNITS_PER_MM if scale is None else float(scale)
     xy = np.asarray(xy_mm, float)
     return np.stack([UPPER_TIP[0] + s * xy[:, 0], UPPER_TIP[2] + s * xy[:, 1]], axis=1)

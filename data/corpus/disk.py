@@ -4,7 +4,7 @@ Layout::
 
     CORPUS/
       corpus.json            optional metadata; generated corpora say {"synthetic": true, ...}
-      Headmeasures.txt       optional, all subjects (format: cassi.data.headmeasures)
+      Headmeasures.txt       optional, all subjects (format: cassi.data.xrmb.headmeasures)
       JW12/
         tp001.txy ... tp118.txy, tp015_2.txy    task files (any case; JW12_001.TXY also read)
         PAL.DAT  PHA.DAT  Mis.dat               subject files (any case)
@@ -13,7 +13,7 @@ Layout::
 
 Every path the corpus opens is checked to stay inside the corpus directory (a symlink or a name
 that leads outside is an error), and every problem met is either raised as
-:class:`~cassi.data.errors.CassiInputError` or recorded in ``problems``/``warnings``.
+:class:`~cassi.common.errors.CassiInputError` or recorded in ``problems``/``warnings``.
 """
 from __future__ import annotations
 
@@ -27,12 +27,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from cassi.data.alignment import Alignment, read_alignment  # noqa: F401 (re-exported)
-from cassi.data.errors import CassiInputError
-from cassi.data.headmeasures import HEAD_MEASURES_FILE, HeadMeasures, read_head_measures
-from cassi.data.mis import MistrackEntry, read_mis
-from cassi.data.textlines import read_bytes
-from cassi.data.xrmb import PELLETS, TaskRecording, parse_task_name, read_pha, read_pal, read_txy
+from cassi.data.xrmb.alignment import Alignment, read_alignment  # noqa: F401 (re-exported)
+from cassi.common.errors import CassiInputError
+from cassi.data.xrmb.headmeasures import HEAD_MEASURES_FILE, HeadMeasures, read_head_measures
+from cassi.data.xrmb.mis import MistrackEntry, read_mis
+from cassi.data.xrmb.textlines import read_bytes
+from cassi.data.xrmb.files import PELLETS, TaskRecording, parse_task_name, read_pha, read_pal, read_txy
 
 METADATA_FILE = "corpus.json"
 SUBJECT_FILES = {"pal": "PAL.DAT", "pha": "PHA.DAT", "mis": "Mis.dat"}
@@ -216,7 +216,7 @@ class SubjectData:
 
     # ------------------------------------------------------------------ tasks
     def load(self, task: int, rep: int = 1, *, require_valid: bool = True) -> TaskRecording:
-        """Read one task file (see :func:`cassi.data.xrmb.read_txy`)."""
+        """Read one task file (see :func:`cassi.data.xrmb.files.read_txy`)."""
         return read_txy(self.task_path(task, rep), subject=self.name, task=task, rep=rep,
                         require_valid=require_valid)
 

@@ -12,7 +12,7 @@ import re
 from pathlib import Path
 from typing import Iterator
 
-from cassi.data.errors import CassiInputError
+from cassi.common.errors import CassiInputError
 
 #: A field separator: spaces, tabs, form feed, vertical tab. (Not ``str.split()``, which also
 #: splits on ``\x1c``..``\x1f`` and Unicode spaces.)

@@ -19,8 +19,8 @@ Outline files (thesis Figure 3.11)
 ``PAL.DAT`` (palate, front to back) and ``PHA.DAT`` (pharynx): one ``x y`` pair per line in
 micrometres; returned as float64 ``(P, 2)`` millimetres.
 
-Mis.dat and the head-measures file live in :mod:`cassi.data.mis` and
-:mod:`cassi.data.headmeasures` and are re-exported here.
+Mis.dat and the head-measures file live in :mod:`cassi.data.xrmb.mis` and
+:mod:`cassi.data.xrmb.headmeasures` and are re-exported here.
 """
 from __future__ import annotations
 
@@ -31,14 +31,14 @@ from pathlib import Path
 
 import numpy as np
 
-from cassi.data.atomic import atomic_write_text
-from cassi.data.errors import CassiInputError
-from cassi.data.headmeasures import (  # noqa: F401  (re-exported: contract names them here)
+from cassi.common.atomic import atomic_write_text
+from cassi.common.errors import CassiInputError
+from cassi.data.xrmb.headmeasures import (  # noqa: F401  (re-exported: contract names them here)
     HeadMeasures, parse_head_measures, read_head_measures, write_head_measures,
     format_head_measures)
-from cassi.data.mis import (  # noqa: F401
+from cassi.data.xrmb.mis import (  # noqa: F401
     MISTRACK_PELLET_CODES, MistrackEntry, format_mis, parse_mis, read_mis, write_mis)
-from cassi.data.textlines import (decode_ascii, numbered_rows, parse_int, parse_num, read_bytes,
+from cassi.data.xrmb.textlines import (decode_ascii, numbered_rows, parse_int, parse_num, read_bytes,
                                   split_lines, tokens)
 
 __all__ = [

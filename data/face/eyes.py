@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cassi.data.face_build import (EYE_WHITE, FRINGE, IRIS, PUPIL, REFLECTION,
+from cassi.data.face.build import (EYE_WHITE, FRINGE, IRIS, PUPIL, REFLECTION,
                                    eyelid_ring_2d, project_to_sphere)
 
 #: Sides of the pupil polygon and of every ring (dissertation 3.1.1).
@@ -186,7 +186,7 @@ def eyelid_positions(opening: float, centre, *, lid_radius: float = 80.0,
     Returns a dict ring -> float (8, 3) in face coordinates (left eye).
     """
     o = float(np.clip(opening, 0.0, 1.0))
-    from cassi.data.face_build import LID_LIP_GAP
+    from cassi.data.face.build import LID_LIP_GAP
     radii = {"A": lid_radius + 6.0, "B": lid_radius, "C": eyeball_radius + LID_LIP_GAP}
     return {r: project_to_sphere(eyelid_ring_2d(o, r, y_scale=y_scale, z_scale=z_scale),
                                  centre, rad) for r, rad in radii.items()}

@@ -1,11 +1,11 @@
 """The embedded default corpus: a synthetic, deterministic XRMB-like corpus.
 
 No real XRMB data can ship with cassi-farm, so it makes its own: the thesis's 15 subjects
-(:mod:`cassi.data.synth_subjects`), each performing tasks 1-118 of the XRMB protocol
-(:mod:`cassi.data.synth_tasks`), with pellet trajectories from per-phone articulatory targets
-(:mod:`cassi.data.synth_motion`, :mod:`cassi.data.synth_program`) and the artifacts of real
+(:mod:`cassi.data.synth.subjects`), each performing tasks 1-118 of the XRMB protocol
+(:mod:`cassi.data.synth.tasks`), with pellet trajectories from per-phone articulatory targets
+(:mod:`cassi.data.synth.motion`, :mod:`cassi.data.synth.program`) and the artifacts of real
 recordings (leading bad rows, logged mistracking, unlogged lost pellets). Everything is written
-with the XRMB writers of :mod:`cassi.data.xrmb`, so the corpus reads like a real one; its
+with the XRMB writers of :mod:`cassi.data.xrmb.files`, so the corpus reads like a real one; its
 ``corpus.json`` says ``"synthetic": true``. Results on it describe the software, not real
 speakers.
 
@@ -30,15 +30,15 @@ from pathlib import Path
 
 import numpy as np
 
-from cassi.data.atomic import atomic_tmp_path, atomic_write_text
-from cassi.data.errors import CassiInputError
-from cassi.data.synth_motion import PERIOD_S, Anatomy, add_noise, expand_phones, pellets, \
+from cassi.common.atomic import atomic_tmp_path, atomic_write_text
+from cassi.common.errors import CassiInputError
+from cassi.data.synth.motion import PERIOD_S, Anatomy, add_noise, expand_phones, pellets, \
     segment_targets, smooth
-from cassi.data.synth_program import jaw_gain, motor_segments, n_frames, spoken_phones, \
+from cassi.data.synth.program import jaw_gain, motor_segments, n_frames, spoken_phones, \
     textgrid_phones
-from cassi.data.synth_subjects import SUBJECTS, SubjectFigures
-from cassi.data.synth_tasks import TASKS
-from cassi.data.xrmb import (NOMINAL_PERIOD_US, PELLETS, HeadMeasures, MistrackEntry,
+from cassi.data.synth.subjects import SUBJECTS, SubjectFigures
+from cassi.data.synth.tasks import TASKS
+from cassi.data.xrmb.files import (NOMINAL_PERIOD_US, PELLETS, HeadMeasures, MistrackEntry,
                              TaskRecording, format_txy, write_head_measures, write_mis, write_pal,
                              write_pha)
 
@@ -359,9 +359,9 @@ def _alignment_for(alignments: Path | None, name: str, task: int, rep: int) -> P
 
 
 def _write_task(path: Path, rec: TaskRecording) -> None:
-    """:func:`cassi.data.xrmb.format_txy` text, written to a temporary sibling and renamed.
+    """:func:`cassi.data.xrmb.files.format_txy` text, written to a temporary sibling and renamed.
 
-    Like :func:`cassi.data.xrmb.write_txy` minus the per-file fsync (about a fifth of the
+    Like :func:`cassi.data.xrmb.files.write_txy` minus the per-file fsync (about a fifth of the
     generation time): the corpus is complete, and durable, once ``corpus.json`` is written
     (fsynced) last; :func:`default_corpus` builds in a temporary directory renamed at the end.
     """
@@ -510,7 +510,7 @@ def make_corpus(out_dir: str | os.PathLike, *, subjects=None, seed: int = DEFAUL
                         gnathion_mm=np.array(SUBJECTS[n].gnathion_mm)) for n in names})
     meta = {
         "synthetic": True,
-        "generator": "cassi.data.synth",
+        "generator": "cassi.data.synth.corpus",
         "generator_version": GENERATOR_VERSION,
         "seed": int(seed),
         "subjects": names,

@@ -34,12 +34,12 @@ from typing import NamedTuple
 import numpy as np
 import pandas as pd
 
-from cassi.data.atomic import atomic_write_text
-from cassi.data.corpus import SUBJECT_FILES, Corpus, SubjectData, natural_key
-from cassi.data.errors import CassiInputError
-from cassi.data.headmeasures import HeadMeasures
-from cassi.data.textlines import decode_ascii, numbered_rows, parse_num, read_bytes
-from cassi.data.xrmb import PELLETS, TaskRecording
+from cassi.common.atomic import atomic_write_text
+from cassi.data.corpus.disk import SUBJECT_FILES, Corpus, SubjectData, natural_key
+from cassi.common.errors import CassiInputError
+from cassi.data.xrmb.headmeasures import HeadMeasures
+from cassi.data.xrmb.textlines import decode_ascii, numbered_rows, parse_num, read_bytes
+from cassi.data.xrmb.files import PELLETS, TaskRecording
 
 log = logging.getLogger(__name__)
 

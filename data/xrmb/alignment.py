@@ -12,8 +12,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from cassi.data.errors import CassiInputError
-from cassi.data.textlines import read_bytes
+from cassi.common.errors import CassiInputError
+from cassi.data.xrmb.textlines import read_bytes
 
 PHONE_TIERS = ("phone", "phones")
 WORD_TIERS = ("word", "words")

@@ -1,7 +1,7 @@
 """What happens when in a synthetic task: timed segments for the trajectory model.
 
 Spoken tasks (1-105) are timed from the protocol's summary statistics
-(:mod:`cassi.data.synth_tasks`): median phone durations scaled to the task's typical speech span,
+(:mod:`cassi.data.synth.tasks`): median phone durations scaled to the task's typical speech span,
 with per-phone jitter and pauses between words as often and as long as in the real recordings; or,
 when a Praat TextGrid of the task is given, exactly from its phone tier. Oral-motor tasks
 (106-118) are programmes of held postures (:func:`motor_segments`).
@@ -13,14 +13,14 @@ from pathlib import Path
 
 import numpy as np
 
-from cassi.data.errors import CassiInputError
-from cassi.data.synth_motion import REST_SPEC, Anatomy, expand_phones
-from cassi.data.synth_tasks import PHONE_DURATION_S, TaskSpec, word_phones
+from cassi.common.errors import CassiInputError
+from cassi.data.synth.motion import REST_SPEC, Anatomy, expand_phones
+from cassi.data.synth.tasks import PHONE_DURATION_S, TaskSpec, word_phones
 
 Segment = tuple[float, float, dict]
 
 #: Jaw opening per task type, as a gain on the phones' jaw angles (oral-motor programmes set their
-#: own). Calibrated to KINEMATIC_TARGETS of :mod:`cassi.data.synth_motion`: in syllable
+#: own). Calibrated to KINEMATIC_TARGETS of :mod:`cassi.data.synth.motion`: in syllable
 #: repetitions the jaw (MNI) opens 15-25 mm at 150-250 mm/s; connected speech opens it less.
 JAW_GAIN: dict[str, float] = {"speech": 1.4, "syllable repetition": 2.0}
 

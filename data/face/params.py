@@ -13,8 +13,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from cassi.data import numbering as N
-from cassi.data.errors import CassiInputError
+from cassi.data.face import numbering as N
+from cassi.common.errors import CassiInputError
 
 
 @dataclass(frozen=True)
@@ -187,8 +187,8 @@ def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
 
     Regions that a model lacks (Parke's own files carry no region names) are left alone.
     """
-    from cassi.data import eyes as E
-    from cassi.data.face_build import EYE_CENTRE
+    from cassi.data.face import eyes as E
+    from cassi.data.face.build import EYE_CENTRE
 
     vals = check_parameters(values, clamp=clamp)
     st1 = face.st1
@@ -315,7 +315,7 @@ def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
                           vals[30] - start[30] + vals[40]])
         params = E.EyeParams(pupil_fraction=vals[41], fringe_fraction=vals[42],
                              iris_fraction=vals[43], radius=vals[44])
-        from cassi.data.face import default_gaze_target
+        from cassi.data.face.model import default_gaze_target
         target = default_gaze_target() if gaze_target is None else np.asarray(gaze_target, float)
         for k in range(2):
             c = centres[k] + shift * np.array([1.0, 1.0 if k == 0 else -1.0, 1.0])

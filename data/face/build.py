@@ -14,21 +14,21 @@ Everything here is deterministic: the same call gives the same numbers, so the t
 fixed for every subject (only the palate's vertex positions depend on PAL.DAT).
 
 Polygons are emitted in Parke's order, which (Figure 3.3's ``1 1 6 7 2`` with Figure 3.2's
-vertices) runs clockwise seen from outside; :mod:`cassi.data.topology` flips them for rendering.
+vertices) runs clockwise seen from outside; :mod:`cassi.data.face.topology` flips them for rendering.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from cassi.data import numbering as N
-from cassi.data.face_layout import (  # noqa: F401  (re-exported for the face and the tests)
+from cassi.data.face import numbering as N
+from cassi.data.face.layout import (  # noqa: F401  (re-exported for the face and the tests)
     EYEBROW, EYE_WHITE, EYELASH, FRINGE, IRIS, LIPS, MATERIAL_NAMES, PALATE, PARKE_MATERIAL_NAMES,
     PUPIL, REFLECTION, SKIN, TEETH, TONGUE, UNMIRRORED_MATERIALS, Layout, _smooth, _row_angles,
     _stitch, _surface_row)
-from cassi.data.face_mouth import (  # noqa: F401
+from cassi.data.face.mouth import (  # noqa: F401
     DEFAULT_PALATE_MM, LOWER_TIP, UPPER_TIP, _palate, _teeth, _tongue, arch_points,
     palate_surface, resample_outline, xrmb_to_parke_xz)
-from cassi.data.face_surface import (  # noqa: F401
+from cassi.data.face.surface import (  # noqa: F401
     CENTRE, EYE_CENTRE, PROFILE, _eye_angles, angles_of, surface_at_z, surface_point,
     surface_radius)
 

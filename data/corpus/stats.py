@@ -38,8 +38,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from cassi.data.errors import CassiInputError
-from cassi.data.xrmb import PELLETS, TaskRecording
+from cassi.common.errors import CassiInputError
+from cassi.data.xrmb.files import PELLETS, TaskRecording
 
 __all__ = ["PELLET_COLUMNS", "SCALARS", "KinematicStats", "compare", "corpus_stats",
            "recording_stats", "summarise"]
@@ -77,7 +77,7 @@ class KinematicStats:
     Attributes
     ----------
     pellets : DataFrame
-        Index :data:`~cassi.data.xrmb.PELLETS`, columns :data:`PELLET_COLUMNS` (NaN where a
+        Index :data:`~cassi.data.xrmb.files.PELLETS`, columns :data:`PELLET_COLUMNS` (NaN where a
         pellet has too few valid rows).
     scalars : dict
         :data:`SCALARS` -> float (NaN when undefined).
@@ -176,7 +176,7 @@ def summarise(time_us, xy_mm, valid=None, *, label: str = "") -> KinematicStats:
     Parameters
     ----------
     time_us : (F,) sample times, microseconds, strictly increasing.
-    xy_mm : (F, 8, 2) pellets in :data:`~cassi.data.xrmb.PELLETS` order, mm.
+    xy_mm : (F, 8, 2) pellets in :data:`~cassi.data.xrmb.files.PELLETS` order, mm.
     valid : bool (F, 8), optional; default: where ``xy_mm`` is finite.
     label : what the arrays are (names the source in errors and tables).
 
@@ -200,7 +200,7 @@ def summarise(time_us, xy_mm, valid=None, *, label: str = "") -> KinematicStats:
 
 
 def recording_stats(recs, *, label: str = "") -> KinematicStats:
-    """Statistics pooled over :class:`~cassi.data.xrmb.TaskRecording` objects.
+    """Statistics pooled over :class:`~cassi.data.xrmb.files.TaskRecording` objects.
 
     Raises CassiInputError when there is no recording or one has no valid row.
     """
@@ -219,8 +219,8 @@ def _selected(path: Path, tasks: set[int] | None):
     Mis.dat (logged mistracking would be measured as movement); pellets lost without a log are
     masked row by row. ``tasks`` restricts the task numbers.
     """
-    from cassi.data.corpus import Corpus
-    from cassi.data.xrmb import read_txy
+    from cassi.data.corpus.disk import Corpus
+    from cassi.data.xrmb.files import read_txy
 
     if not path.exists():
         raise CassiInputError("not found", path=path)

@@ -3,7 +3,7 @@
 ``preview_png(face, path)`` draws the mirrored head from the front, the side, three-quarters and
 the half-face cut, flat-shaded with the polygon edges on top, plus the mouth parts (teeth,
 tongue, palate) from the side and from below. Faces seen from behind are drawn dark (a wrong
-winding stands out), except in the half view, which looks into the head and is two-sided. ``python -m cassi.data.preview OUT.png`` writes the neutral face.
+winding stands out), except in the half view, which looks into the head and is two-sided. ``python -m cassi.data.face.preview OUT.png`` writes the neutral face.
 """
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from os import PathLike
 
 import numpy as np
 
-from cassi.data.atomic import atomic_tmp_path
+from cassi.common.atomic import atomic_tmp_path
 
 _COLOURS = {
     "skin": (0.86, 0.68, 0.58), "lips": (0.75, 0.35, 0.35), "eyelash": (0.15, 0.1, 0.1),
@@ -23,7 +23,7 @@ _COLOURS = {
     "fringe": (0.1, 0.15, 0.2), "pupil": (0.02, 0.02, 0.02), "reflection": (1.0, 1.0, 1.0),
 }
 
-#: The render parts of the teeth (cassi.data.topology splits the face's teeth in two).
+#: The render parts of the teeth (cassi.data.face.topology splits the face's teeth in two).
 _TEETH = ("teeth_upper", "teeth_lower")
 
 #: name -> (elevation, azimuth) for matplotlib's view_init, Parke axes (X forward, Z up).
@@ -78,7 +78,7 @@ def preview_png(face, path: str | PathLike, *, positions=None, dpi: int = 110,
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from cassi.data.topology import render_topology
+    from cassi.data.face.topology import render_topology
 
     pos = face.vertices if positions is None else np.asarray(positions)
     full = render_topology(face)
@@ -107,7 +107,7 @@ def preview_png(face, path: str | PathLike, *, positions=None, dpi: int = 110,
 
 
 def main(argv=None) -> int:
-    from cassi.data.face import build_face
+    from cassi.data.face.model import build_face
 
     argv = sys.argv[1:] if argv is None else argv
     out = argv[0] if argv else "face_preview.png"

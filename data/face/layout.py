@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cassi.data.face_surface import surface_point
+from cassi.data.face.surface import surface_point
 
 #: Materials (Parke's 1-4 and this project's additions); values are render part names.
 MATERIAL_NAMES: dict[int, str] = {

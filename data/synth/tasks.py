@@ -700,7 +700,7 @@ class TaskSpec:
     pause_s : float
         Median pause length, s.
     motor : str or None
-        Oral-motor programme name understood by :mod:`cassi.data.synth_motion`.
+        Oral-motor programme name understood by :mod:`cassi.data.synth.motion`.
     assumed : bool
         True when the task's content is this generator's assumption, not a documented fact.
     """

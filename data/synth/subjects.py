@@ -36,7 +36,7 @@ Sources of the columns
     behind the incisors, 73-84 mm behind the gnathion (Go-Gn 76-88 mm).
   * Checks against the rest of the table (tests/test_synth_model.py): MNI 32-37 mm and MNM
     20-25 mm above the mandibular plane (teeth on the body of the jaw); the gonion 33-42 mm
-    below the jaw's centre of rotation (``condyle_mm`` of :mod:`cassi.data.synth_motion`) and
+    below the jaw's centre of rotation (``condyle_mm`` of :mod:`cassi.data.synth.motion`) and
     within 12 mm of it front to back (the ramus hangs below the joint). That centre sits lower
     than the anatomical condyle (it also stands for the condyle's glide), so the distance is
     shorter than a condylion-gonion ramus height (about 50-55 mm).
@@ -56,7 +56,7 @@ Sources of the columns
   from rubric results.
 - ``min_ul``, ``min_ll`` (MIN UL, MIN LL of Figure 4.16): the lower lip reaches its minimum in
   /f v/, drawn back onto the upper incisors (``Anatomy.ll_floor_x`` of
-  :mod:`cassi.data.synth_motion`): every subject's MIN LL is reproduced within 0.01. MIN UL is
+  :mod:`cassi.data.synth.motion`): every subject's MIN LL is reproduced within 0.01. MIN UL is
   reproduced (within 0.01) for the five subjects whose published value is above 0.1 of the jaw
   length (JW18, JW19, JW32, JW41, JW502: the upper lip 1.9-6.2 mm behind rest, reached in lip
   spreading). For the other ten the published MIN UL is 0.0074-0.0117, i.e. the upper-lip pellet

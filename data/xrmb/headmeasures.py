@@ -34,9 +34,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cassi.data.atomic import atomic_write_text
-from cassi.data.errors import CassiInputError
-from cassi.data.textlines import decode_ascii, parse_num, read_bytes, split_lines, tokens
+from cassi.common.atomic import atomic_write_text
+from cassi.common.errors import CassiInputError
+from cassi.data.xrmb.textlines import decode_ascii, parse_num, read_bytes, split_lines, tokens
 
 HEAD_MEASURES_FILE = "Headmeasures.txt"
 HEADER = ("SUBJECT", "GONION_X", "GONION_Y", "GNATHION_X", "GNATHION_Y")
