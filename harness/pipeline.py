@@ -407,10 +407,10 @@ def image_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> Sta
 
 def cassi_pipeline(*, render: bool = True) -> Pipeline:
     """The real pipeline; ``render=False`` for geometry-only runs."""
-    from cassi.harness.rubric import rate  # noqa: PLC0415
+    from cassi.harness.rubric import ratings_table  # noqa: PLC0415
 
     return Pipeline(geometry=geometry_stage, render=render_stage if render else None,
-                    image=image_stage if render else None, rate=rate)
+                    image=image_stage if render else None, ratings=ratings_table)
 
 
 def catalog(corpus):

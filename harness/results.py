@@ -1,4 +1,5 @@
-"""The one long results table and the per-table ratings derived from it.
+"""The one long results table of a run (its ratings come from the pipeline: the rubric's
+aggregation, :func:`cassi.harness.rubric.ratings_table`).
 
 Every measurement of a run is one row: which task file (subject, task, rep), which version and
 view, which frame (-1 = the whole-task aggregate), which rubric check, its value and unit, the
@@ -9,7 +10,7 @@ from __future__ import annotations
 
 import io
 import os
-from typing import Callable, Iterable
+from typing import Iterable
 
 import pandas as pd
 
@@ -25,11 +26,6 @@ _DTYPES = {"subject": "string", "task": "int64", "rep": "int64", "version": "str
 
 #: Columns that identify one row; a retried job can never add a second row with the same key.
 KEY = ("subject", "task", "rep", "version", "view", "frame", "check", "component")
-
-#: Columns of the ratings table.
-RATING_COLUMNS = ("subject", "task", "rep", "version", "table", "component", "negatives",
-                  "rating", "synthetic")
-
 
 def normalize(rows: pd.DataFrame | Iterable[dict], **defaults) -> pd.DataFrame:
     """Return ``rows`` as a results table: every column present, fixed dtypes, column order.
@@ -106,29 +102,6 @@ def read_results(path: str | os.PathLike) -> pd.DataFrame:
     return normalize(pd.read_parquet(path, engine="pyarrow"))
 
 
-def ratings(results: pd.DataFrame, rate: Callable[[int], str] | None = None) -> pd.DataFrame:
-    """Per task file, version, rubric table and component: total negatives and the rating.
-
-    Only whole-task rows (``frame == -1``) count: per-frame rows are the evidence behind them,
-    and counting them too would charge one fault once per frame.
-
-    Parameters
-    ----------
-    results : DataFrame
-        A results table.
-    rate : callable, optional
-        Negatives -> rating words; default :func:`cassi.harness.rubric.rate`.
-    """
-    if rate is None:
-        from cassi.harness.rubric import rate  # noqa: PLC0415 - the one rating scale
-    df = normalize(results)
-    df = df[(df["frame"] == -1) & df["table"].notna()]
-    if df.empty:
-        return pd.DataFrame({c: pd.Series(dtype="object") for c in RATING_COLUMNS})
-    group = ["subject", "task", "rep", "version", "table", "component"]
-    out = (df.groupby(group, dropna=False, sort=True)
-             .agg(negatives=("negatives", "sum"), synthetic=("synthetic", "any"))
-             .reset_index())
-    out["negatives"] = out["negatives"].astype("int64")
-    out["rating"] = [rate(int(n)) for n in out["negatives"]]
-    return out[list(RATING_COLUMNS)]
+def empty_ratings() -> pd.DataFrame:
+    """The ratings table of a pipeline that rates nothing (no columns, no rows)."""
+    return pd.DataFrame()

@@ -45,15 +45,14 @@ class Pipeline:
         geometry-only runs.
     image : stage for image jobs (image checks over every rendered frame of a view: its inputs
         are the outputs of all the view's render chunks), or None.
-    aggregate : rows of the whole run -> extra rows, or None.
-    rate : negatives -> rating words (thesis Table 5.2), or None for the rubric's.
+    ratings : the run's results table -> its ratings table (the one aggregation the run's
+        ``ratings`` files and every report share), or None for a run without ratings.
     """
 
     geometry: StageFn
     render: StageFn | None = None
     image: StageFn | None = None
-    aggregate: Callable[[pd.DataFrame], pd.DataFrame] | None = None
-    rate: Callable[[int], str] | None = None
+    ratings: Callable[[pd.DataFrame], pd.DataFrame] | None = None
 
     def stage(self, name: str) -> StageFn:
         return {"geometry": self.geometry, "render": self.render, "image": self.image}[name]
@@ -226,9 +225,7 @@ def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterabl
     records = scheduler.run()
     frames, renders = collect(scheduler)
     table = R.combine(frames)
-    if pipeline.aggregate is not None and len(table):
-        table = R.combine([table, R.normalize(pipeline.aggregate(table))])
-    rated = R.ratings(table, pipeline.rate)
+    rated = pipeline.ratings(table) if pipeline.ratings is not None else R.empty_ratings()
     summary = Summary(records, time.perf_counter() - t0,
                       worker_crashes=getattr(executor, "crashes", 0))
     render_index = pd.DataFrame(renders, columns=list(RENDER_COLUMNS)).sort_values(

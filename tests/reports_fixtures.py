@@ -9,7 +9,8 @@ import imageio.v3 as iio
 import numpy as np
 import pandas as pd
 
-from cassi.harness.results import normalize, ratings
+from cassi.harness.results import normalize
+from cassi.harness.rubric import ratings_table as ratings
 from cassi.harness.runner import RENDER_COLUMNS
 from cassi.harness.tableset import write_table_set
 

@@ -24,6 +24,7 @@ from cassi.harness.executors import LocalExecutor
 from cassi.harness.jobs import Job, SkipJob, StageContext, StageOutput, State, npz_bytes, select_frames
 from cassi.harness.runner import Pipeline, TaskSpec, run_batch
 from cassi.harness.store import OutputStore
+from cassi.harness.rubric import ratings_table
 
 TESTS = Path(__file__).resolve().parent
 N_FRAMES = 30
@@ -82,7 +83,7 @@ def image_stage(job: Job, ctx: StageContext, inputs) -> StageOutput:
              value=means[worst], unit="px", threshold=20.0, negatives=0, detail="evidence")]))
 
 
-PIPE = Pipeline(geometry=geom_stage, render=render_stage, image=image_stage)
+PIPE = Pipeline(geometry=geom_stage, render=render_stage, image=image_stage, ratings=ratings_table)
 TASKS = [TaskSpec("JW11", 19), TaskSpec("JW11", 21), TaskSpec("JW12", 2), TaskSpec("JW12", 5)]
 
 
@@ -136,8 +137,11 @@ def test_batch_runs_and_tables_are_consistent(reference):
     checks = df[(df.view == "front") & (df.subject == "JW11") & (df.task == 19) & (df.version == "v1")]
     assert list(checks.frame) == [-1, int(checks.frame.max())] and checks.frame.max() in set(front.frame)
     rt = pd.read_parquet(out / "ratings.parquet")
-    # per file x version: (A, lips) and (A, teeth); only frame -1 rows count
-    assert len(rt) == 16 and set(rt.component) == {"lips", "teeth"}
+    # the rubric's one aggregation: per version, table, subject and component (only frame -1
+    # rows count); Table A's lip rows are judged again in Table C
+    assert len(rt) == 2 * 2 * 3 and set(rt.component) == {"lips", "teeth"}
+    assert set(zip(rt.table, rt.component)) == {("A", "lips"), ("A", "teeth"), ("C", "lips")}
+    pd.testing.assert_frame_equal(rt, ratings_table(pd.read_parquet(out / "results.parquet")))
     assert set(rt["rating"]) <= {"EXCELLENT", "VERY GOOD", "GOOD", "FAIR"}
     assert (out / "logs" / "JW11" / "019-1" / "v1" / "geometry.log").is_file()
 

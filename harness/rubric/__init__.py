@@ -19,7 +19,7 @@ from .registry import (AGGREGATION_RULES, CHECKS, MIN_FRAMES, checks_for, get_ch
                        registry_table)
 from .measures import DIAGNOSTICS_READ
 from .run import run_geometry_checks, run_image_checks
-from .tables import (component_ratings, file_verdicts, negatives_text, order_versions,
+from .tables import (RATING_COLUMNS, component_ratings, ratings_table, file_verdicts, negatives_text, order_versions,
                      rating_counts, table_c_rule, verdicts, version_comparisons,
                      version_summaries, version_totals)
 
@@ -30,4 +30,5 @@ __all__ = [
     "run_image_checks", "file_verdicts",
     "verdicts", "table_c_rule", "component_ratings", "rating_counts", "version_totals",
     "version_summaries", "version_comparisons", "negatives_text", "order_versions",
+    "ratings_table", "RATING_COLUMNS",
 ]

@@ -18,7 +18,7 @@ import pandas as pd
 from .model import GOOD_RATINGS, RATINGS, TABLE_TOPICS, TABLES, VERSION_ORDER, rate
 from .registry import CHECKS, MARKED_SHARE, TABLE_C_FROM_A
 
-__all__ = ["file_verdicts", "verdicts", "table_c_rule", "component_ratings", "rating_counts",
+__all__ = ["ratings_table", "RATING_COLUMNS", "file_verdicts", "verdicts", "table_c_rule", "component_ratings", "rating_counts",
            "version_totals", "version_summaries", "version_comparisons", "negatives_text", "order_versions",
            "VERDICT_COLUMNS"]
 
@@ -222,6 +222,23 @@ def component_ratings(results: pd.DataFrame) -> pd.DataFrame:
         rows.append((version, table, TABLES.get(table, ("", ""))[0], subject, component, n,
                      rate(n), text, adjust, reason))
     return pd.DataFrame(rows, columns=cols)
+
+
+#: Columns of a run's ratings files (``ratings.parquet`` / ``.csv``): :func:`component_ratings`'s
+#: and whether the results came from a synthetic corpus.
+RATING_COLUMNS = ["version", "table", "thesis_table", "subject", "component", "negatives", "rating",
+                  "text", "adjust", "reason", "synthetic"]
+
+
+def ratings_table(results: pd.DataFrame) -> pd.DataFrame:
+    """A run's ratings files: :func:`component_ratings` (the report's tables, cell for cell) and
+    ``synthetic`` (any of the subject's results from a synthetic corpus)."""
+    cr = component_ratings(results)
+    if cr.empty:
+        return pd.DataFrame({c: pd.Series(dtype="object") for c in RATING_COLUMNS})
+    synthetic = results.groupby("subject")["synthetic"].any()
+    cr["synthetic"] = cr["subject"].map(synthetic).fillna(False).astype(bool)
+    return cr[RATING_COLUMNS].reset_index(drop=True)
 
 
 def rating_counts(results: pd.DataFrame, table: str, *, ratings: pd.DataFrame | None = None) -> pd.DataFrame:
