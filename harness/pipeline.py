@@ -96,14 +96,14 @@ def get_profile(corpus, subject: str):
 
 
 def get_face(corpus, subject: str, profile):
-    from cassi.data.face.model import build_face  # noqa: PLC0415
+    from cassi.versions.mapping import subject_face  # noqa: PLC0415
 
     key = (str(corpus.root), subject)
     if key not in _faces:
         # jaw_length_mm scales the palate by p/d like the pellets (thesis 4.1.1).
-        _faces[key] = build_face(palate_mm=getattr(profile, "palate_mm", None),
-                                 head_measures=getattr(profile, "head_measures", None),
-                                 jaw_length_mm=getattr(profile, "jaw_length_mm", None))
+        _faces[key] = subject_face(palate_mm=getattr(profile, "palate_mm", None),
+                                   head_measures=getattr(profile, "head_measures", None),
+                                   jaw_length_mm=getattr(profile, "jaw_length_mm", None))
     return _faces[key]
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from cassi.versions.mapping import subject_face
 from cassi.data.face import numbering as N
 from cassi.common.errors import CassiInputError
 from cassi.data.face.model import FaceModel, build_face
@@ -316,7 +317,7 @@ def test_palate_fixed_count_and_shape(face):
     short = np.array([(-4.0, 8.0), (-20.0, 20.0), (-45.0, 22.0)])
     long = np.column_stack([np.linspace(-3, -55, 40), 10 + 12 * np.sin(np.linspace(0, 2.5, 40))])
     for outline in (short, long):
-        f = build_face(palate_mm=outline)
+        f = subject_face(palate_mm=outline)
         assert f.vertex_count == face.vertex_count
         pal = f.vertices[np.asarray(N.PALATE) - 1].reshape(N.PALATE_STATIONS, N.PALATE_ACROSS, 3)
         width = pal[:, -1, 1]
@@ -331,7 +332,7 @@ def test_palate_fixed_count_and_shape(face):
 
 def test_palate_scale_from_jaw_length():
     outline = np.array([(-5.0, 8.0), (-40.0, 20.0)])
-    f = build_face(palate_mm=outline, jaw_length_mm=70.0)
+    f = subject_face(palate_mm=outline, jaw_length_mm=70.0)
     pal = f.vertex(N.PALATE_FIRST)
     scale = f.jaw_length / 70.0                              # p / d
     np.testing.assert_allclose(pal[[0, 2]], f.vertex(N.TEETH_TIP)[[0, 2]] + outline[0] * scale)
@@ -339,8 +340,8 @@ def test_palate_scale_from_jaw_length():
 
 def test_palate_given_back_to_front():
     outline = np.array([(-5.0, 8.0), (-25.0, 21.0), (-50.0, 20.0)])
-    a = build_face(palate_mm=outline).vertices[np.asarray(N.PALATE) - 1]
-    b = build_face(palate_mm=outline[::-1]).vertices[np.asarray(N.PALATE) - 1]
+    a = subject_face(palate_mm=outline).vertices[np.asarray(N.PALATE) - 1]
+    b = subject_face(palate_mm=outline[::-1]).vertices[np.asarray(N.PALATE) - 1]
     np.testing.assert_array_equal(a, b)
 
 
@@ -348,7 +349,7 @@ def test_palate_given_back_to_front():
                                  np.zeros((4, 2))])
 def test_bad_palate(bad):
     with pytest.raises(CassiInputError):
-        build_face(palate_mm=bad)
+        subject_face(palate_mm=bad)
 
 
 # --- files -------------------------------------------------------------------------------------
@@ -386,3 +387,13 @@ def test_parke_sized_files_load(tmp_path):
     write_top(tmp_path / "bad.top", [Polygon(1, (1, 6, 40))])
     with pytest.raises(CassiInputError):
         FaceModel.read(tmp_path / "st1.pts", tmp_path / "bad.top")
+
+
+def test_default_palate_is_the_typical_outline_at_the_models_own_scale():
+    """The generator places its typical palate as the one mapping would at 4 units/mm."""
+    from cassi.data.face.mouth import DEFAULT_PALATE_MM, DEFAULT_PALATE_XZ
+    from cassi.versions.mapping import XrmbToParke
+
+    v226 = build_face().vertex(N.TEETH_TIP)[[0, 2]]
+    m = XrmbToParke(scale=N.UNITS_PER_MM, origin=v226)
+    np.testing.assert_array_equal(m.to_parke(DEFAULT_PALATE_MM), DEFAULT_PALATE_XZ)

@@ -3,8 +3,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from cassi.data.face.model import FaceModel, build_face, main
+from cassi.data.face.model import FaceModel, build_face
 from cassi.data.face.preview import preview_png
+from cassi.versions.face_cli import main
+from cassi.versions.mapping import subject_face
 
 
 def test_generator_writes_parke_files_with_a_subject_palate(tmp_path, capsys):
@@ -14,7 +16,7 @@ def test_generator_writes_parke_files_with_a_subject_palate(tmp_path, capsys):
     assert main([str(out), "--palate", str(pal), "--jaw-length", "34",
                  "--preview", str(tmp_path / "p.png")]) == 0
     face = FaceModel.read(out / "st1.pts", out / "stt.top", out / "st2.pts")
-    want = build_face(palate_mm=np.array([(-5, 8.5), (-20, 19), (-45, 22)]), jaw_length_mm=34)
+    want = subject_face(palate_mm=np.array([(-5, 8.5), (-20, 19), (-45, 22)]), jaw_length_mm=34)
     np.testing.assert_array_equal(face.st1, want.st1)
     png = (tmp_path / "p.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000

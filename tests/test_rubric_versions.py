@@ -13,6 +13,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from cassi.versions.mapping import subject_face
 from cassi.harness import rubric as R
 from cassi.harness.rubric import geometry as G
 
@@ -28,7 +29,7 @@ def subject():
 
     corpus = Corpus(default_corpus())
     prof = preprocess(corpus, ["JW11"])["JW11"]
-    face = build_face(palate_mm=prof.palate_mm, head_measures=prof.head_measures)
+    face = subject_face(palate_mm=prof.palate_mm, head_measures=prof.head_measures)
     return corpus, prof, face
 
 

@@ -19,6 +19,7 @@ import pytest
 
 cassi30 = pytest.importorskip("cassi30", reason="the cassi-3.0 plug-in is not installed")
 
+from cassi.versions.mapping import subject_face  # noqa: E402
 from cassi.data.face import numbering as N  # noqa: E402
 from cassi.harness.pipeline import get_corpus, get_face, get_profile  # noqa: E402
 from cassi.harness.rubric import geometry as G  # noqa: E402
@@ -152,7 +153,7 @@ def test_the_palate_never_reaches_below_the_incisor_tip(corpus, version):
 
     faces = [get_face(corpus, s, get_profile(corpus, s)) for s in corpus.subjects[:6]]
     low = np.array([(-2.0, -3.0), (-6.0, 2.0), (-15.0, 14.0), (-30.0, 20.0), (-50.0, 19.0)])
-    faces.append(build_face(palate_mm=low))
+    faces.append(subject_face(palate_mm=low))
     assert np.ptp(faces[-1].vertices[np.asarray(N.PALATE) - 1, 2]) > 0
     planted_below = faces[-1].vertices[N.UPPER_INCISOR_TIP - 1, 2] - \
         faces[-1].vertices[np.asarray(N.PALATE) - 1, 2].min()

@@ -10,6 +10,7 @@ import importlib
 import numpy as np
 import pytest
 
+from cassi.versions.mapping import subject_face
 from cassi.versions import constants as K
 from cassi.versions.mapping import XrmbToParke
 from cassi.versions.registry import get_version
@@ -32,7 +33,7 @@ def synth(tmp_path_factory):
 def real_face(synth):
     face_mod = importlib.import_module("cassi.data.face.model")
     _, profile = synth
-    return face_mod.build_face(palate_mm=profile.palate_mm, head_measures=profile.head_measures)
+    return subject_face(palate_mm=profile.palate_mm, head_measures=profile.head_measures)
 
 
 def test_thesis_excerpt_first_valid_row(shared_dir):

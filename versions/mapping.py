@@ -13,9 +13,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from cassi.common.errors import CassiInputError
+from cassi.data.face import numbering as N
+from cassi.data.face.model import FaceModel, build_face
 from cassi.versions import constants as K
 
-__all__ = ["XrmbToParke", "model_jaw_length"]
+__all__ = ["XrmbToParke", "model_jaw_length", "subject_face"]
 
 
 def model_jaw_length(vertices: np.ndarray) -> float:
@@ -78,3 +80,39 @@ class XrmbToParke:
         out[..., 0] = xz[..., 0]
         out[..., 2] = xz[..., 1]
         return out
+
+
+def subject_face(*, palate_mm: np.ndarray | None = None, jaw_length_mm: float | None = None,
+                 head_measures=None) -> FaceModel:
+    """A subject's face: the neutral face with the subject's PAL.DAT outline as its palate,
+    mapped like the pellets (thesis 4.1.1: scaled by p / d, translated to vertex 226).
+
+    Parameters
+    ----------
+    palate_mm : float (P, 2), optional
+        PAL.DAT (XRMB mm: origin at the upper incisor tips, x forward, y up), either direction;
+        default: the generator's typical palate.
+    jaw_length_mm : float, optional
+        The subject's jaw length d (MNI-MNM, mm); default: the model's own scale
+        (:data:`cassi.data.face.numbering.UNITS_PER_MM`).
+    head_measures : optional
+        Kept on the face for the versions' chin and jaw adjustment.
+    """
+    if palate_mm is None:
+        return build_face(head_measures=head_measures)
+    pal = np.asarray(palate_mm, dtype=np.float64)
+    if pal.ndim != 2 or pal.shape[1] != 2 or len(pal) < 2 or not np.isfinite(pal).all():
+        raise CassiInputError("palate_mm must be a finite (P >= 2, 2) array of x, y mm")
+    if np.hypot(*np.diff(pal, axis=0).T).sum() < 5.0:
+        raise CassiInputError("the palate outline is shorter than 5 mm")
+    if pal[0, 0] < pal[-1, 0]:
+        pal = pal[::-1].copy()  # given back to front: PAL.DAT runs front to back
+    neutral = build_face().vertices
+    if jaw_length_mm is None:
+        mapping = XrmbToParke(scale=N.UNITS_PER_MM,
+                              origin=neutral[K.V_UPPER_INCISOR_TIP - 1, [0, 2]].copy())
+    else:
+        if not (np.isfinite(jaw_length_mm) and jaw_length_mm > 0):
+            raise CassiInputError(f"jaw_length_mm must be positive, got {jaw_length_mm}")
+        mapping = XrmbToParke.from_face(neutral, jaw_length_mm)
+    return build_face(palate_mm=pal, palate_xz=mapping.to_parke(pal), head_measures=head_measures)

@@ -27,7 +27,7 @@ from cassi.data.face.layout import (  # noqa: F401  (re-exported for the face an
     _stitch, _surface_row)
 from cassi.data.face.mouth import (  # noqa: F401
     DEFAULT_PALATE_MM, LOWER_TIP, UPPER_TIP, _palate, _teeth, _tongue, arch_points,
-    palate_surface, resample_outline, xrmb_to_parke_xz)
+    DEFAULT_PALATE_XZ, palate_surface, resample_outline)
 from cassi.data.face.surface import (  # noqa: F401
     CENTRE, EYE_CENTRE, PROFILE, _eye_angles, angles_of, surface_at_z, surface_point,
     surface_radius)

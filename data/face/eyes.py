@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cassi.data.face.build import (EYE_WHITE, FRINGE, IRIS, PUPIL, REFLECTION,
-                                   eyelid_ring_2d, project_to_sphere)
+from cassi.data.face.build import (EYE_CENTRE, EYE_WHITE, FRINGE, IRIS, LID_LIP_GAP, PUPIL,
+                                   REFLECTION, eyelid_ring_2d, project_to_sphere)
 
 #: Sides of the pupil polygon and of every ring (dissertation 3.1.1).
 SIDES = 12
@@ -186,7 +186,11 @@ def eyelid_positions(opening: float, centre, *, lid_radius: float = 80.0,
     Returns a dict ring -> float (8, 3) in face coordinates (left eye).
     """
     o = float(np.clip(opening, 0.0, 1.0))
-    from cassi.data.face.build import LID_LIP_GAP
     radii = {"A": lid_radius + 6.0, "B": lid_radius, "C": eyeball_radius + LID_LIP_GAP}
     return {r: project_to_sphere(eyelid_ring_2d(o, r, y_scale=y_scale, z_scale=z_scale),
                                  centre, rad) for r, rad in radii.items()}
+
+
+def default_gaze_target() -> np.ndarray:
+    """Where the neutral face looks: straight ahead, about 1.5 m away at eye height."""
+    return np.array([EYE_CENTRE[0] + 6000.0, 0.0, EYE_CENTRE[2]])

@@ -20,11 +20,14 @@ import numpy as np
 from cassi.data.face import numbering as N
 from cassi.common.errors import CassiInputError
 from cassi.data.face.build import (EYE_CENTRE, EYEBALL_RADIUS, MATERIAL_NAMES,
-                                   PARKE_MATERIAL_NAMES, UNMIRRORED_MATERIALS, build_layout,
-                                   xrmb_to_parke_xz)
+                                   PARKE_MATERIAL_NAMES, UNMIRRORED_MATERIALS, build_layout)
 from cassi.data.xrmb.parke_io import (Polygon, PtsFile, TopFile, read_pts, read_top, write_pts,
                                  write_top)
+from cassi.data.face.eyes import (SIDES, VERTS_PER_EYE, WHITE_RINGS_DEG, EyeParams,
+                                  default_gaze_target, eyeball_polygons, place_eye)
+from cassi.data.face.params import apply_parameters
 from cassi.data.face.topology import RenderTopology, render_topology  # noqa: F401  (re-export)
+from cassi.common.atomic import atomic_write_text
 
 __all__ = ["FaceModel", "Material", "build_face", "parke_parameters", "RenderTopology",
            "render_topology", "default_gaze_target"]
@@ -34,7 +37,6 @@ def parke_parameters(face: "FaceModel", values: dict[int, float] | None = None, 
                      clamp: bool = False, gaze_target=None) -> "FaceModel":
     """``face`` with Parke's parameters (thesis Table 3.1 numbers -> values) applied; see
     :func:`cassi.data.face.params.apply_parameters`."""
-    from cassi.data.face.params import apply_parameters
     return apply_parameters(face, values or {}, clamp=clamp, gaze_target=gaze_target)
 
 
@@ -149,7 +151,6 @@ class FaceModel:
         parameters act on, the eyes); :meth:`read` picks it up when it sits beside stt.top."""
         import json
 
-        from cassi.common.atomic import atomic_write_text
 
         d = Path(directory)
         d.mkdir(parents=True, exist_ok=True)
@@ -198,7 +199,6 @@ class FaceModel:
             else None
         centres = np.zeros((0, 3))
         if eyes_first is not None:
-            from cassi.data.face.eyes import VERTS_PER_EYE, WHITE_RINGS_DEG, SIDES
             back = 1 + SIDES * (3 + len(WHITE_RINGS_DEG))
             cs = []
             for k in range(2):
@@ -236,32 +236,28 @@ def _read_sidecar(path: Path, count: int, eyes_first, centres):
 
 
 def _verts_per_eye() -> int:
-    from cassi.data.face.eyes import VERTS_PER_EYE
     return VERTS_PER_EYE
 
 
-def default_gaze_target() -> np.ndarray:
-    """Where the neutral face looks: straight ahead, about 1.5 m away at eye height."""
-    return np.array([EYE_CENTRE[0] + 6000.0, 0.0, EYE_CENTRE[2]])
-
-
-def build_face(*, palate_mm: np.ndarray | None = None, head_measures=None,
-               jaw_length_mm: float | None = None,
-               parameters: dict[int, float] | None = None, clamp: bool = False) -> FaceModel:
+def build_face(*, palate_mm: np.ndarray | None = None, palate_xz: np.ndarray | None = None,
+               head_measures=None, parameters: dict[int, float] | None = None,
+               clamp: bool = False) -> FaceModel:
     """The neutral face: Parke's structure generated from code, start parameter values applied.
+
+    A subject's face comes from :func:`cassi.versions.mapping.subject_face`, which maps the
+    subject's PAL.DAT outline onto the model with the one XRMB -> Parke mapping (thesis 4.1.1)
+    and passes both forms here.
 
     Parameters
     ----------
     palate_mm : float (P, 2), optional
-        A subject's PAL.DAT outline (XRMB mm: origin at the upper incisor tips, x forward, y up),
-        front to back. It is mapped like the pellets (4.1.1): scaled by p / d and translated to
-        vertex 226, then resampled to the fixed palate size. Default: a typical outline.
+        The subject's PAL.DAT outline (XRMB mm), kept on the model for the versions.
+    palate_xz : float (P, 2), optional
+        The same outline on the model (Parke x, z), front to back, resampled to the fixed
+        palate size; given with ``palate_mm``. Default: the generator's typical palate.
     head_measures : optional
         Stored on the model for the versions' chin and jaw adjustment (4.1.1); the neutral
         geometry does not use it.
-    jaw_length_mm : float, optional
-        The subject's jaw length d (MNI-MNM, mm) for the palate's scale p / d; default the
-        model's own scale (:data:`cassi.data.face.numbering.UNITS_PER_MM`).
     parameters : dict[int, float], optional
         Parke parameters (Table 3.1 numbers) overriding the start values.
     clamp : bool
@@ -272,36 +268,17 @@ def build_face(*, palate_mm: np.ndarray | None = None, head_measures=None,
     FaceModel
         ``vertices`` float64 (V, 3) with V = 360 + two eyeballs.
     """
-    from cassi.data.face.params import apply_parameters  # late: face_params imports face
-
-    scale = None
-    if palate_mm is not None:
-        pal = np.asarray(palate_mm, dtype=np.float64)
-        if pal.ndim != 2 or pal.shape[1] != 2 or len(pal) < 2 or not np.isfinite(pal).all():
-            raise CassiInputError("palate_mm must be a finite (P >= 2, 2) array of x, y mm")
-        if np.hypot(*np.diff(pal, axis=0).T).sum() < 5.0:
-            raise CassiInputError("the palate outline is shorter than 5 mm")
-        if pal[0, 0] < pal[-1, 0]:
-            pal = pal[::-1].copy()  # given back to front: PAL.DAT runs front to back
-        if jaw_length_mm is not None:
-            if not (np.isfinite(jaw_length_mm) and jaw_length_mm > 0):
-                raise CassiInputError(f"jaw_length_mm must be positive, got {jaw_length_mm}")
-            scale = _model_jaw_length() / float(jaw_length_mm)
-        palate_xz = xrmb_to_parke_xz(pal, scale)
-    else:
-        pal, palate_xz = None, None
+    if (palate_mm is None) != (palate_xz is None):
+        raise CassiInputError("palate_mm and palate_xz go together (the outline and its place on "
+                              "the model: cassi.versions.mapping.subject_face)")
+    pal = None if palate_mm is None else np.asarray(palate_mm, dtype=np.float64)
+    if palate_xz is not None:
+        palate_xz = np.asarray(palate_xz, dtype=np.float64)
+        if palate_xz.ndim != 2 or palate_xz.shape[1] != 2 or not np.isfinite(palate_xz).all():
+            raise CassiInputError("palate_xz must be a finite (P, 2) array of Parke x, z")
     base = _base_face(palate_xz)
     face = replace(base, palate_mm=pal, head_measures=head_measures)
     return apply_parameters(face, parameters or {}, clamp=clamp)
-
-
-_JAW_LENGTH_CACHE: list[float] = []
-
-
-def _model_jaw_length() -> float:
-    if not _JAW_LENGTH_CACHE:
-        _JAW_LENGTH_CACHE.append(_base_face(None).jaw_length)
-    return _JAW_LENGTH_CACHE[0]
 
 
 _BASE_CACHE: dict = {}
@@ -312,7 +289,6 @@ def _base_face(palate_xz) -> FaceModel:
     key = None if palate_xz is None else np.asarray(palate_xz).tobytes()
     if key in _BASE_CACHE:
         return _BASE_CACHE[key]
-    from cassi.data.face.eyes import VERTS_PER_EYE, EyeParams, eyeball_polygons, place_eye
 
     lay = build_layout(palate_xz=palate_xz)
     numbers = assign_numbers(lay)
@@ -387,41 +363,3 @@ def assign_numbers(lay) -> dict[str, int]:
             raise AssertionError(f"pool {pool!r}: {len(nums) - taken[pool]} numbers unused "
                                  f"({nums[taken[pool]:][:8]}...)")
     return out
-
-
-def main(argv: list[str] | None = None) -> int:
-    """``python -m cassi.data.face.model OUT_DIR [--palate PAL.DAT] [--jaw-length MM] [--preview PNG]``
-
-    Generate the face and write its ``st1.pts``, ``st2.pts`` and ``stt.top`` into OUT_DIR
-    (optionally with a subject's palate and a wireframe preview).
-    """
-    import argparse
-    import sys
-
-    ap = argparse.ArgumentParser(prog="python -m cassi.data.face.model",
-                                 description="write the generated face in Parke's formats")
-    ap.add_argument("out_dir", help="folder for st1.pts, st2.pts and stt.top")
-    ap.add_argument("--palate", help="a subject's PAL.DAT (XRMB micrometres)")
-    ap.add_argument("--jaw-length", type=float, help="the subject's jaw length d in mm (p/d)")
-    ap.add_argument("--preview", help="also write a PNG preview here")
-    args = ap.parse_args(argv)
-    try:
-        palate = None
-        if args.palate:
-            from cassi.data.xrmb.files import read_pal
-            palate = read_pal(args.palate)
-        face = build_face(palate_mm=palate, jaw_length_mm=args.jaw_length)
-        paths = face.write(args.out_dir)
-        if args.preview:
-            from cassi.data.face.preview import preview_png
-            preview_png(face, args.preview)
-    except CassiInputError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    for p in paths.values():
-        print(p)
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -129,6 +129,13 @@ DEFAULT_PALATE_MM = np.array([
 ])
 
 
+#: The typical palate on the generated face, designed like the teeth in mm from the upper
+#: incisor tip at the model's own scale (a subject's palate is mapped by
+#: :class:`cassi.versions.mapping.XrmbToParke`, p/d, instead).
+DEFAULT_PALATE_XZ = np.stack([UPPER_TIP[0] + N.UNITS_PER_MM * DEFAULT_PALATE_MM[:, 0],
+                              UPPER_TIP[2] + N.UNITS_PER_MM * DEFAULT_PALATE_MM[:, 1]], axis=1)
+
+
 def resample_outline(xy: np.ndarray, n: int) -> np.ndarray:
     """Resample a polyline (front to back) to ``n`` points equally spaced by arc length."""
     xy = np.asarray(xy, float)
@@ -168,7 +175,7 @@ def palate_surface(palate_xz: np.ndarray) -> np.ndarray:
 
 def _palate(lay: Layout, palate_xz):
     if palate_xz is None:
-        palate_xz = xrmb_to_parke_xz(DEFAULT_PALATE_MM)
+        palate_xz = DEFAULT_PALATE_XZ
     surf = palate_surface(palate_xz)
     keys = [[lay.add(f"palate.{s}.{a}", surf[s, a], N.palate_vertex(s, a))
              for a in range(N.PALATE_ACROSS)] for s in range(N.PALATE_STATIONS)]
@@ -177,10 +184,3 @@ def _palate(lay: Layout, palate_xz):
             # the palate's visible side faces down (into the mouth): clockwise seen from below
             lay.poly(PALATE, (keys[s][a], keys[s][a + 1], keys[s + 1][a + 1], keys[s + 1][a]))
 
-
-def xrmb_to_parke_xz(xy_mm: np.ndarray, scale: float | None = None) -> np.ndarray:
-    """XRMB midsagittal (x, y) mm -> Parke (x, z): origin at vertex 226, ``scale`` units/mm
-    (default :data:`cassi.data.face.numbering.UNITS_PER_MM`)."""
-    s = N.UNITS_PER_MM if scale is None else float(scale)
-    xy = np.asarray(xy_mm, float)
-    return np.stack([UPPER_TIP[0] + s * xy[:, 0], UPPER_TIP[2] + s * xy[:, 1]], axis=1)

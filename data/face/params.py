@@ -13,7 +13,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from cassi.data.face import eyes as E
 from cassi.data.face import numbering as N
+from cassi.data.face.build import EYE_CENTRE
 from cassi.common.errors import CassiInputError
 
 
@@ -187,9 +189,6 @@ def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
 
     Regions that a model lacks (Parke's own files carry no region names) are left alone.
     """
-    from cassi.data.face import eyes as E
-    from cassi.data.face.build import EYE_CENTRE
-
     vals = check_parameters(values, clamp=clamp)
     st1 = face.st1
     v = st1.copy()
@@ -315,8 +314,7 @@ def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
                           vals[30] - start[30] + vals[40]])
         params = E.EyeParams(pupil_fraction=vals[41], fringe_fraction=vals[42],
                              iris_fraction=vals[43], radius=vals[44])
-        from cassi.data.face.model import default_gaze_target
-        target = default_gaze_target() if gaze_target is None else np.asarray(gaze_target, float)
+        target = E.default_gaze_target() if gaze_target is None else np.asarray(gaze_target, float)
         for k in range(2):
             c = centres[k] + shift * np.array([1.0, 1.0 if k == 0 else -1.0, 1.0])
             c[2] = z_eye + (c[2] - z_eye) * 1.0

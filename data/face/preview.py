@@ -14,6 +14,8 @@ from os import PathLike
 import numpy as np
 
 from cassi.common.atomic import atomic_tmp_path
+from cassi.data.face.model import build_face
+from cassi.data.face.topology import render_topology
 
 _COLOURS = {
     "skin": (0.86, 0.68, 0.58), "lips": (0.75, 0.35, 0.35), "eyelash": (0.15, 0.1, 0.1),
@@ -78,7 +80,6 @@ def preview_png(face, path: str | PathLike, *, positions=None, dpi: int = 110,
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from cassi.data.face.topology import render_topology
 
     pos = face.vertices if positions is None else np.asarray(positions)
     full = render_topology(face)
@@ -107,8 +108,6 @@ def preview_png(face, path: str | PathLike, *, positions=None, dpi: int = 110,
 
 
 def main(argv=None) -> int:
-    from cassi.data.face.model import build_face
-
     argv = sys.argv[1:] if argv is None else argv
     out = argv[0] if argv else "face_preview.png"
     preview_png(build_face(), out)
