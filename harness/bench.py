@@ -34,9 +34,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .executors import LocalExecutor, RayExecutor, thread_env
-from .jobs import Job, StageContext, StageOutput
-from .runner import Pipeline, TaskSpec, run_batch
+from cassi.harness.farm.executors import LocalExecutor, RayExecutor, thread_env
+from cassi.harness.farm.jobs import Job, StageContext, StageOutput
+from cassi.harness.farm.runner import Pipeline, TaskSpec, run_batch
 
 SPEEDUP_GOAL = 1.6
 
@@ -80,9 +80,9 @@ def _workload(quick: bool, kind: str = "auto"):
     try:
         if kind == "cpu":
             raise LookupError(why)
-        from .config import RunConfig  # noqa: PLC0415
-        from .farm import plan  # noqa: PLC0415
-        from .pipeline import cassi_pipeline, warm_worker  # noqa: PLC0415
+        from cassi.harness.evaluation.config import RunConfig  # noqa: PLC0415
+        from cassi.harness.evaluation.run import plan  # noqa: PLC0415
+        from cassi.harness.evaluation.pipeline import cassi_pipeline, warm_worker  # noqa: PLC0415
 
         views = ("front",) if quick else ("front", "half")
         cfg = RunConfig(subjects=("JW11",), versions=("cassi-2.1",) if quick else None,
@@ -198,7 +198,7 @@ def bench_farm(quick: bool = False, *, workload: str = "auto", ray: bool = True,
         try:
             import ray  # noqa: PLC0415
 
-            from .pipeline import worker_env  # noqa: PLC0415
+            from cassi.harness.evaluation.pipeline import worker_env  # noqa: PLC0415
 
             owned = not ray.is_initialized()
             ex = RayExecutor(None, num_cpus=2, initializer=worker_env, initargs=(1,))
@@ -239,11 +239,11 @@ def bench_farm_preview(quick: bool = False, *, subject: str = "JW11", task: int 
     from cassi.renderer.bench import bare_frame  # noqa: PLC0415
     from cassi.renderer.views import VIEW_NAMES  # noqa: PLC0415
 
-    from .config import RunConfig  # noqa: PLC0415
-    from .farm import plan  # noqa: PLC0415
-    from .pipeline import (cassi_pipeline, get_corpus, get_face, get_profile,  # noqa: PLC0415
+    from cassi.harness.evaluation.config import RunConfig  # noqa: PLC0415
+    from cassi.harness.evaluation.run import plan  # noqa: PLC0415
+    from cassi.harness.evaluation.pipeline import (cassi_pipeline, get_corpus, get_face, get_profile,  # noqa: PLC0415
                            get_renderer, warm_worker, worker_env)
-    from .store import OutputStore  # noqa: PLC0415
+    from cassi.harness.farm.store import OutputStore  # noqa: PLC0415
 
     cfg = RunConfig(subjects=(subject,), tasks=(task,), versions=(version,), views=VIEW_NAMES)
     corpus, tasks, versions, views = plan(cfg)

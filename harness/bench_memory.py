@@ -55,8 +55,8 @@ def long_task_corpus(root: Path, *, rows: int = ROWS, subject: str = "JW12", tas
 
 def child(corpus: str, subject: str, task: int, version: str) -> None:
     """In a fresh process: one geometry job; print peak RSS (MB), wall time and frames."""
-    from cassi.harness.jobs import Job, StageContext  # noqa: PLC0415
-    from cassi.harness.pipeline import geometry_stage, get_corpus, get_profile  # noqa: PLC0415
+    from cassi.harness.farm.jobs import Job, StageContext  # noqa: PLC0415
+    from cassi.harness.evaluation.pipeline import geometry_stage, get_corpus, get_profile  # noqa: PLC0415
 
     c = get_corpus(corpus)
     get_profile(c, subject)
@@ -86,8 +86,8 @@ def image_child(frames: int, subject: str = "JW12", task: int = 2) -> None:
     peak RSS (MB), the RSS before it and its wall time."""
     import numpy as np  # noqa: PLC0415
 
-    from cassi.harness.jobs import Job, StageContext, npz_bytes  # noqa: PLC0415
-    from cassi.harness.pipeline import (get_corpus, get_face, get_profile, get_renderer,  # noqa: PLC0415
+    from cassi.harness.farm.jobs import Job, StageContext, npz_bytes  # noqa: PLC0415
+    from cassi.harness.evaluation.pipeline import (get_corpus, get_face, get_profile, get_renderer,  # noqa: PLC0415
                                         image_stage)
 
     c = get_corpus(None)

@@ -2,7 +2,8 @@
 
 Each cassi package contributes its subcommands through the ``cassi.commands`` entry point
 group (``module:register``, called with the argparse subparsers object), so this module never
-imports a layer it must not depend on. Exit codes: 0 success, 2 bad input, 1 other failure.
+imports a layer it must not depend on. A subcommand names its handler as a
+``"module:function"`` string (:func:`cassi.common.lazy.resolve`), imported only when it runs. Exit codes: 0 success, 2 bad input, 1 other failure.
 """
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import sys
 from importlib.metadata import entry_points, version
 
 from cassi.common.errors import CassiInputError
+from cassi.common.lazy import resolve
 
 EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -41,7 +43,7 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO,
                         format="%(levelname)s %(name)s: %(message)s")
     try:
-        return int(args.func(args) or EXIT_OK)
+        return int(resolve(args.func)(args) or EXIT_OK)
     except CassiInputError as err:
         print(f"cassi: error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -2,13 +2,11 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
-from cassi.common.atomic import atomic_write_text
 from cassi.common.errors import CassiInputError
 
-from . import config as C
+from cassi.harness.evaluation import config as C
 
 
 def _add_run(sub) -> None:
@@ -43,7 +41,7 @@ def _add_run(sub) -> None:
     p.add_argument("--retries", help="retries of a job whose worker died (default 1)")
     p.add_argument("--out", type=Path, help="output directory (required here or in --config)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
-    p.set_defaults(func=cmd_run)
+    p.set_defaults(func="cassi.harness.actions:cmd_run")
 
 
 def _add_bench(sub) -> None:
@@ -55,7 +53,7 @@ def _add_bench(sub) -> None:
                    help="run only these benchmarks (geometry, render, geometry_memory, "
                         "image_memory, farm_preview, farm: cassi.harness.bench.BENCHMARKS); "
                         "e.g. --only render,farm_preview")
-    p.set_defaults(func=cmd_bench)
+    p.set_defaults(func="cassi.harness.actions:cmd_bench")
 
 
 def register(sub) -> None:
@@ -76,40 +74,3 @@ def config_from_args(args: argparse.Namespace) -> C.RunConfig:
     if cfg.out is None:
         raise CassiInputError("no output directory: give --out DIR (or out = ... in --config)")
     return cfg
-
-
-def cmd_run(args: argparse.Namespace) -> int:
-    from .farm import run  # noqa: PLC0415 - heavy imports only for this command
-
-    cfg = config_from_args(args)
-    # On a terminal: bars; in a log (cron, CI): a line per stage every few seconds.
-    result = run(cfg, progress=not args.no_progress)
-    print(result.summary.text())
-    print(f"results: {cfg.out / 'results.parquet'} (and .csv); ratings: "
-          f"{cfg.out / 'ratings.parquet'}")
-    return 0 if result.ok else 1
-
-
-def cmd_bench(args: argparse.Namespace) -> int:
-    from .bench import BENCHMARKS, run_benchmarks  # noqa: PLC0415
-
-    only = None
-    if args.only:
-        only = [n for n in args.only.split(",") if n]
-        unknown = sorted(set(only) - set(BENCHMARKS))
-        if unknown:
-            raise CassiInputError(f"no benchmark {', '.join(unknown)}; "
-                                  f"known: {', '.join(BENCHMARKS)}")
-    report = run_benchmarks(quick=args.quick, only=only)
-    out = Path(args.out)
-    try:
-        atomic_write_text(out, json.dumps(report, indent=1, sort_keys=True, default=str) + "\n")
-    except OSError as err:
-        raise CassiInputError(f"cannot write the benchmark file: {err.strerror}", path=out) from err
-    for name, entry in sorted(report["benchmarks"].items()):
-        status = f"error: {entry['error']}" if "error" in entry else "ok"
-        print(f"{name}: {status}")
-    if "farm_speedup_2_workers" in report:
-        print(f"farm_speedup_2_workers: {report['farm_speedup_2_workers']}")
-    print(f"wrote {out}")
-    return 0

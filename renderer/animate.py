@@ -14,8 +14,8 @@ from cassi.common.atomic import atomic_tmp_path
 from cassi.common.errors import CassiInputError
 from cassi.data.xrmb.files import NOMINAL_PERIOD_US  # the XRMB frame period, us
 
-from .images import to_srgb8
-from .views import VIEW_NAMES
+from cassi.renderer.images import to_srgb8
+from cassi.renderer.views import VIEW_NAMES
 
 __all__ = ["side_by_side", "animation_frames", "write_animation", "animate_positions", "views_sheet",
            "realtime_fps"]
@@ -106,7 +106,7 @@ def animate_positions(face, positions: np.ndarray, out: str | os.PathLike, *,
     """
     from cassi.data.face.model import render_topology
 
-    from .render import FaceRenderer
+    from cassi.renderer.render import FaceRenderer
 
     positions = np.asarray(positions)
     if positions.ndim != 3 or positions.shape[2] != 3 or len(positions) == 0:
@@ -132,8 +132,8 @@ def views_sheet(face, positions: np.ndarray, *, views: Sequence[str] = VIEW_NAME
     written as PNG to ``out`` when given (metadata: views, preset, variant)."""
     from cassi.data.face.model import render_topology
 
-    from .images import write_contact_sheet
-    from .render import FaceRenderer
+    from cassi.renderer.images import write_contact_sheet
+    from cassi.renderer.render import FaceRenderer
 
     results = [FaceRenderer(render_topology(face, half=(v == "half")), v, preset, variant)
                .render(positions) for v in views]

@@ -97,7 +97,7 @@ def pipeline_frame(renderer, positions: np.ndarray, metadata: dict | None = None
     depth as ``.npz`` bytes. Returns (png, npz)."""
     import io
 
-    from .images import png_bytes
+    from cassi.renderer.images import png_bytes
 
     res = renderer.render(positions)
     png = png_bytes(res.srgb8(), metadata={**res.metadata(), **(metadata or {})}, linear=False)
@@ -114,7 +114,7 @@ def bench_render(quick: bool = False, *, topology_for=None, positions=None,
     ``topology_for(half: bool)`` and ``positions`` (V, 3) default to the neutral face of
     ``cassi.data.face.model``.
     """
-    from .variant import choose_variant
+    from cassi.renderer.variant import choose_variant
 
     if topology_for is None or positions is None:
         topology_for, positions = _neutral()
@@ -131,8 +131,8 @@ def bench_render(quick: bool = False, *, topology_for=None, positions=None,
 
 
 def _bench_render(quick, topology_for, positions, variant) -> dict:
-    from .render import FaceRenderer
-    from .views import PRESET_NAMES, VIEW_NAMES
+    from cassi.renderer.render import FaceRenderer
+    from cassi.renderer.views import PRESET_NAMES, VIEW_NAMES
 
     out: dict = {"variant": variant, "threads": 1, "quick": quick, "render_per_s": {}, "efficiency_by_view": {},
                  "efficiency_vs_own_pass_by_view": {},

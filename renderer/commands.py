@@ -11,13 +11,11 @@ from __future__ import annotations
 import argparse
 import logging
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
 
-from cassi.common.errors import CassiInputError
 
-from .views import PRESET_NAMES, VIEW_NAMES
+from cassi.renderer.views import PRESET_NAMES, VIEW_NAMES
 
 __all__ = ["register", "NEUTRAL"]
 
@@ -26,64 +24,6 @@ log = logging.getLogger(__name__)
 NEUTRAL = "neutral"
 
 PositionsProvider = Callable[..., tuple[object, np.ndarray, np.ndarray]]
-
-
-def _frame_index(frames: np.ndarray, frame: int) -> int:
-    hits = np.flatnonzero(frames == frame)
-    if not hits.size:
-        lo, hi = (int(frames[0]), int(frames[-1])) if frames.size else (None, None)
-        raise CassiInputError(f"frame {frame} is not animated (frames {lo}..{hi})")
-    return int(hits[0])
-
-
-def _cmd_render(args, provider: PositionsProvider) -> int:
-    from cassi.data.face.model import render_topology
-
-    from .images import write_exr, write_mask_png, write_png, write_sidecar
-    from .render import FaceRenderer
-
-    out = Path(args.out)
-    if out.suffix.lower() not in (".png", ".exr"):
-        raise CassiInputError("--out must end in .png or .exr", path=out)
-    face, frames, positions = provider(args.corpus, args.subject, args.task, args.rep, args.version)
-    k = _frame_index(frames, args.frame)
-    renderer = FaceRenderer(render_topology(face, half=(args.view == "half")), args.view,
-                            args.preset, args.variant)
-    res = renderer.render(positions[k])
-    meta = {**res.metadata(), "subject": args.subject, "task": args.task, "rep": args.rep,
-            "version": args.version, "frame": int(args.frame)}
-    if out.suffix.lower() == ".exr":
-        write_exr(out, res.rgb, depth=res.depth, mask=res.mask, metadata=meta)
-    else:
-        write_png(out, res.rgb, metadata=meta)
-    written = [out]
-    if args.mask:
-        written.append(write_mask_png(out.with_name(out.stem + ".mask.png"), res.mask, metadata=meta))
-    written.append(write_sidecar(out.with_name(out.name + ".json"), meta))
-    for p in written:
-        print(p)
-    log.info("rendered %s %s frame %d with %s", args.view, args.version, args.frame, res.variant)
-    return 0
-
-
-def _cmd_animate(args, provider: PositionsProvider) -> int:
-    from .animate import animate_positions
-
-    views = [v.strip() for v in args.views.split(",") if v.strip()]
-    face, frames, positions = provider(args.corpus, args.subject, args.task, args.rep, args.version)
-    if args.start is not None or args.end is not None:
-        keep = (frames >= (args.start if args.start is not None else frames.min())) & \
-               (frames <= (args.end if args.end is not None else frames.max()))
-        positions = positions[keep]
-        if not len(positions):
-            raise CassiInputError("no animated frame in the --start/--end range")
-    if args.version == NEUTRAL:
-        positions = positions[:1]  # a still face: one frame is the whole animation
-    summary = animate_positions(face, positions, args.out, views=views, stride=args.stride,
-                                preset=args.preset, variant=args.variant, fps=args.fps)
-    print(summary["path"])
-    log.info("animation: %s", summary)
-    return 0
 
 
 def _common(p: argparse.ArgumentParser) -> None:
@@ -101,9 +41,9 @@ def _common(p: argparse.ArgumentParser) -> None:
                         "$CASSI_VARIANT or the fastest usable)")
 
 
-def register(sub, *, positions_provider: PositionsProvider) -> None:
+def register(sub, *, positions_provider: PositionsProvider | str) -> None:
     """Add ``render`` and ``animate`` to the ``cassi`` subcommands, animating through
-    ``positions_provider``."""
+    ``positions_provider`` (or the ``"module:function"`` that names it)."""
     provider = positions_provider
 
     p = sub.add_parser("render", help="render one frame of a task in one view (PNG or EXR)",
@@ -114,7 +54,7 @@ def register(sub, *, positions_provider: PositionsProvider) -> None:
     p.add_argument("--frame", required=True, type=int, help="recording row to render")
     p.add_argument("--out", required=True, help="output file, .png (sRGB) or .exr (linear)")
     p.add_argument("--mask", action="store_true", help="also write <out stem>.mask.png")
-    p.set_defaults(func=lambda a: _cmd_render(a, provider))
+    p.set_defaults(func="cassi.renderer.actions:cmd_render", positions_provider=provider)
 
     a = sub.add_parser("animate", help="render a task as MP4 or GIF, views side by side",
                        description="Render every STRIDE-th animated frame of a task in the "
@@ -126,4 +66,4 @@ def register(sub, *, positions_provider: PositionsProvider) -> None:
     a.add_argument("--end", type=int, default=None, help="last recording row")
     a.add_argument("--fps", type=float, default=None, help="frames per second (default: real time)")
     a.add_argument("--out", required=True, help="output .mp4 or .gif")
-    a.set_defaults(func=lambda a_: _cmd_animate(a_, provider))
+    a.set_defaults(func="cassi.renderer.actions:cmd_animate", positions_provider=provider)

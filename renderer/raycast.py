@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import shading
-from .images import _LUT_STEPS, _SRGB8_LUT
+from cassi.renderer import shading
+from cassi.renderer.images import _LUT_STEPS, _SRGB8_LUT
 
 __all__ = ["DrJitOps", "RaycastPass", "pixel_centre_rays"]
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .views import Preset, View, material_for
+from cassi.renderer.views import Preset, View, material_for
 
 __all__ = ["mesh_id", "part_mesh", "vertex_normals", "sensor_dict", "emitter_dicts",
            "colour_integrator_dict", "mask_integrator_dict", "scene_dict", "SENSOR_COLOUR",

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .views import Material, Preset, View, material_for
+from cassi.renderer.views import Material, Preset, View, material_for
 
 __all__ = ["ShadingTables", "shading_tables", "shade", "shade_terms", "columns", "NumpyOps",
            "pixel_directions"]

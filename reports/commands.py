@@ -1,12 +1,10 @@
 """``cassi report``, ``cassi nightly``, ``cassi gate`` and ``cassi golden``."""
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
-
-from cassi.reports.nightly_plan import (NIGHTLY_ANIMATE_STRIDE, NIGHTLY_EXTREMES, NIGHTLY_STRIDE,
-                                       NIGHTLY_VIDEO_VERSIONS)
+from cassi.harness.evaluation.config import (NIGHTLY_ANIMATE_STRIDE, NIGHTLY_EXTREMES,
+                                             NIGHTLY_STRIDE, NIGHTLY_VIDEO_VERSIONS)
 
 
 def register(sub) -> None:
@@ -15,7 +13,7 @@ def register(sub) -> None:
     p.add_argument("run", type=Path, help="a run directory (cassi run --out)")
     p.add_argument("--compare", type=Path, help="a previous run to compare with")
     p.add_argument("--out", type=Path, required=True, help="report directory")
-    p.set_defaults(func=cmd_report)
+    p.set_defaults(func="cassi.reports.actions:cmd_report")
 
     p = sub.add_parser("nightly", help="run the default evaluation, report, compare, gate",
                        description="One night: dated run + report under DIR, compared with the "
@@ -42,7 +40,7 @@ def register(sub) -> None:
     p.add_argument("--quiet", action="store_true",
                    help="no progress (bars on a terminal, a line per stage every few seconds "
                         "in a log) and no stage times")
-    p.set_defaults(func=cmd_nightly)
+    p.set_defaults(func="cassi.reports.actions:cmd_nightly")
 
     p = sub.add_parser("gate", help="apply the regression gates to a run",
                        description="Compare RUN with a baseline run or golden directory; write "
@@ -52,53 +50,11 @@ def register(sub) -> None:
     p.add_argument("--common-only", action="store_true", dest="common_only",
                    help="compare only the task files, versions and views both runs have, and say "
                         "so in gate.md (default: a baseline of another scope is an error, exit 2)")
-    p.set_defaults(func=cmd_gate)
+    p.set_defaults(func="cassi.reports.actions:cmd_gate")
 
     p = sub.add_parser("golden", help="make a run's renders the golden images (explicit only)",
                        description="Copy RUN's renders and results into GOLDEN; the only way "
                        "golden images change.")
     p.add_argument("run", type=Path)
     p.add_argument("--golden", type=Path, required=True, help="golden directory to (re)write")
-    p.set_defaults(func=cmd_golden)
-
-
-def cmd_report(args: argparse.Namespace) -> int:
-    from cassi.reports.report import write_report  # noqa: PLC0415
-
-    index = write_report(args.run, args.out, compare=args.compare)
-    print(index)
-    return 0
-
-
-def cmd_nightly(args: argparse.Namespace) -> int:
-    from cassi.harness.config import RunConfig  # noqa: PLC0415
-    from cassi.reports.nightly import nightly  # noqa: PLC0415
-
-    video = tuple(v.strip() for v in args.video_versions.split(",") if v.strip())
-    cfg = RunConfig(workers=args.workers, stride=args.stride, extremes=args.extremes,
-                    animate_stride=args.animate_stride, video_versions=video or None)
-    passed, index = nightly(args.out, corpus=args.corpus, config=cfg, progress=not args.quiet,
-                            common_only=args.common_only)
-    print(f"{'PASSED' if passed else 'FAILED'}: {index}")
-    return 0 if passed else 1
-
-
-def cmd_gate(args: argparse.Namespace) -> int:
-    from cassi.reports.gates import gate  # noqa: PLC0415
-
-    passed, results = gate(args.run, args.baseline, common_only=args.common_only)
-    fails = [r for r in results if r.status == "fail"]
-    for r in fails:
-        print(f"FAIL {r.gate} {r.version} {r.subject} {r.item}: {r.reason}")
-    skips = sum(r.status == "skip" for r in results)
-    print(f"{'PASSED' if passed else 'FAILED'}: {len(results) - len(fails) - skips} passed, "
-          f"{len(fails)} failed, {skips} skipped (see {args.run / 'gate.md'})")
-    return 0 if passed else 1
-
-
-def cmd_golden(args: argparse.Namespace) -> int:
-    from cassi.reports.gates import update_golden  # noqa: PLC0415
-
-    n = update_golden(args.run, args.golden)
-    print(f"{n} golden images written to {args.golden}")
-    return 0
+    p.set_defaults(func="cassi.reports.actions:cmd_golden")

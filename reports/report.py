@@ -18,6 +18,7 @@ from cassi.common.atomic import atomic_write_text
 from cassi.reports import compare as cmp
 from cassi.reports import media, plots
 from cassi.reports.runio import Run, load_run, order_versions
+from cassi.harness.evaluation.frames import COMPARISON_VIEW, VIDEO_VIEWS
 from cassi.harness.rubric import (AGGREGATION_RULES, CHECKS, RATINGS, component_ratings,
                                   file_verdicts, rating_counts, table_c_rule, table_title,
                                   version_comparisons)
@@ -26,11 +27,6 @@ from cassi.reports.tables import markdown_table
 #: How many fired checks per version and task file show the four views of their frame on a
 #: subject page (the rest link to the frame's number only).
 MAX_SHEETS_PER_VERSION = 12
-#: The view in which versions are compared side by side (where the farm rendered the video
-#: frames of several versions in it: every task file in a nightly).
-COMPARISON_VIEW = "front"
-#: The order of a task video's panels.
-VIDEO_VIEWS = ("front", "side", "half", "top")
 
 
 def slug(text: str) -> str:

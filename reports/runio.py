@@ -12,9 +12,9 @@ from pathlib import Path
 import pandas as pd
 
 from cassi.common.errors import CassiInputError
-from cassi.harness.results import read_results
-from cassi.harness.runner import RENDER_COLUMNS  # the render index the farm writes
-from cassi.harness.tableset import SUMMARY_FILE, verify_table_set
+from cassi.harness.farm.results import read_results
+from cassi.harness.farm.runner import RENDER_COLUMNS  # the render index the farm writes
+from cassi.harness.farm.tableset import SUMMARY_FILE, verify_table_set
 
 
 @dataclass
@@ -25,7 +25,7 @@ class Run:
     ----------
     root : Path
     results : DataFrame
-        The long results table (cassi.harness.results.COLUMNS).
+        The long results table (cassi.harness.farm.results.COLUMNS).
     ratings : DataFrame
         Per task file, version, table and component: negatives and rating.
     meta : dict
@@ -111,7 +111,7 @@ def load_run(path: str | os.PathLike) -> Run:
     ------
     CassiInputError
         When ``path`` is not a run directory (no results table), or its tables are not one
-        complete set (:class:`~cassi.harness.tableset.TableSetError`).
+        complete set (:class:`~cassi.harness.farm.tableset.TableSetError`).
     """
     root = Path(path)
     if not (root / "results.parquet").is_file():

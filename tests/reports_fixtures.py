@@ -9,10 +9,10 @@ import imageio.v3 as iio
 import numpy as np
 import pandas as pd
 
-from cassi.harness.results import normalize
+from cassi.harness.farm.results import normalize
 from cassi.harness.rubric import ratings_table as ratings
-from cassi.harness.runner import RENDER_COLUMNS
-from cassi.harness.tableset import write_table_set
+from cassi.harness.farm.runner import RENDER_COLUMNS
+from cassi.harness.farm.tableset import write_table_set
 
 VERSIONS = ("cassi-1.0", "cassi-2.0", "cassi-2.1")
 

@@ -8,9 +8,9 @@ from pathlib import Path
 import pytest
 
 from cassi.common.errors import CassiInputError
-from cassi.harness import config as C
+from cassi.harness.evaluation import config as C
 from cassi.harness.commands import config_from_args, register
-from cassi.harness.evalset import TABLE_5_1
+from cassi.harness.evaluation.evalset import TABLE_5_1
 
 CATALOG = C.Catalog(subjects=("JW11", "JW12"), tasks={"JW11": (19, 21, 106), "JW12": (2, 5)},
                     versions=("cassi-1.0", "cassi-2.1"), views=("front", "side", "half", "top"),

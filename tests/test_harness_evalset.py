@@ -8,7 +8,7 @@ import pytest
 
 from cassi.data.corpus.disk import Corpus
 from cassi.data.synth.corpus import make_corpus
-from cassi.harness.evalset import EXTRA_TASKS, TABLE_5_1, default_tasks, explicit_tasks, task_catalog
+from cassi.harness.evaluation.evalset import EXTRA_TASKS, TABLE_5_1, default_tasks, explicit_tasks, task_catalog
 
 
 @pytest.fixture(scope="module")

@@ -19,11 +19,11 @@ import pandas as pd
 import pytest
 
 from cassi.common.errors import CassiInputError
-from cassi.harness import results as R
-from cassi.harness.executors import LocalExecutor
-from cassi.harness.jobs import Job, SkipJob, StageContext, StageOutput, State, npz_bytes, select_frames
-from cassi.harness.runner import Pipeline, TaskSpec, run_batch
-from cassi.harness.store import OutputStore
+from cassi.harness.farm import results as R
+from cassi.harness.farm.executors import LocalExecutor
+from cassi.harness.farm.jobs import Job, SkipJob, StageContext, StageOutput, State, npz_bytes, select_frames
+from cassi.harness.farm.runner import Pipeline, TaskSpec, run_batch
+from cassi.harness.farm.store import OutputStore
 from cassi.harness.rubric import ratings_table
 
 TESTS = Path(__file__).resolve().parent
@@ -266,7 +266,7 @@ def test_results_normalize_folds_extra_columns_into_detail():
 
 
 def test_tables_that_cannot_be_written_keep_finished_outputs(tmp_path):
-    from cassi.harness.runner import OutputWriteError
+    from cassi.harness.farm.runner import OutputWriteError
 
     (tmp_path / "results.parquet").mkdir()  # the table's name is taken: its write must fail
     with pytest.raises(OutputWriteError, match="finished job outputs are kept"):

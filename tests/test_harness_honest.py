@@ -19,10 +19,10 @@ from cassi.common.errors import CassiInputError
 from cassi.data.synth.corpus import make_corpus
 from cassi.harness import provenance, rubric
 from cassi.harness.cli import main as cli_main
-from cassi.harness.config import RunConfig
-from cassi.harness.executors import require_ray
-from cassi.harness.farm import run, worker_count
-from cassi.harness.tableset import TableSetError, verify_table_set, write_table_set
+from cassi.harness.evaluation.config import RunConfig
+from cassi.harness.farm.executors import require_ray
+from cassi.harness.evaluation.run import run, worker_count
+from cassi.harness.farm.tableset import TableSetError, verify_table_set, write_table_set
 from cassi.reports.gates import MismatchedBaseline, gate
 from cassi.reports.nightly import NIGHT_DONE, night_name
 from cassi.reports.runio import load_run
@@ -284,7 +284,7 @@ def test_ray_missing_is_a_clear_error(monkeypatch):
 
 
 def test_results_are_normalised_where_they_are_made(corpus, tmp_path):
-    from cassi.harness import results as R
+    from cassi.harness.farm import results as R
 
     run(RunConfig(out=tmp_path / "out", corpus=corpus, subjects=("JW45",), tasks=(2,),
                   **GEOMETRY), progress=False)

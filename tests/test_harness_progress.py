@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import io
 
-from cassi.harness.jobs import State
-from cassi.harness.progress import Progress
+from cassi.harness.farm.jobs import State
+from cassi.harness.farm.progress import Progress
 
 
 def test_log_gets_a_line_per_stage_at_most_every_interval():

@@ -11,10 +11,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from cassi.harness.executors import LocalExecutor, RayExecutor
-from cassi.harness.jobs import Job, StageContext, StageOutput, State, npz_bytes, select_frames
-from cassi.harness.runner import Pipeline, TaskSpec, run_batch
-from cassi.harness.store import OutputStore
+from cassi.harness.farm.executors import LocalExecutor, RayExecutor
+from cassi.harness.farm.jobs import Job, StageContext, StageOutput, State, npz_bytes, select_frames
+from cassi.harness.farm.runner import Pipeline, TaskSpec, run_batch
+from cassi.harness.farm.store import OutputStore
 
 ray = importlib.import_module("ray")
 pytestmark = pytest.mark.ray

@@ -9,12 +9,14 @@ import pandas as pd
 import pytest
 
 from cassi.common.errors import CassiInputError
-from cassi.harness import pipeline as P
+from cassi.harness.evaluation import caches as P
+from cassi.harness.evaluation import frames as F
+from cassi.harness.evaluation import stages as S
 from cassi.harness.commands import register
-from cassi.harness.config import RunConfig
-from cassi.harness.farm import run
-from cassi.harness.jobs import Job, StageContext
-from cassi.harness.store import OutputStore
+from cassi.harness.evaluation.config import RunConfig
+from cassi.harness.evaluation.run import run
+from cassi.harness.farm.jobs import Job, StageContext
+from cassi.harness.farm.store import OutputStore
 
 
 def _cli(argv) -> int:
@@ -77,14 +79,14 @@ def test_geometry_run_then_rerun(tmp_path, capsys):
 def test_render_stages_reuse_one_renderer_per_view(tmp_path):
     """In-process: geometry, then two render chunks of one view share one Mitsuba scene, then
     the image checks read both chunks."""
-    from cassi.harness.jobs import execute_job
-    from cassi.harness.runner import TaskSpec  # noqa: F401
+    from cassi.harness.farm.jobs import execute_job
+    from cassi.harness.farm.runner import TaskSpec  # noqa: F401
 
     ctx = StageContext(out_dir=tmp_path, corpus=P.corpus_root(None), stride=0, chunk_size=2,
                        synthetic=True)
     OutputStore(tmp_path).prepare()
     geom = Job("geometry", "JW12", 2, 1, "cassi-2.1")
-    out = execute_job(P.geometry_stage, geom, ctx, "d")
+    out = execute_job(S.geometry_stage, geom, ctx, "d")
     frames = out.meta["render_frames"]
     assert frames and frames[0] == min(frames)
     before = P.cache_sizes()["renderers"]
@@ -92,14 +94,14 @@ def test_render_stages_reuse_one_renderer_per_view(tmp_path):
     keys = []
     for i, chunk in enumerate(chunks):
         job = Job("render", "JW12", 2, 1, "cassi-2.1", "front", chunk, i, parents=(geom.key,))
-        assert execute_job(P.render_stage, job, ctx, f"r{i}").state.value == "done"
+        assert execute_job(S.render_stage, job, ctx, f"r{i}").state.value == "done"
         keys.append(job.key)
     assert P.cache_sizes()["renderers"] == min(before + 1, P.RENDERERS_KEPT)
     renderer = next(reversed(P._renderers.values()))  # the most recently used
     assert renderer.loads == 1
     image = Job("image", "JW12", 2, 1, "cassi-2.1", "front", tuple(sorted(set(sum(chunks, ())))),
                 parents=tuple(keys))
-    res = execute_job(P.image_stage, image, ctx, "i")
+    res = execute_job(S.image_stage, image, ctx, "i")
     assert res.state.value == "done"
     rows = pd.read_parquet(OutputStore(tmp_path).path(
         OutputStore(tmp_path).read_manifest(image.key)["outputs"]["rows"]))
@@ -108,7 +110,7 @@ def test_render_stages_reuse_one_renderer_per_view(tmp_path):
     outputs = OutputStore(tmp_path).read_manifest(keys[0])["outputs"]
     assert any(n.startswith("masks-") for n in outputs)
     side = Job("render", "JW12", 2, 1, "cassi-2.1", "side", chunks[0], 0, parents=(geom.key,))
-    assert execute_job(P.render_stage, side, ctx, "s").state.value == "done"
+    assert execute_job(S.render_stage, side, ctx, "s").state.value == "done"
     outputs = OutputStore(tmp_path).read_manifest(side.key)["outputs"]
     assert any(n.startswith("render-") for n in outputs)
     assert not any(n.startswith("masks-") for n in outputs)
@@ -136,8 +138,8 @@ def test_extreme_frames_prefer_checks_that_fired():
         dict(frame=-1, check="a", negatives=0), dict(frame=40, check="a", negatives=0),
         dict(frame=-1, check="b", negatives=2), dict(frame=70, check="b", negatives=0),
         dict(frame=-1, check="c", negatives=1), dict(frame=10, check="c", negatives=0)])
-    assert P.extreme_frames(rows, limit=2) == [10, 70]
-    assert P.extreme_frames(rows) == [10, 40, 70]
+    assert F.extreme_frames(rows, limit=2) == [10, 70]
+    assert F.extreme_frames(rows) == [10, 40, 70]
 
 
 def test_bench_reports_missing_packages_as_errors_and_times_the_farm():
@@ -170,4 +172,4 @@ def test_extreme_frames_ignore_the_fidelity_traces():
         dict(check="lip_aperture", frame=10, negatives=0, view="trace"),
         dict(check="lip_aperture", frame=20, negatives=0, view="trace"),
     ])
-    assert P.extreme_frames(rows, limit=8) == [40]
+    assert F.extreme_frames(rows, limit=8) == [40]

@@ -6,7 +6,7 @@ import os
 
 import pytest
 
-from cassi.harness.store import OutputStore
+from cassi.harness.farm.store import OutputStore
 
 
 def test_blob_writes_skip_fsync_manifests_keep_it(tmp_path, monkeypatch):

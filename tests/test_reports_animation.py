@@ -96,9 +96,9 @@ def test_every_task_file_becomes_a_video_and_versions_compare(tmp_path):
     """cassi-2.0 is the video version: all views on the grid and a two-view video; cassi-1.0
     gets the grid in the view the image checks judge (front) in every task file, so those
     checks judge both versions on the same frames, and both appear side by side."""
-    from cassi.harness.config import RunConfig
-    from cassi.harness.farm import run
-    from cassi.harness.pipeline import image_views
+    from cassi.harness.evaluation.config import RunConfig
+    from cassi.harness.evaluation.run import run
+    from cassi.harness.evaluation.frames import image_views
     from cassi.reports.report import write_report
 
     cfg = RunConfig(out=tmp_path / "run", subjects=("JW45",), tasks=(5, 118),

@@ -8,7 +8,7 @@ import json
 import pandas as pd
 import pytest
 
-from cassi.harness.config import RunConfig
+from cassi.harness.evaluation.config import RunConfig
 from cassi.reports.nightly import nightly
 
 from reports_fixtures import rewrite_results

@@ -21,7 +21,7 @@ cassi30 = pytest.importorskip("cassi30", reason="the cassi-3.0 plug-in is not in
 
 from cassi.versions.mapping import subject_face  # noqa: E402
 from cassi.data.face import numbering as N  # noqa: E402
-from cassi.harness.pipeline import get_corpus, get_face, get_profile  # noqa: E402
+from cassi.harness.evaluation.caches import get_corpus, get_face, get_profile  # noqa: E402
 from cassi.harness.rubric import geometry as G  # noqa: E402
 from cassi.versions.protocol import version_face  # noqa: E402
 from cassi.versions.registry import get_version  # noqa: E402
@@ -424,7 +424,7 @@ def test_the_rubric_on_streamed_chunks_equals_the_rubric_on_the_whole_task(corpu
                                                                            tmp_path):
     """The geometry stage's path for 3.0 (positions streamed to a file, checks a chunk at a
     time, on the face the version animates) gives the same rows, exactly."""
-    from cassi.harness.pipeline import animate_to_file, get_neutral
+    from cassi.harness.evaluation.caches import animate_to_file, get_neutral
     from cassi.harness.rubric import run_geometry_checks
 
     profile, face, rec = _inputs(corpus, "JW40", 118)

@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from cassi.harness.pipeline import get_corpus, get_face, get_profile
+from cassi.harness.evaluation.caches import get_corpus, get_face, get_profile
 from cassi.versions.registry import get_version
 
 VERSIONS = ("parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1")
@@ -59,7 +59,8 @@ def test_the_rubric_on_chunks_from_a_file_equals_the_rubric_on_the_whole_array(
         inputs, version, tmp_path):
     """The geometry stage's path (positions streamed to a file, checks read back a chunk at a
     time, jitter windows and frame steps with their halo) gives the same rows, exactly."""
-    from cassi.harness.pipeline import animate_to_file, get_neutral
+    from cassi.harness.evaluation.caches import get_neutral
+from cassi.harness.evaluation.stages import animate_to_file
     from cassi.harness.rubric import run_geometry_checks
 
     v = get_version(version)

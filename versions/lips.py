@@ -34,8 +34,8 @@ import numpy as np
 from cassi.data.face import numbering as N
 from cassi.common.errors import CassiInputError
 
-from . import lips_constants as K
-from .lips_ellipse import (
+from cassi.versions import lips_constants as K
+from cassi.versions.lips_ellipse import (
     OuterAbcParams,
     OuterAbcState,
     c_prime,
@@ -45,7 +45,7 @@ from .lips_ellipse import (
     mid_inner_abc,
     outer_abc_sequence,
 )
-from .lips_thickness import (
+from cassi.versions.lips_thickness import (
     EQUAL_THICKNESS,
     LOW_LIPS_THICKNESS,
     ThicknessRule,
@@ -56,10 +56,10 @@ from .lips_thickness import (
     rounding_t,
     thick_from_lipthick,
 )
-from .lips_track import track_x
+from cassi.versions.lips_track import track_x
 
 if TYPE_CHECKING:
-    from .protocol import TaskContext
+    from cassi.versions.protocol import TaskContext
 
 __all__ = [
     "LIP_VERTICES",
@@ -559,7 +559,7 @@ class LipMovementStage:
     def _setup(self, ctx: "TaskContext") -> dict:
         plan = ctx.state.get("lips20")
         if plan is None:
-            from .mapping import model_jaw_length
+            from cassi.versions.mapping import model_jaw_length
 
             before = np.array(ctx.start, dtype=np.float64)
             rest = LipRest(before)
@@ -600,6 +600,6 @@ class LipMovementStage:
         ctx.diagnostics.update(lips.diagnostics)
         ctx.diagnostics["thickness_rule"] = np.full(len(lips.xyz), plan["rule"].name, dtype=object)
         # Table 4.1's lip parameters drive steps 1-4 exactly as in 1.0: same diagnostics.
-        from .cassi10 import parameters_frame
+        from cassi.versions.cassi10 import parameters_frame
 
         parameters_frame(ctx, {63: ("UL", 0), 64: ("UL", 1), 65: ("LL", 0), 66: ("LL", 1)})

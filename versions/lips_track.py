@@ -10,7 +10,7 @@ import numpy as np
 
 from cassi.common.errors import CassiInputError
 
-from . import lips_constants as K
+from cassi.versions import lips_constants as K
 
 __all__ = ["track_x", "track_y_for_x"]
 

@@ -5,5 +5,5 @@
 - :mod:`.params` -- Parke's parameters (Table 3.1); :mod:`.numbering` -- vertex numbers;
 - :mod:`.topology` -- the mirrored, triangulated render topology; :mod:`.preview` -- matplotlib.
 """
-from .model import *  # noqa: F401,F403 - `from cassi.data.face import FaceModel`
-from .model import __all__  # noqa: F401
+from cassi.data.face.model import *  # noqa: F401,F403 - `from cassi.data.face import FaceModel`
+from cassi.data.face.model import __all__  # noqa: F401

@@ -6,5 +6,5 @@
 - :mod:`.parke_io` -- Parke's ``st1.pts`` / ``stt.top``; :mod:`.alignment` -- TextGrids;
 - :mod:`.textlines` -- the small whitespace-separated formats' shared line reader.
 """
-from .files import *  # noqa: F401,F403 - the readers, as `cassi.data.xrmb.read_txy`
-from .files import __all__  # noqa: F401
+from cassi.data.xrmb.files import *  # noqa: F401,F403 - the readers, as `cassi.data.xrmb.read_txy`
+from cassi.data.xrmb.files import __all__  # noqa: F401

@@ -13,13 +13,13 @@ Modules by role:
 - :mod:`.run` -- running checks into rows of the long results table;
 - :mod:`.tables` -- the one aggregation into the thesis's tables.
 """
-from .model import (GOOD_RATINGS, RATINGS, TABLE_TOPICS, TABLES, VERSION_ORDER, Check,
+from cassi.harness.rubric.model import (GOOD_RATINGS, RATINGS, TABLE_TOPICS, TABLES, VERSION_ORDER, Check,
                     Measurement, rate, table_title)
-from .registry import (AGGREGATION_RULES, CHECKS, MIN_FRAMES, checks_for, get_check,
+from cassi.harness.rubric.registry import (AGGREGATION_RULES, CHECKS, MIN_FRAMES, checks_for, get_check,
                        registry_table)
-from .measures import DIAGNOSTICS_READ
-from .run import run_geometry_checks, run_image_checks
-from .tables import (RATING_COLUMNS, component_ratings, ratings_table, file_verdicts, negatives_text, order_versions,
+from cassi.harness.rubric.measures import DIAGNOSTICS_READ
+from cassi.harness.rubric.run import run_geometry_checks, run_image_checks
+from cassi.harness.rubric.tables import (RATING_COLUMNS, component_ratings, ratings_table, file_verdicts, negatives_text, order_versions,
                      rating_counts, table_c_rule, verdicts, version_comparisons,
                      version_summaries, version_totals)
 

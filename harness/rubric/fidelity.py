@@ -20,9 +20,9 @@ import numpy as np
 from cassi.data.face import numbering as N
 from cassi.common.errors import CassiInputError
 
-from .frames import Frames
-from .model import Measurement
-from .registry import FIDELITY_MIN_RANGE_MM
+from cassi.harness.rubric.frames import Frames
+from cassi.harness.rubric.model import Measurement
+from cassi.harness.rubric.registry import FIDELITY_MIN_RANGE_MM
 
 __all__ = ["ARTICULATORS", "TRACT_VARIABLES", "FidelityContext", "virtual_pellets",
            "tract_variables", "traces", "m_lips_error", "m_tongue_error", "m_jaw_error", "m_lip_aperture",

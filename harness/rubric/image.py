@@ -23,8 +23,8 @@ import numpy as np
 from scipy import ndimage
 from skimage import measure
 
-from .model import Measurement
-from .registry import (CENTERING_OPEN_SHARE, LOWER_TEETH_MIN_PIXELS, OPEN_MIN_HEIGHT,
+from cassi.harness.rubric.model import Measurement
+from cassi.harness.rubric.registry import (CENTERING_OPEN_SHARE, LOWER_TEETH_MIN_PIXELS, OPEN_MIN_HEIGHT,
                        OPEN_MIN_PIXELS, TEETH_MIN_PIXELS, TONGUE_MIN_PIXELS, WIDE_OPEN_SHARE)
 
 __all__ = ["FrameMasks", "FrameStats", "ImageContext", "mouth_opening", "teeth_split",

@@ -15,10 +15,10 @@ import pandas as pd
 
 from cassi.common.errors import CassiInputError
 
-from . import geometry as G
-from .frames import ArrayFrames, Frames
-from .model import Measurement
-from .registry import (CHECKS, END_SHARE, JAW_NEAR_CLOSED_MM, JITTER_ORDER, JITTER_WINDOW,
+from cassi.harness.rubric import geometry as G
+from cassi.harness.rubric.frames import ArrayFrames, Frames
+from cassi.harness.rubric.model import Measurement
+from cassi.harness.rubric.registry import (CHECKS, END_SHARE, JAW_NEAR_CLOSED_MM, JITTER_ORDER, JITTER_WINDOW,
                        LIPS_BELOW_TEETH_MM, MIN_FRAMES, OFTEN_PERCENTILE, TEETH_HOLD_FRAMES, WIDE_OPEN_MM,
                        WIDE_OPEN_SHARE)
 

@@ -26,7 +26,7 @@ import pandas as pd
 
 from cassi.common.errors import CassiInputError
 
-from .model import Check
+from cassi.harness.rubric.model import Check
 
 __all__ = ["CHECKS", "get_check", "checks_for", "registry_table", "MIN_FRAMES",
            "TABLE_C_FROM_A", "MARKED_SHARE", "AGGREGATION_RULES"]

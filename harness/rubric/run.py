@@ -1,7 +1,7 @@
 """Running checks: one animation (geometry and fidelity) or one view's rendered frames (image)
 into rows of the long results table.
 
-Results are rows of ``cassi.harness.results.COLUMNS``: one whole-task row (``frame == -1``) per
+Results are rows of ``cassi.harness.farm.results.COLUMNS``: one whole-task row (``frame == -1``) per
 check with the negatives, plus one evidence row at the worst frame (negatives 0) so the farm can
 render the frame a check points at.
 """
@@ -14,11 +14,11 @@ import pandas as pd
 
 from cassi.common.errors import CassiInputError
 
-from . import geometry as G
-from .frames import ArrayFrames, Frames
-from .measures import GeometryContext
-from .model import Check, Measurement
-from .registry import TRACE_STEP, TRACE_TASKS, checks_for, get_check
+from cassi.harness.rubric import geometry as G
+from cassi.harness.rubric.frames import ArrayFrames, Frames
+from cassi.harness.rubric.measures import GeometryContext
+from cassi.harness.rubric.model import Check, Measurement
+from cassi.harness.rubric.registry import TRACE_STEP, TRACE_TASKS, checks_for, get_check
 
 __all__ = ["run_geometry_checks", "run_image_checks"]
 
@@ -119,7 +119,7 @@ def _measured_rows(checks, ctx, ids: dict, wanted, frame_no) -> list[dict]:
 def _fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no) -> list[dict]:
     from cassi.versions.mapping import XrmbToParke  # noqa: PLC0415 - the one 4.1.1 mapping
 
-    from .fidelity import FidelityContext, traces  # noqa: PLC0415
+    from cassi.harness.rubric.fidelity import FidelityContext, traces  # noqa: PLC0415
 
     jaw = getattr(profile, "jaw_length_mm", None)
     if face is None or jaw is None:
@@ -159,7 +159,7 @@ def run_image_checks(results_by_view: Mapping[str, Any], *, task: int, subject: 
     -------
     DataFrame of results-table rows (view = the render view each check judges).
     """
-    from . import image as I  # noqa: PLC0415 - scikit-image only where images are judged
+    from cassi.harness.rubric import image as I  # noqa: PLC0415 - scikit-image only where images are judged
 
     ids = dict(subject=subject, task=int(task), rep=int(rep), version=version)
     wanted = None if checks is None else {get_check(c).name for c in checks}

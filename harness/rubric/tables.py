@@ -15,8 +15,8 @@ from typing import Sequence
 
 import pandas as pd
 
-from .model import GOOD_RATINGS, RATINGS, TABLE_TOPICS, TABLES, VERSION_ORDER, rate
-from .registry import CHECKS, MARKED_SHARE, TABLE_C_FROM_A
+from cassi.harness.rubric.model import GOOD_RATINGS, RATINGS, TABLE_TOPICS, TABLES, VERSION_ORDER, rate
+from cassi.harness.rubric.registry import CHECKS, MARKED_SHARE, TABLE_C_FROM_A
 
 __all__ = ["ratings_table", "RATING_COLUMNS", "file_verdicts", "verdicts", "table_c_rule", "component_ratings", "rating_counts",
            "version_totals", "version_summaries", "version_comparisons", "negatives_text", "order_versions",

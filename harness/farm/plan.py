@@ -17,7 +17,7 @@ import json
 from dataclasses import dataclass
 from typing import Iterable, Mapping
 
-from .jobs import GEOMETRY_VIEW, Job, chunk_frames
+from cassi.harness.farm.jobs import GEOMETRY_VIEW, Job, chunk_frames
 
 
 @dataclass(frozen=True)

@@ -12,14 +12,19 @@ import time
 
 from cassi.common.atomic import atomic_write_text
 
-from . import config as C
-from .evalset import default_tasks, explicit_tasks
-from .executors import make_executor, require_ray
-from .inputs import check_inputs
-from .jobs import GEOMETRY_VIEW, StageContext
-from .provenance import code_provenance
-from .runner import Pipeline, RunResult, run_batch
-from .store import OutputStore
+from cassi.harness.evaluation import config as C
+from cassi.harness.evaluation.evalset import default_tasks, explicit_tasks
+from cassi.harness.farm.executors import make_executor, require_ray
+from cassi.harness.evaluation.inputs import check_inputs
+from cassi.harness.farm.jobs import GEOMETRY_VIEW, StageContext
+from cassi.harness.evaluation.provenance import code_provenance
+from cassi.harness.farm.runner import Pipeline, RunResult, run_batch
+from cassi.harness.farm.store import OutputStore
+from cassi.harness.farm.workers import worker_env
+from cassi.harness.evaluation.caches import get_corpus, get_profile
+from cassi.harness.evaluation.frames import render_budget
+from cassi.harness.evaluation.stages import cassi_pipeline, catalog
+from cassi.renderer.variant import choose_variant
 
 
 def plan(cfg: C.RunConfig):
@@ -28,7 +33,7 @@ def plan(cfg: C.RunConfig):
     Returns
     -------
     (corpus, tasks, versions, views)
-        ``tasks`` a list of :class:`~cassi.harness.plan.TaskSpec` (unusable ones included,
+        ``tasks`` a list of :class:`~cassi.harness.farm.plan.TaskSpec` (unusable ones included,
         with reasons), ``views`` the render views (empty for a geometry-only run).
 
     Raises
@@ -36,8 +41,6 @@ def plan(cfg: C.RunConfig):
     CassiInputError
         Unknown names (with the valid ones), unreadable corpus.
     """
-    from .pipeline import catalog, get_corpus  # noqa: PLC0415
-
     corpus = get_corpus(cfg.corpus)
     cat = catalog(corpus)
     C.check_names(cfg, cat)
@@ -72,20 +75,16 @@ def _warn(lines: list[str], *, limit: int = 10) -> None:
 
 
 def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = None) -> RunResult:
-    """Run ``cfg`` (see :mod:`cassi.harness.config`); writes everything under ``cfg.out``.
+    """Run ``cfg`` (see :mod:`cassi.harness.evaluation.config`); writes everything under ``cfg.out``.
 
     Everything is checked before the first job: names, the render variant, and every corpus
-    file the run reads (:func:`cassi.harness.inputs.check_inputs`).
+    file the run reads (:func:`cassi.harness.evaluation.inputs.check_inputs`).
     """
-    from .pipeline import cassi_pipeline, get_profile, worker_env  # noqa: PLC0415
-
     if cfg.executor == "ray":
         require_ray()
     corpus, tasks, versions, views = plan(cfg)
     variant = cfg.variant
     if views:
-        from cassi.renderer.variant import choose_variant  # noqa: PLC0415
-
         variant = choose_variant(cfg.variant)  # an unknown or unusable variant fails here
     checked = check_inputs(corpus, tasks, get_profile=get_profile)
     _warn(checked.warnings)
@@ -97,8 +96,6 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
     if warning:
         _warn([warning])
     if progress:
-        from .pipeline import render_budget  # noqa: PLC0415
-
         n = render_budget(checked.rows, tasks, versions, views, stride=cfg.stride,
                           extremes=cfg.extremes, animate_stride=cfg.animate_stride,
                           video_versions=cfg.video_versions)

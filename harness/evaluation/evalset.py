@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import Iterable
 
-from .runner import TaskSpec
+from cassi.harness.farm.runner import TaskSpec
 
 #: Thesis Table 5.1: subject -> the two tasks used for evaluation (task descriptions in comments).
 TABLE_5_1: dict[str, tuple[int, int]] = {

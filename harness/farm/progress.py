@@ -11,8 +11,8 @@ from tqdm import tqdm
 
 from cassi.common.atomic import atomic_write_text
 
-from .jobs import State
-from .store import OutputStore
+from cassi.harness.farm.jobs import State
+from cassi.harness.farm.store import OutputStore
 
 
 @dataclass

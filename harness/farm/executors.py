@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from multiprocessing.connection import wait as mp_wait
 from typing import Any, Callable
 
+from cassi.harness.farm.workers import thread_env
 from cassi.common.errors import CassiInputError
 
 
@@ -331,13 +332,6 @@ def require_ray():
         raise CassiInputError("--executor ray needs Ray, which is an optional extra: "
                               "pip install 'cassi-farm[ray]'") from None
     return ray
-
-
-def thread_env(threads: int) -> dict[str, str]:
-    """Environment that limits a worker's native thread pools (BLAS, OpenMP) to ``threads``."""
-    n = str(max(1, int(threads)))
-    return {v: n for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
-                           "NUMEXPR_NUM_THREADS", "VECLIB_MAXIMUM_THREADS")}
 
 
 def make_executor(kind: str, *, workers: int = 1, address: str | None = None,

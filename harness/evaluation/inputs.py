@@ -4,7 +4,7 @@ A malformed file (a task file, PAL.DAT, PHA.DAT, Mis.dat, a head-measures file, 
 stops the run with ``file:line: reason`` (exit 2), exactly as ``cassi corpus check`` reports
 it; a well-formed file that cannot be animated (no row with all eight pellets valid) stays a
 skipped job with its reason. Each usable task file gets the digest of everything its jobs
-read (:func:`cassi.harness.provenance.task_inputs_digest`).
+read (:func:`cassi.harness.evaluation.provenance.task_inputs_digest`).
 """
 from __future__ import annotations
 
@@ -14,8 +14,8 @@ from dataclasses import dataclass, field
 from cassi.data.corpus.disk import check_task_file
 from cassi.common.errors import CassiInputError
 
-from .plan import TaskSpec
-from .provenance import task_inputs_digest
+from cassi.harness.farm.plan import TaskSpec
+from cassi.harness.evaluation.provenance import task_inputs_digest
 
 #: Subject attributes that read (and parse) the subject's own files.
 _SUBJECT_READS = ("palate_mm", "pharynx_mm", "mistracking", "head_measures")

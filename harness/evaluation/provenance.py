@@ -1,6 +1,6 @@
 """What a run's outputs depend on besides the job itself: the code and the corpus files.
 
-Every job's digest (:meth:`cassi.harness.jobs.Job.digest`) includes
+Every job's digest (:meth:`cassi.harness.farm.jobs.Job.digest`) includes
 
 - the **code**: the package version, a digest of every file of the installed ``cassi``
   packages and of the modules of any third-party version the run uses, and a digest of the
@@ -83,7 +83,7 @@ def rubric_digest() -> str:
 
 def code_provenance(versions: Iterable[str]) -> dict[str, str]:
     """The code a run's outputs come from (saved in run.json, part of every job digest)."""
-    from .config import package_version  # noqa: PLC0415
+    from cassi.harness.evaluation.config import package_version  # noqa: PLC0415
 
     return {"package_version": package_version(), "code_digest": code_digest(),
             "versions_code_digest": version_code_digest(versions),
@@ -115,7 +115,7 @@ def profile_digest(profile) -> str:
 def file_digest(path: Path | None) -> str:
     if path is None:
         return "-"
-    from .store import sha256_file  # noqa: PLC0415
+    from cassi.harness.farm.store import sha256_file  # noqa: PLC0415
 
     return sha256_file(path)
 

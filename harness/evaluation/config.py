@@ -37,7 +37,7 @@ import yaml
 
 from cassi.common.errors import CassiInputError
 
-from .jobs import GEOMETRY_VIEW
+from cassi.harness.farm.jobs import GEOMETRY_VIEW
 
 EXECUTORS = ("local", "ray")
 
@@ -47,6 +47,23 @@ def usable_cores() -> int:
     import os  # noqa: PLC0415
 
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+#: At most this many "extreme" frames per task file and version (the worst frame of the checks
+#: that fired, most negatives first), so renders stay bounded on long tasks.
+DEFAULT_EXTREMES = 4
+
+#: What a night renders (all four views, raycast preview): the first frame and the two frames
+#: the checks point at most strongly per task file and version; every NIGHTLY_ANIMATE_STRIDE-th
+#: row of every task file in all four views for the video versions' four-view videos (real
+#: time: 145.6 / stride frames per second), and in the front view for the other versions (the
+#: view the image checks judge, on the same frames for every version; the side-by-side
+#: comparisons). README says how the night's time was estimated from measured per-frame costs.
+NIGHTLY_STRIDE = 0
+NIGHTLY_EXTREMES = 2
+NIGHTLY_ANIMATE_STRIDE = 24
+#: The thesis's final version gets a four-view video of every task file.
+NIGHTLY_VIDEO_VERSIONS = ("cassi-2.1",)
 
 
 @dataclass(frozen=True)
@@ -62,7 +79,7 @@ class RunConfig:
     # The default render budget: about 35 frames per task file, version and view, which keeps
     # `cassi run --subjects JW16,JW27` (~9,000 renders before, ~4,500 now) to a few minutes.
     stride: int = 50
-    extremes: int = 4
+    extremes: int = DEFAULT_EXTREMES
     animate_stride: int = 0
     #: Versions whose task videos show all four views (None: every version); the others are
     #: rendered at ``animate_stride`` in the view the image checks judge (front), so those

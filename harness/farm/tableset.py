@@ -19,7 +19,7 @@ import pandas as pd
 from cassi.common.atomic import atomic_tmp_path, atomic_write_text
 from cassi.common.errors import CassiInputError
 
-from .store import sha256_bytes, sha256_file
+from cassi.harness.farm.store import sha256_bytes, sha256_file
 
 SET_FILE = "tables.json"
 #: The tables of a run, each written as ``NAME.parquet`` and ``NAME.csv``.

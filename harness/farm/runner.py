@@ -1,6 +1,6 @@
 """Run a batch plan: skip the jobs already done, execute the rest, derive the tables.
 
-:class:`Scheduler` walks the :class:`~cassi.harness.plan.BatchPlan`: it submits the geometry
+:class:`Scheduler` walks the :class:`~cassi.harness.farm.plan.BatchPlan`: it submits the geometry
 jobs, and as each job finishes asks the plan what it unlocks (a geometry job its render
 chunks, a view's last render chunk its image job). Its state is explicit: the jobs it knows,
 their digests and records. The executor only sees ``(key, call_job, args)`` items. Once every
@@ -15,12 +15,12 @@ from typing import Callable, Iterable
 
 import pandas as pd
 
-from . import results as R
-from .jobs import Job, Outcome, StageContext, StageFn, State, call_job, parent_inputs, store_outputs
-from .plan import BatchPlan, TaskSpec
-from .progress import JobRecord, Progress, Summary, write_job_log
-from .store import OutputStore
-from .tableset import write_table_set
+from cassi.harness.farm import results as R
+from cassi.harness.farm.jobs import Job, Outcome, StageContext, StageFn, State, call_job, parent_inputs, store_outputs
+from cassi.harness.farm.plan import BatchPlan, TaskSpec
+from cassi.harness.farm.progress import JobRecord, Progress, Summary, write_job_log
+from cassi.harness.farm.store import OutputStore
+from cassi.harness.farm.tableset import write_table_set
 
 __all__ = ["Pipeline", "RunResult", "Scheduler", "TaskSpec", "OutputWriteError", "run_batch",
            "collect", "RENDER_COLUMNS", "RENDER_PREFIX"]

@@ -36,8 +36,8 @@ from typing import Callable, Mapping
 
 import pandas as pd
 
-from . import results as R
-from .store import OutputStore
+from cassi.harness.farm import results as R
+from cassi.harness.farm.store import OutputStore
 
 GEOMETRY_VIEW = "geometry"
 

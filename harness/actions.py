@@ -1,0 +1,69 @@
+"""What ``cassi run``, ``cassi bench``, ``cassi render`` and ``cassi animate`` do in the harness
+(parsers: :mod:`.commands`, :mod:`.render_commands`)."""
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from cassi.common.atomic import atomic_write_text
+from cassi.common.errors import CassiInputError
+from cassi.harness.bench import BENCHMARKS, run_benchmarks
+from cassi.harness.commands import config_from_args
+from cassi.harness.evaluation.caches import get_corpus, get_face, get_profile, get_version_face
+from cassi.harness.evaluation.run import run
+from cassi.renderer.commands import NEUTRAL
+from cassi.versions.registry import get_version
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    cfg = config_from_args(args)
+    # On a terminal: bars; in a log (cron, CI): a line per stage every few seconds.
+    result = run(cfg, progress=not args.no_progress)
+    print(result.summary.text())
+    print(f"results: {cfg.out / 'results.parquet'} (and .csv); ratings: "
+          f"{cfg.out / 'ratings.parquet'}")
+    return 0 if result.ok else 1
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    only = None
+    if args.only:
+        only = [n for n in args.only.split(",") if n]
+        unknown = sorted(set(only) - set(BENCHMARKS))
+        if unknown:
+            raise CassiInputError(f"no benchmark {', '.join(unknown)}; "
+                                  f"known: {', '.join(BENCHMARKS)}")
+    report = run_benchmarks(quick=args.quick, only=only)
+    out = Path(args.out)
+    try:
+        atomic_write_text(out, json.dumps(report, indent=1, sort_keys=True, default=str) + "\n")
+    except OSError as err:
+        raise CassiInputError(f"cannot write the benchmark file: {err.strerror}", path=out) from err
+    for name, entry in sorted(report["benchmarks"].items()):
+        status = f"error: {entry['error']}" if "error" in entry else "ok"
+        print(f"{name}: {status}")
+    if "farm_speedup_2_workers" in report:
+        print(f"farm_speedup_2_workers: {report['farm_speedup_2_workers']}")
+    print(f"wrote {out}")
+    return 0
+
+
+def task_positions(corpus_dir, subject: str, task: int, rep: int, version: str):
+    """Face (the one ``version`` animates), recording rows int64 (F,) and positions float32
+    (F, V, 3) Parke units of ``version`` animating one task file; ``neutral``: the subject's
+    neutral face in every row."""
+    corpus = get_corpus(corpus_dir)
+    rec = corpus.subject(subject).load(task, rep)
+    ver = None if version == NEUTRAL else get_version(version)  # unknown: did-you-mean error
+    profile = get_profile(corpus, subject)
+    face = get_face(corpus, subject, profile)
+    if ver is None:
+        n = len(rec.time_us)
+        verts = np.asarray(face.vertices, np.float32)
+        return face, np.arange(n, dtype=np.int64), np.broadcast_to(verts, (n, *verts.shape))
+    anim = ver.animate(profile, face, rec)
+    face = get_version_face(corpus, subject, profile, ver)  # the face the version animated
+    return face, np.asarray(anim.frames, np.int64), np.asarray(anim.positions, np.float32)

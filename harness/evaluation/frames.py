@@ -1,0 +1,118 @@
+"""The frame policy: which frames a job renders, which it keeps, which views show them.
+
+One home for every rule that picks frames, read by the geometry stage (what it keeps and asks
+to render), the run's render budget (said before any work starts), the render stage (which
+views keep masks) and the report (which views a task's video shows).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from cassi.harness.evaluation.config import DEFAULT_EXTREMES
+from cassi.harness.farm.jobs import select_frames
+from cassi.harness.rubric import checks_for
+
+#: The views a task file's video shows side by side; with ``animate_stride`` each of them is
+#: rendered at that stride (views a run leaves out are not rendered).
+VIDEO_VIEWS = ("front", "side", "half", "top")
+#: Tasks whose versions are compared side by side (front view) in the nightly report.
+COMPARED_TASKS = (106, 118)
+COMPARISON_VIEW = "front"
+
+
+def image_views(task: int) -> set[str]:
+    """The views the task's image checks judge (the front view): the only views whose masks are
+    kept, and the views every version renders on the video grid, so that the image checks
+    judge every version on the same frames."""
+    return {c.view for c in checks_for(kind="image", task=task)}
+
+
+def video_views(task: int, version: str, video_versions=None) -> tuple[str, ...]:
+    """The views in which ``version`` renders task ``task`` on the video grid.
+
+    Every task file is also shown as a video (four views side by side): the video versions
+    (``video_versions``; None: every version) get every view; the others the views the image
+    checks judge (else those checks would judge the video versions on every grid frame and the
+    others on a first frame and an extreme or two) and the front view of the compared tasks;
+    the same frames for every version, so videos of a task compare frame for frame.
+    """
+    if video_versions is None or version in video_versions:
+        return VIDEO_VIEWS
+    judged = image_views(task)
+    return tuple(v for v in VIDEO_VIEWS
+                 if v in judged or (task in COMPARED_TASKS and v == COMPARISON_VIEW))
+
+
+def extreme_frames(rows: pd.DataFrame, *, limit: int = DEFAULT_EXTREMES) -> list[int]:
+    """Frames the geometric checks point at.
+
+    The rubric gives each check a whole-task row (``frame == -1``, with the negatives) and an
+    evidence row at the check's worst frame. The worst frames of the checks that earned
+    negatives come first (most negatives first), then those of the other checks, up to
+    ``limit`` frames.
+    """
+    if rows is None or not len(rows) or "frame" not in rows:
+        return []
+    rows = rows.copy()
+    rows["negatives"] = pd.to_numeric(rows["negatives"], errors="coerce").fillna(0)
+    fired = rows[rows["frame"] == -1].groupby("check")["negatives"].max()
+    # Evidence rows only: the fidelity traces (view "trace") are per-frame data, not a fault.
+    traces = rows["view"] == "trace" if "view" in rows else False
+    evidence = rows[(rows["frame"] >= 0) & ~traces].copy()
+    if evidence.empty:
+        return []
+    evidence["fired"] = evidence["check"].map(fired).fillna(0)
+    evidence = evidence.sort_values(["fired", "check", "frame"], ascending=[False, True, True])
+    picked: list[int] = []
+    for f in evidence["frame"]:
+        if int(f) not in picked:
+            picked.append(int(f))
+        if len(picked) >= limit:
+            break
+    return sorted(picked)
+
+
+def frames_to_render(frames: np.ndarray, rows: pd.DataFrame, *, task: int, version: str,
+                     stride: int, extremes: int, animate_stride: int = 0,
+                     video_versions=None) -> tuple[list[int], dict[str, list[int]]]:
+    """What a geometry job asks to render: (frames in every view, frames per video view).
+
+    ``frames`` are the animated recording rows, ``rows`` the checks' rows (their extremes).
+    Every view renders the first frame, every ``stride``-th row and up to ``extremes`` check
+    frames; the :func:`video_views` also every ``animate_stride``-th row.
+    """
+    first, last = int(frames[0]), int(frames[-1])
+    animated = set(frames.tolist())
+    pick = [f for f in select_frames(first, last, stride=stride,
+                                     extremes=extreme_frames(rows, limit=extremes))
+            if f in animated]
+    by_view: dict[str, list[int]] = {}
+    if animate_stride > 0:
+        grid = {f for f in select_frames(first, last, stride=animate_stride) if f in animated}
+        by_view = {view: sorted(set(pick) | grid)
+                   for view in video_views(task, version, video_versions)}
+    return pick, by_view
+
+
+def render_budget(rows_of, tasks, versions, views, *, stride: int, extremes: int,
+                  animate_stride: int, video_versions=None) -> int:
+    """At most how many frames a run renders (said before any work starts).
+
+    ``rows_of`` maps ``(subject, task, rep)`` to the task file's rows
+    (:attr:`cassi.harness.evaluation.inputs.CheckedInputs.rows`: the files are not read again).
+    Per usable task file of R rows, version and view: the first frame, every ``stride``-th row
+    and up to ``extremes`` check frames; plus every ``animate_stride``-th row in the
+    :func:`video_views` (overlaps counted twice: an upper bound).
+    """
+    total = 0
+    for t in tasks:
+        if not t.usable:
+            continue
+        rows = rows_of[(t.subject, t.task, t.rep)]
+        base = 1 + (rows // stride if stride > 0 else 0) + max(0, extremes)
+        video = rows // animate_stride + 1 if animate_stride > 0 else 0
+        for version in versions:
+            shown = set(video_views(t.task, version, video_versions))
+            total += sum(base + (video if view in shown else 0) for view in views)
+    return total

@@ -1,0 +1,154 @@
+"""``cassi nightly``'s orchestration: one night's run in a dated directory, then its review.
+
+Layout of the nightly directory::
+
+    DIR/runs/<YYYY-MM-DD>[-N]/      each night's run (cassi run output)
+    DIR/reports/<same name>/        its report (index.html, tables, images)
+    DIR/golden/                     golden renders (only `cassi golden` writes them)
+    DIR/history.csv                 night, version, negatives, gate (one row per version a night)
+    DIR/latest.txt                  the name of the newest night
+
+The harness runs the evaluation; what reads the night's results (gates, history, report) is
+the ``review`` the caller passes (:func:`cassi.reports.nightly.review_night`), so that
+reports never drive the farm and the harness never imports reports.
+"""
+from __future__ import annotations
+
+import datetime as dt
+import json
+import os
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from cassi.common.atomic import atomic_write_text
+from cassi.harness.evaluation.config import RunConfig
+from cassi.harness.evaluation.run import run as run_farm
+from cassi.harness.farm.runner import RunResult
+from cassi.harness.farm.tableset import SET_FILE as TABLE_SET
+
+#: Written into a night's run directory once the whole night (run, gates, history, report) is
+#: done; a night of today's date without it was interrupted and is resumed.
+NIGHT_DONE = "night.json"
+
+
+def night_name(runs_dir: Path, today: dt.date | None = None) -> str:
+    """Today's ISO date; an unfinished night of that date is resumed (same name, its finished
+    jobs reused), a finished one is followed by -2, -3 ..."""
+    base = (today or dt.datetime.now(dt.timezone.utc).date()).isoformat()
+    name, n = base, 1
+    while (runs_dir / name).exists():
+        if not (runs_dir / name / NIGHT_DONE).is_file():
+            return name
+        n += 1
+        name = f"{base}-{n}"
+    return name
+
+
+def previous_night(runs_dir: Path, current: str) -> Path | None:
+    """The newest night before ``current`` with a complete table set."""
+    nights = sorted((p for p in runs_dir.iterdir() if p.is_dir() and p.name != current
+                     and (p / TABLE_SET).is_file()), key=lambda p: p.name)
+    earlier = [p for p in nights if p.name < current]
+    return earlier[-1] if earlier else None
+
+
+@dataclass
+class Night:
+    """One night, as its review sees it: where it is, what the farm did and the night before."""
+
+    root: Path
+    name: str
+    run_dir: Path
+    report_dir: Path
+    result: RunResult
+    previous: Path | None
+    timer: "StageTimer"
+
+
+def nightly(out_dir: str | os.PathLike, *, review: Callable[[Night], tuple[bool, Path]],
+            corpus: str | os.PathLike | None = None, config: RunConfig | None = None,
+            today: dt.date | None = None, progress: bool = True) -> tuple[bool, Path]:
+    """One night: run the evaluation into ``DIR/runs/<night>``, then ``review(night)`` (gates,
+    history, report), then mark the night done. Returns what the review returns (gates
+    passed, report index); a night whose run failed a job never passes.
+    """
+    timer = StageTimer(progress)
+    root = Path(out_dir)
+    runs_dir, reports_dir = root / "runs", root / "reports"
+    runs_dir.mkdir(parents=True, exist_ok=True)
+    name = night_name(runs_dir, today)
+    run_dir = runs_dir / name
+    cfg = (config or RunConfig()).replace(out=run_dir, corpus=Path(corpus) if corpus else None)
+    with timer("run"):
+        result = run_farm(cfg, progress=progress)
+    timer.worker_seconds(result)
+    timer.say(f"variant: {_variant_of(run_dir)}")
+    passed, index = review(Night(root, name, run_dir, reports_dir / name, result,
+                                 previous_night(runs_dir, name), timer))
+    passed = passed and result.ok
+    atomic_write_text(root / "latest.txt", name + "\n")
+    atomic_write_text(run_dir / NIGHT_DONE, json.dumps(
+        {"night": name, "passed": passed,
+         "finished": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")}) + "\n")
+    timer.say(timer.summary())
+    return passed, index
+
+
+def _variant_of(run_dir: Path) -> str:
+    """The Mitsuba variant the night rendered with (run.json, as the farm resolved it)."""
+    meta = json.loads((run_dir / "run.json").read_text())
+    if not meta.get("views_resolved"):
+        return "none (no renders)"
+    return str(meta.get("variant_resolved") or "unknown (not recorded)")
+
+
+class StageTimer:
+    """Wall time of each stage of a night, printed as it goes (stderr) and summed at the end."""
+
+    def __init__(self, verbose: bool = True):
+        self.verbose = verbose
+        self.seconds: dict[str, float] = {}
+        self.notes: list[str] = []
+        self._current: tuple[str, float] | None = None
+
+    def start(self, name: str) -> None:
+        self.stop()
+        self._current = (name, time.perf_counter())
+
+    def stop(self) -> None:
+        if self._current is not None:
+            name, t0 = self._current
+            self.seconds[name] = time.perf_counter() - t0
+            self._current = None
+            self.say(f"{name}: {self.seconds[name]:.1f} s")
+
+    def __call__(self, name: str):
+        timer = self
+
+        class _Stage:
+            def __enter__(self):
+                timer.start(name)
+
+            def __exit__(self, *exc):
+                timer.stop()
+        return _Stage()
+
+    def worker_seconds(self, result) -> None:
+        """The farm's worker time per stage (geometry, render, image), from its job records."""
+        per = {}
+        for rec in result.records.values():
+            per[rec.stage] = per.get(rec.stage, 0.0) + rec.seconds
+        self.notes.append("worker time " + ", ".join(f"{k} {v:.1f} s" for k, v in per.items()))
+        self.say(self.notes[-1])
+
+    def summary(self) -> str:
+        total = sum(self.seconds.values())
+        parts = ", ".join(f"{k} {v:.1f} s" for k, v in self.seconds.items())
+        return f"night: {total:.1f} s ({parts}; {'; '.join(self.notes)})"
+
+    def say(self, line: str) -> None:
+        if self.verbose:
+            print(f"cassi nightly: {line}", file=sys.stderr, flush=True)

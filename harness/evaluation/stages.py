@@ -1,0 +1,210 @@
+"""The CASSI stages: versions -> rubric geometric checks -> renderer -> image checks -> ratings.
+
+Each stage is a module-level function ``stage(job, ctx, inputs) -> StageOutput`` run inside a
+worker process (:func:`cassi.harness.farm.jobs.execute_job`), with the worker's caches
+(:mod:`.caches`) and the frame policy (:mod:`.frames`).
+"""
+from __future__ import annotations
+
+import io
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Mapping
+
+import numpy as np
+import pandas as pd
+
+from cassi.common.errors import CassiInputError
+from cassi.harness import rubric
+from cassi.harness.evaluation.caches import (get_corpus, get_face, get_neutral, get_profile,
+                                             get_renderer, get_version_face)
+from cassi.harness.evaluation.config import Catalog
+from cassi.harness.evaluation.evalset import task_catalog
+from cassi.harness.evaluation.frames import DEFAULT_EXTREMES, frames_to_render, image_views
+from cassi.harness.farm.jobs import Job, SkipJob, StageContext, StageOutput, npz_bytes
+from cassi.harness.farm.runner import Pipeline
+from cassi.harness.rubric.frames import CHUNK_FRAMES, FileFrames
+from cassi.harness.rubric.measures import DIAGNOSTICS_READ
+from cassi.renderer.images import png_bytes
+from cassi.renderer.views import PRESET_NAMES, VIEW_NAMES
+from cassi.versions.registry import available_versions, get_version
+
+
+def load_usable(subject_data, job: Job):
+    """The job's recording, parsed once; SkipJob with the reason when it cannot be animated."""
+    try:
+        rec = subject_data.load(job.task, job.rep, require_valid=False)
+        u = subject_data.usability(job.task, job.rep, recording=rec)
+    except CassiInputError as err:
+        raise SkipJob(str(err)) from err
+    if not u.usable:
+        raise SkipJob("; ".join(u.reasons) or "task file not usable")
+    return rec
+
+
+def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> StageOutput:
+    """Animate every frame, run the geometric checks, choose and keep the frames to render.
+
+    Outputs: ``rows`` (the checks' rows, view ``"geometry"``), ``keyframes`` (npz: ``frames``
+    int64 (K,) recording rows, ``positions`` float32 (K, V, 3) Parke units) and
+    ``meta["render_frames"]``.
+    """
+    corpus = get_corpus(ctx.corpus)
+    rec = load_usable(corpus.subject(job.subject), job)
+    try:
+        profile = get_profile(corpus, job.subject)
+    except CassiInputError as err:
+        raise SkipJob(f"subject cannot be preprocessed: {err}") from err
+    version = get_version(job.version)
+    face = get_face(corpus, job.subject, profile)
+    with tempfile.TemporaryDirectory(prefix="cassi-geometry-") as tmp:
+        anim = animate_to_file(version, profile, face, rec, Path(tmp))
+        face = get_version_face(corpus, job.subject, profile, version)  # what it animated
+        rows = rubric.run_geometry_checks(anim, face, profile, task=job.task, subject=job.subject,
+                                          rep=job.rep, neutral=get_neutral(), recording=rec)
+        return _geometry_output(job, ctx, rec, anim, pd.DataFrame(rows))
+
+
+@dataclass(frozen=True)
+class StreamedAnimation:
+    """An :class:`~cassi.versions.protocol.Animation` whose positions stay in a file
+    (:class:`~cassi.harness.rubric.frames.FileFrames`), read back a chunk at a time."""
+
+    version: str
+    frames: np.ndarray
+    time_us: np.ndarray
+    positions: object
+    diagnostics: pd.DataFrame
+
+
+def animate_to_file(version, profile, face, rec, tmp: Path) -> StreamedAnimation:
+    """Animate ``rec`` a chunk of frames at a time into a positions file under ``tmp``, so a
+    worker's memory does not grow with the task's positions (about 6.8 KB a frame for the
+    570-vertex face); of the diagnostics, only the columns the rubric reads are kept. A version
+    without ``animate_chunks`` (the protocol only asks for ``animate``) is animated at once and
+    its positions written out."""
+    kept = ("frame", "time_us", *DIAGNOSTICS_READ)
+
+    chunks = (version.animate_chunks(profile, face, rec, frames=CHUNK_FRAMES)
+              if hasattr(version, "animate_chunks") else iter([version.animate(profile, face, rec)]))
+    store, frames, times, diags, name = None, [], [], [], getattr(version, "name", "")
+    for anim in chunks:
+        if store is None:
+            store = FileFrames(tmp / "positions.f32", anim.positions.shape[1])
+        store.append(anim.positions)
+        frames.append(np.asarray(anim.frames, np.int64))
+        times.append(np.asarray(anim.time_us, np.int64))
+        diags.append(anim.diagnostics.filter(items=kept))
+        name = anim.version
+    if store is None:
+        raise SkipJob("the version animated no frame")
+    return StreamedAnimation(name, np.concatenate(frames), np.concatenate(times), store,
+                             pd.concat(diags, ignore_index=True))
+
+
+def _geometry_output(job: Job, ctx: StageContext, rec, anim: StreamedAnimation,
+                     rows: pd.DataFrame) -> StageOutput:
+    """Pick the frames to render from the checks' rows and keep their positions."""
+    frames = np.asarray(anim.frames, dtype=np.int64)
+    if frames.size == 0:
+        raise SkipJob("the version animated no frame")
+    step = int(ctx.option("animate_stride", 0) or 0)
+    pick, by_view = frames_to_render(
+        frames, rows, task=job.task, version=job.version, stride=ctx.stride,
+        extremes=ctx.option("extremes", DEFAULT_EXTREMES), animate_stride=step,
+        video_versions=ctx.option("video_versions"))
+    meta = {"render_frames": pick, "n_frames": int(frames.size)}
+    if by_view:
+        meta["render_frames_by_view"] = by_view
+    keep = sorted(set(pick).union(*meta.get("render_frames_by_view", {}).values()))
+    idx = np.searchsorted(frames, keep)
+    keyframes = npz_bytes(frames=np.asarray(keep, np.int64), positions=anim.positions.take(idx))
+    log = [f"frames {frames[0]}..{frames[-1]} ({frames.size}); render {len(pick)}: {pick}"]
+    if len(keep) > len(pick):
+        log.append(f"video frames (every {step}th row, {', '.join(by_view)}): "
+                   f"{len(keep) - len(pick)} more")
+    log += [f"recording warning: {w}" for w in getattr(rec, "warnings", ())]
+    return StageOutput(rows=rows, files={"keyframes": (keyframes, ".npz")}, meta=meta, log=log)
+
+
+def _png_bytes(srgb: np.ndarray, metadata: dict | None = None) -> bytes:
+    """The frame's sRGB PNG (uint8 (H, W, 3)), encoded in memory (no temporary file per frame)."""
+    return png_bytes(srgb, metadata=metadata, linear=False)
+
+
+class StoredFrame:
+    """A rendered frame as the image checks need it, rebuilt from a render job's outputs."""
+
+    def __init__(self, mask: np.ndarray, depth: np.ndarray, part_names: tuple[str, ...]):
+        self.mask, self.depth, self.part_names = mask, depth, part_names
+
+
+def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> StageOutput:
+    """Render ``job.frames`` of ``job.view``.
+
+    Outputs: one PNG per frame (``render-<frame>``) and, in the views the task's image checks
+    judge, ``masks-<frame>`` (npz: ``mask`` uint8 (H, W) part ids, ``depth`` float32 (H, W)
+    Parke units, ``part_names``). Nothing else reads masks, and a night's masks of every view
+    were 6.9 GB written and hashed.
+    """
+    judged = job.view in image_views(job.task)
+
+    data = np.load(io.BytesIO(inputs["keyframes"]))
+    all_frames = data["frames"].tolist()
+    positions = data["positions"]  # read once: each data[...] access decodes the array again
+    corpus = get_corpus(ctx.corpus)
+    profile = get_profile(corpus, job.subject)
+    face = get_version_face(corpus, job.subject, profile, get_version(job.version))
+    renderer = get_renderer(corpus, job.subject, face, job.view, ctx.preset, ctx.variant)
+    files = {}
+    seconds = 0.0
+    for f in job.frames:
+        res = renderer.render(positions[all_frames.index(f)])
+        seconds += float(getattr(res, "render_s", 0.0))
+        meta = {"subject": job.subject, "task": job.task, "rep": job.rep,
+                "version": job.version, "view": job.view, "frame": f,
+                "synthetic": ctx.synthetic}
+        files[f"render-{f:06d}"] = (_png_bytes(res.srgb8(), {**res.metadata(), **meta}), ".png")
+        if not judged:
+            continue
+        mask = np.asarray(res.mask)
+        if mask.max(initial=0) > 255:
+            raise ValueError("more than 255 parts: masks are stored as uint8")
+        files[f"masks-{f:06d}"] = (npz_bytes(mask=mask.astype(np.uint8),
+                                             depth=np.asarray(res.depth, np.float32),
+                                             part_names=np.asarray(res.part_names, dtype=str)),
+                                   ".npz")
+    return StageOutput(files=files, meta={"render_s": round(seconds, 3)},
+                       log=[f"rendered {len(job.frames)} frame(s) of {job.view} "
+                            f"({ctx.preset}, {renderer.variant}) in {seconds:.2f} s"])
+
+
+def image_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> StageOutput:
+    """The rubric's image checks over every rendered frame of ``job.view`` (all chunks)."""
+
+    def frames():  # one frame's masks at a time: the checks keep a few numbers per frame
+        for f in job.frames:
+            d = np.load(io.BytesIO(inputs[f"masks-{f:06d}"]))
+            yield int(f), StoredFrame(d["mask"].astype(np.int32), d["depth"],
+                                      tuple(str(n) for n in d["part_names"]))
+
+    rows = rubric.run_image_checks({job.view: frames()}, task=job.task, subject=job.subject,
+                                   rep=job.rep, version=job.version)
+    return StageOutput(rows=pd.DataFrame(rows),
+                       log=[f"image checks on {len(job.frames)} frame(s): {len(rows)} row(s)"])
+
+
+def cassi_pipeline(*, render: bool = True) -> Pipeline:
+    """The real pipeline; ``render=False`` for geometry-only runs."""
+    return Pipeline(geometry=geometry_stage, render=render_stage if render else None,
+                    image=image_stage if render else None, ratings=rubric.ratings_table)
+
+
+def catalog(corpus):
+    """The names a run may use on ``corpus`` (:class:`cassi.harness.evaluation.config.Catalog`)."""
+    return Catalog(subjects=tuple(corpus.subjects), tasks=task_catalog(corpus),
+                   versions=tuple(available_versions()), views=tuple(VIEW_NAMES),
+                   presets=tuple(PRESET_NAMES))
+
+

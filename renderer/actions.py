@@ -1,0 +1,71 @@
+"""What ``cassi render`` and ``cassi animate`` do (parsers: :mod:`cassi.renderer.commands`),
+with the positions provider the harness named there."""
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import numpy as np
+
+from cassi.common.errors import CassiInputError
+from cassi.common.lazy import resolve
+from cassi.data.face.topology import render_topology
+from cassi.renderer.animate import animate_positions
+from cassi.renderer.commands import NEUTRAL
+from cassi.renderer.images import write_exr, write_mask_png, write_png, write_sidecar
+from cassi.renderer.render import FaceRenderer
+
+log = logging.getLogger(__name__)
+
+
+def _frame_index(frames: np.ndarray, frame: int) -> int:
+    hits = np.flatnonzero(frames == frame)
+    if not hits.size:
+        lo, hi = (int(frames[0]), int(frames[-1])) if frames.size else (None, None)
+        raise CassiInputError(f"frame {frame} is not animated (frames {lo}..{hi})")
+    return int(hits[0])
+
+
+def cmd_render(args) -> int:
+    provider = resolve(args.positions_provider)
+    out = Path(args.out)
+    if out.suffix.lower() not in (".png", ".exr"):
+        raise CassiInputError("--out must end in .png or .exr", path=out)
+    face, frames, positions = provider(args.corpus, args.subject, args.task, args.rep, args.version)
+    k = _frame_index(frames, args.frame)
+    renderer = FaceRenderer(render_topology(face, half=(args.view == "half")), args.view,
+                            args.preset, args.variant)
+    res = renderer.render(positions[k])
+    meta = {**res.metadata(), "subject": args.subject, "task": args.task, "rep": args.rep,
+            "version": args.version, "frame": int(args.frame)}
+    if out.suffix.lower() == ".exr":
+        write_exr(out, res.rgb, depth=res.depth, mask=res.mask, metadata=meta)
+    else:
+        write_png(out, res.rgb, metadata=meta)
+    written = [out]
+    if args.mask:
+        written.append(write_mask_png(out.with_name(out.stem + ".mask.png"), res.mask, metadata=meta))
+    written.append(write_sidecar(out.with_name(out.name + ".json"), meta))
+    for p in written:
+        print(p)
+    log.info("rendered %s %s frame %d with %s", args.view, args.version, args.frame, res.variant)
+    return 0
+
+
+def cmd_animate(args) -> int:
+    provider = resolve(args.positions_provider)
+    views = [v.strip() for v in args.views.split(",") if v.strip()]
+    face, frames, positions = provider(args.corpus, args.subject, args.task, args.rep, args.version)
+    if args.start is not None or args.end is not None:
+        keep = (frames >= (args.start if args.start is not None else frames.min())) & \
+               (frames <= (args.end if args.end is not None else frames.max()))
+        positions = positions[keep]
+        if not len(positions):
+            raise CassiInputError("no animated frame in the --start/--end range")
+    if args.version == NEUTRAL:
+        positions = positions[:1]  # a still face: one frame is the whole animation
+    summary = animate_positions(face, positions, args.out, views=views, stride=args.stride,
+                                preset=args.preset, variant=args.variant, fps=args.fps)
+    print(summary["path"])
+    log.info("animation: %s", summary)
+    return 0
