@@ -8,7 +8,8 @@ pytestmark = [pytest.mark.render, pytest.mark.slow]
 
 
 def test_farm_preview_benchmark_reports_every_view_beside_a_bare_render():
-    from cassi.harness.bench import bench_farm_preview, headline
+    from cassi.harness.bench import headline
+    from cassi.harness.bench.farm import bench_farm_preview
 
     out = bench_farm_preview(True)
     assert "error" not in out, out

@@ -1,12 +1,12 @@
 """Memory of an image job does not grow with the frames it judges (issue 14: flat memory).
 
-Each figure is a fresh process's peak RSS (``cassi.harness.bench_memory``); before the image
+Each figure is a fresh process's peak RSS (``cassi.harness.bench.memory``); before the image
 checks reduced each frame to a few numbers as it was read, 400 frames held about 0.5 GB more
 than 40.
 """
 import pytest
 
-from cassi.harness.bench_memory import bench_image_memory
+from cassi.harness.bench.memory import bench_image_memory
 
 pytestmark = pytest.mark.render
 

@@ -142,29 +142,6 @@ def test_extreme_frames_prefer_checks_that_fired():
     assert F.extreme_frames(rows) == [10, 40, 70]
 
 
-def test_bench_reports_missing_packages_as_errors_and_times_the_farm():
-    from cassi.harness.bench import _registered, bench_farm
-
-    entry = _registered("cassi.no_such_package.bench", "bench_x", True)
-    assert "error" in entry and "not available" in entry["error"]
-    farm = bench_farm(True, workload="cpu", ray=False, repeats=1)
-    assert farm["local_1"]["jobs"] == farm["local_2"]["jobs"] == 8
-    assert farm["local_1"]["failed"] == farm["local_2"]["failed"] == 0
-    assert farm["speedup_2_workers"] > 0 and "cpu-bound" in farm["workload"]
-
-
-def test_bench_headline_keys_come_from_the_entries_that_have_them():
-    from cassi.harness.bench import headline
-
-    out = headline({"geometry": {"geometry_frames_per_s": {"cassi-1.0": 5.0}},
-                    "render": {"error": "mitsuba missing"}})
-    assert out == {"geometry_frames_per_s": {"cassi-1.0": 5.0}}
-    out = headline({"geometry": {"error": "x"},
-                    "render": {"render_per_s": {"front/preview": 2.0},
-                               "render_pipeline_efficiency": 0.8, "render_rss_growth_mb": 1.0}})
-    assert set(out) == {"render_per_s", "render_pipeline_efficiency", "render_rss_growth_mb"}
-
-
 def test_extreme_frames_ignore_the_fidelity_traces():
     rows = pd.DataFrame([
         dict(check="lip_gap", frame=-1, negatives=1, view="geometry"),

@@ -134,7 +134,7 @@ def test_background_writer_matches_synchronous_writes(front, head, tmp_path):
 @pytest.mark.slow
 def test_bench_render_quick_on_toy_head():
     """The benchmark runs end to end and reports the figures cassi bench expects."""
-    from cassi.renderer.bench import bench_render
+    from cassi.harness.bench.render import bench_render
 
     topo_full, pos = toy_head()
     topo_half, pos_half = toy_head(half=True)

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from _versions_toy import ToyFace, toy_vertices
-from cassi.versions.bench import bench_geometry, long_task
+from cassi.harness.bench.geometry import bench_geometry, long_task
 
 
 def test_long_task_is_deterministic_and_valid_after_head():

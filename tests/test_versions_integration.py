@@ -75,7 +75,7 @@ def test_synthetic_task_on_real_face(synth, real_face, name, task):
 
 
 def test_bench_on_real_face(real_face):
-    from cassi.versions.bench import bench_geometry
+    from cassi.harness.bench.geometry import bench_geometry
 
     out = bench_geometry(True, face=real_face, frames=600, versions=BUILTIN)
     assert not out["errors"] and set(out["geometry_frames_per_s"]) == set(BUILTIN)

@@ -184,6 +184,8 @@ class Outcome:
     meta: dict = field(default_factory=dict)
     log: list[str] = field(default_factory=list)
     blobs: dict[str, tuple[bytes, str]] | None = None
+    #: CPU time of the worker process over the job (``seconds`` is its wall time).
+    cpu_seconds: float = 0.0
 
 
 def rows_to_bytes(rows: pd.DataFrame) -> bytes:
@@ -273,7 +275,7 @@ def execute_job(stage: StageFn, job: Job, ctx: StageContext, digest: str,
     # core (an oversubscribed machine), which is what to look at when workers do not scale.
     log = [f"wall {wall:.3f} s, cpu {cpu:.3f} s (pid {os.getpid()})", *out.log]
     return Outcome(job.key, State.DONE, wall, meta=out.meta, log=log,
-                   blobs=blobs if store is None else None)
+                   blobs=blobs if store is None else None, cpu_seconds=cpu)
 
 
 def call_job(stage: StageFn, job: Job, ctx: StageContext, digest: str,

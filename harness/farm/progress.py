@@ -26,6 +26,7 @@ class JobRecord:
     seconds: float = 0.0
     reason: str = ""
     log: list[str] = field(default_factory=list)
+    cpu_seconds: float = 0.0  # the worker's CPU time over the job, beside its wall ``seconds``
 
 
 @dataclass

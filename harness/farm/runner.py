@@ -153,7 +153,8 @@ class Scheduler:
                                attempts=attempts, log=error.splitlines())
         else:
             rec = self._record(job, outcome.state, outcome.reason, attempts=attempts,
-                               seconds=outcome.seconds, log=outcome.log)
+                               seconds=outcome.seconds, cpu_seconds=outcome.cpu_seconds,
+                               log=outcome.log)
             if outcome.blobs is not None and rec.state is State.DONE:
                 # Outputs shipped back by a worker that does not share our filesystem.
                 store_outputs(self.store, key, self.digests[key], outcome.blobs, outcome.meta)

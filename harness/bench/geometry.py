@@ -1,6 +1,6 @@
 """Geometry benchmark: frames per second of every registered version on one long task.
 
-``cassi bench`` (cassi.harness.bench) calls :func:`bench_geometry`. The task is generated here
+Registered as ``geometry`` in :data:`cassi.harness.bench.BENCHMARKS`. The task is generated here
 (deterministic): JW45's first valid row of task 13 (thesis Figure 3.9) moved by jaw wagging, lip
 protrusion and tongue motion at XRMB's 145.6 rows/s; the subject is JW45's published profile
 (maxprotru.txt and lipthick.txt, thesis Figures 4.16 and 4.25). numpy's element-wise work runs
@@ -13,11 +13,17 @@ import traceback
 
 import numpy as np
 
+from cassi.data.corpus.profile import SubjectProfile
+from cassi.data.face.model import build_face
+from cassi.data.synth.subjects import subject_figures
+from cassi.data.xrmb.files import NOMINAL_PERIOD_US, TaskRecording
+from cassi.versions.registry import available_versions, get_version
+
 __all__ = ["bench_geometry", "long_task", "bench_profile", "bench_face"]
 
 #: Frames of the long task (about 137 s of XRMB data for the full run).
 FULL_FRAMES = 20_000
-QUICK_FRAMES = 4_000
+QUICK_FRAMES = 4_000  # --quick: a few seconds per version, enough to see a regression
 #: JW45 task 13, 27464 us (thesis Figure 3.9), mm, PELLETS order.
 _JW45_ROW = np.array([[15.757, 11.596], [12.175, -9.772], [-7.786, 5.158], [-27.477, 11.512],
                       [-42.758, 9.180], [-54.294, 0.829], [-0.699, -7.452], [-34.792, -9.862]])
@@ -25,8 +31,6 @@ _JW45_ROW = np.array([[15.757, 11.596], [12.175, -9.772], [-7.786, 5.158], [-27.
 
 def long_task(n_frames: int, *, seed: int = 0):
     """A deterministic :class:`~cassi.data.xrmb.files.TaskRecording` of ``n_frames`` rows."""
-    from cassi.data.xrmb.files import NOMINAL_PERIOD_US, TaskRecording
-
     rng = np.random.default_rng(seed)
     t = np.arange(n_frames, dtype=np.float64)
     xy = np.broadcast_to(_JW45_ROW, (n_frames, 8, 2)).copy()
@@ -53,9 +57,6 @@ def bench_profile():
     """JW45's published profile (thesis Figures 4.16, 4.25), jaw length from Figure 3.9's row,
     and the synthetic corpus's JW45 pharynx outline (the thesis does not print a PHA.DAT; versions
     that place the tongue's back along it need one)."""
-    from cassi.data.corpus.profile import SubjectProfile
-    from cassi.data.synth.subjects import subject_figures
-
     d = float(np.hypot(*(_JW45_ROW[6] - _JW45_ROW[7])))
     return SubjectProfile(subject="JW45", jaw_length_mm=d, rest_ul=0.462957, rest_ll=0.355955,
                           max_ul=0.692150, max_ll=0.564495, min_ul=0.010773, min_ll=0.008101,
@@ -65,8 +66,6 @@ def bench_profile():
 
 def bench_face():
     """The neutral face model (``cassi.data.face.model.build_face()``)."""
-    from cassi.data.face.model import build_face
-
     return build_face()
 
 
@@ -92,8 +91,6 @@ def bench_geometry(quick: bool = False, *, face=None, frames: int | None = None,
         ``vertices``, ``repeats``, ``seconds`` {version: best wall time}; ``errors``
         {version: message} for a version that failed.
     """
-    from cassi.versions.registry import available_versions, get_version
-
     n = int(frames or (QUICK_FRAMES if quick else FULL_FRAMES))
     repeats = 2 if quick else 3
     rec, profile = long_task(n), bench_profile()

@@ -1,9 +1,5 @@
-"""``cassi bench``: the registered benchmarks in one JSON document.
+"""The farm benchmarks: ``farm_preview`` and ``farm`` in :data:`cassi.harness.bench.BENCHMARKS`.
 
-- ``geometry``: :func:`cassi.versions.bench.bench_geometry` (owned by the versions package);
-- ``render``: :func:`cassi.renderer.bench.bench_render` (owned by the renderer package);
-- ``geometry_memory`` and ``image_memory``: peak RSS of one worker on a 100,000-row task
-  (:mod:`.bench_memory`, ``geometry_peak_rss_mb``, ``image_peak_rss_mb``);
 - ``farm_preview``: preview frames per second end to end in the farm (one worker, one core:
   render jobs reading their keyframes, rendering, encoding the PNG in memory, storing PNG and
   masks), per view and the mean over the four views (``farm_preview_frames_per_s``, goal >= 60
@@ -15,43 +11,39 @@
   (``farm_speedup_2_workers``, goal >= 1.6) and through a local Ray cluster (its overhead
   against the 2-worker local pool).
 
-A benchmark whose package is missing or fails is reported as ``{"error": ...}``, never
-replaced by made-up numbers. Pool and cluster start-up are timed separately from the batch, so
-jobs per second describe the steady state that a long batch sees.
+A job's wall and CPU seconds are what its worker measured and returned with its outcome
+(:attr:`~cassi.harness.evaluation.run.progress.JobRecord.seconds`, ``cpu_seconds``). Pool and cluster start-up
+are timed separately from the batch, so jobs per second describe the steady state that a long
+batch sees.
 """
 from __future__ import annotations
 
-import importlib
+import io
 import os
-import platform
-import re
 import shutil
 import tempfile
 import time
-import traceback
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from cassi.harness.farm.executors import LocalExecutor, RayExecutor, thread_env
-from cassi.harness.farm.jobs import Job, StageContext, StageOutput
+from cassi.renderer.views import VIEW_NAMES
+
+from cassi.harness.evaluation.config import RunConfig
+from cassi.harness.farm.executors import LocalExecutor, RayExecutor
+from cassi.harness.farm.workers import thread_env, worker_env
+from cassi.harness.evaluation.run import plan
+from cassi.harness.farm.jobs import Job, StageContext, StageOutput, State
+from cassi.harness.evaluation.caches import (get_corpus, get_face, get_profile, get_renderer,
+                                             warm_worker)
+from cassi.harness.evaluation.stages import cassi_pipeline
 from cassi.harness.farm.runner import Pipeline, TaskSpec, run_batch
+from cassi.harness.farm.store import OutputStore
+from cassi.harness.bench.render import bare_frame
 
-SPEEDUP_GOAL = 1.6
-
-
-def _registered(module: str, func: str, quick: bool) -> dict:
-    try:
-        fn = getattr(importlib.import_module(module), func)
-    except (ImportError, AttributeError) as err:
-        return {"error": f"{module}.{func} not available: {type(err).__name__}: {err}"}
-    try:
-        out = fn(quick)
-    except Exception as err:  # noqa: BLE001 - one failing benchmark must not hide the others
-        return {"error": f"{type(err).__name__}: {err}",
-                "traceback": traceback.format_exc().splitlines()[-6:]}
-    return out if isinstance(out, dict) else {"result": out}
+SPEEDUP_GOAL = 1.6  # the issue's goal for 2 local workers over 1 on the same batch
+FARM_PREVIEW_GOAL = 60.0  # frames/s of one worker on one core, the issue's goal with llvm
 
 
 # -- a CPU-bound stage, used only when the CASSI pipeline cannot run -------------------------
@@ -75,15 +67,11 @@ def _noop() -> int:
 
 def _workload(quick: bool, kind: str = "auto"):
     """The batch to time: the real pipeline (geometry and renders of the default corpus) when
-    its packages are present, else the CPU-bound stage; with a description of which."""
+    it can be planned, else the CPU-bound stage; with a description of which."""
     why = "asked for the cpu-bound stage"
     try:
         if kind == "cpu":
             raise LookupError(why)
-        from cassi.harness.evaluation.config import RunConfig  # noqa: PLC0415
-        from cassi.harness.evaluation.run import plan  # noqa: PLC0415
-        from cassi.harness.evaluation.pipeline import cassi_pipeline, warm_worker  # noqa: PLC0415
-
         views = ("front",) if quick else ("front", "half")
         cfg = RunConfig(subjects=("JW11",), versions=("cassi-2.1",) if quick else None,
                         views=views, stride=0 if quick else 200)
@@ -108,19 +96,12 @@ def _workload(quick: bool, kind: str = "auto"):
             "ctx": dict(options=(("work", 0.1 if quick else 0.2),))}, why
 
 
-def _job_times(rec) -> tuple[float, float] | None:
-    """(wall, cpu) seconds of a job as its worker logged them (first log line), or None."""
-    m = re.match(r"wall ([\d.]+) s, cpu ([\d.]+) s", rec.log[0]) if rec.log else None
-    return (float(m.group(1)), float(m.group(2))) if m else None
+def _warm_up(executor, n_workers: int, init=None, initargs=()) -> None:
+    """Return once each of ``executor``'s workers has run its set-up.
 
-
-def _time_batch(work: dict, executor, n_workers: int, tmp: Path, name: str) -> dict:
-    """Start ``executor``, wait until each of its workers has run the warm-up, time the batch."""
-    t0 = time.perf_counter()
-    executor.start()
-    # One trivial item per worker: a worker runs its set-up (the warm-up) before its first item,
-    # so when these come back every worker is warm. (Ray: concurrent warm-up tasks.)
-    init, initargs = work["warm"]
+    One trivial item per worker: a worker runs its set-up (the warm-up) before its first item,
+    so when these come back every worker is warm. (Ray: concurrent warm-up tasks.)
+    """
     for i in range(n_workers):
         if isinstance(executor, RayExecutor) and init is not None:
             executor.submit(f"warm{i}", init, *initargs)
@@ -130,6 +111,13 @@ def _time_batch(work: dict, executor, n_workers: int, tmp: Path, name: str) -> d
         for fin in executor.wait(timeout=1.0):
             if not fin.ok:
                 raise RuntimeError(f"warm-up failed: {fin.error}")
+
+
+def _time_batch(work: dict, executor, n_workers: int, tmp: Path, name: str) -> dict:
+    """Start ``executor``, wait until each of its workers has run the warm-up, time the batch."""
+    t0 = time.perf_counter()
+    executor.start()
+    _warm_up(executor, n_workers, *work["warm"])
     startup = time.perf_counter() - t0
     ctx = StageContext(out_dir=tmp / name, **work["ctx"])
     t1 = time.perf_counter()
@@ -142,12 +130,9 @@ def _time_batch(work: dict, executor, n_workers: int, tmp: Path, name: str) -> d
     for rec in res.records.values():
         by_stage[rec.stage] = by_stage.get(rec.stage, 0) + 1
     failures = sorted({r.reason for r in res.summary.failed})[:3]
-    wall_sum = cpu_sum = 0.0
-    for rec in res.records.values():
-        times = _job_times(rec)
-        if times:
-            wall_sum += times[0]
-            cpu_sum += times[1]
+    ran = [rec for rec in res.records.values() if rec.state is State.DONE]  # not cached ones
+    wall_sum = sum(rec.seconds for rec in ran)
+    cpu_sum = sum(rec.cpu_seconds for rec in ran)
     return {"jobs": jobs, "jobs_by_stage": by_stage, "failed": c["failed"],
             "failure_reasons": failures, "skipped": c["skipped"], "seconds": round(wall, 3),
             "jobs_per_s": round(jobs / wall, 3) if wall else None,
@@ -158,15 +143,16 @@ def _time_batch(work: dict, executor, n_workers: int, tmp: Path, name: str) -> d
 
 
 def bench_farm(quick: bool = False, *, workload: str = "auto", ray: bool = True,
-               repeats: int = 2) -> dict:
+               repeats: int | None = None) -> dict:
     """Jobs per second with 1 and 2 local workers, and with Ray, on the same batch.
 
     The 1- and 2-worker runs alternate ``repeats`` times and the best of each counts (on a
-    shared machine the other load only ever slows a run down); every run is listed under
-    ``runs``. ``workload="cpu"`` times the CPU-bound stage instead of the CASSI pipeline
+    shared machine the other load only ever slows a run down; default 2, quick 1: under a minute
+    in all); every run is listed under ``runs``. ``workload="cpu"`` times the CPU-bound stage instead of the CASSI pipeline
     (tests); ``ray=False`` leaves Ray out.
     """
     use_ray = ray
+    repeats = (1 if quick else 2) if repeats is None else repeats
     work, fallback_reason = _workload(quick, workload)
     out: dict = {"workload": work["kind"], "versions": work["versions"], "views": work["views"],
                  "task_files": len(work["tasks"]), "threads_per_worker": 1}
@@ -196,9 +182,7 @@ def bench_farm(quick: bool = False, *, workload: str = "auto", ray: bool = True,
         if not use_ray:
             return out
         try:
-            import ray  # noqa: PLC0415
-
-            from cassi.harness.evaluation.pipeline import worker_env  # noqa: PLC0415
+            import ray  # noqa: PLC0415 - optional dependency (cassi-farm[ray])
 
             owned = not ray.is_initialized()
             ex = RayExecutor(None, num_cpus=2, initializer=worker_env, initargs=(1,))
@@ -220,9 +204,6 @@ def bench_farm(quick: bool = False, *, workload: str = "auto", ray: bool = True,
     return out
 
 
-FARM_PREVIEW_GOAL = 60.0
-
-
 def bench_farm_preview(quick: bool = False, *, subject: str = "JW11", task: int = 118,
                        version: str = "cassi-2.1") -> dict:
     """Preview frames per second end to end in the farm, one worker, per view.
@@ -232,19 +213,8 @@ def bench_farm_preview(quick: bool = False, *, subject: str = "JW11", task: int 
     of a view is the sum of its render jobs' wall times as the worker measured them (inputs
     read, frames rendered and encoded, outputs stored), so geometry and image checks do not
     count. In the same run and process kind (one core), a bare Mitsuba frame of the same scene:
-    :func:`cassi.renderer.bench.bare_frame` on the same keyframes.
+    :func:`cassi.harness.bench.render.bare_frame` on the same keyframes.
     """
-    import io  # noqa: PLC0415
-
-    from cassi.renderer.bench import bare_frame  # noqa: PLC0415
-    from cassi.renderer.views import VIEW_NAMES  # noqa: PLC0415
-
-    from cassi.harness.evaluation.config import RunConfig  # noqa: PLC0415
-    from cassi.harness.evaluation.run import plan  # noqa: PLC0415
-    from cassi.harness.evaluation.pipeline import (cassi_pipeline, get_corpus, get_face, get_profile,  # noqa: PLC0415
-                           get_renderer, warm_worker, worker_env)
-    from cassi.harness.farm.store import OutputStore  # noqa: PLC0415
-
     cfg = RunConfig(subjects=(subject,), tasks=(task,), versions=(version,), views=VIEW_NAMES)
     corpus, tasks, versions, views = plan(cfg)
     tasks = [t for t in tasks if t.usable][:1]
@@ -262,19 +232,17 @@ def bench_farm_preview(quick: bool = False, *, subject: str = "JW11", task: int 
         OutputStore(ctx.out_dir).prepare()
         init = (warm_worker, (str(corpus.root), subject, tuple(views), "preview", None, 1))
         with LocalExecutor(1, initializer=init[0], initargs=init[1], env=thread_env(1)) as ex:
-            ex.submit("warm", _noop)
-            while ex.pending():
-                ex.wait(timeout=1.0)
+            _warm_up(ex, 1)
             res = run_batch(tasks, versions, views, cassi_pipeline(render=True), ctx, ex,
                             progress=False)
         renders = pd.read_parquet(ctx.out_dir / "renders.parquet")
         seconds: dict[str, float] = {}
         cpu: dict[str, float] = {}
         for key, rec in res.records.items():
-            if rec.stage == "render" and rec.state.value == "done":
+            if rec.stage == "render" and rec.state is State.DONE:
                 view = key.split("/")[3]
                 seconds[view] = seconds.get(view, 0.0) + rec.seconds
-                cpu[view] = cpu.get(view, 0.0) + (_job_times(rec) or (0.0, 0.0))[1]
+                cpu[view] = cpu.get(view, 0.0) + rec.cpu_seconds
         per_view = {}
         for view in views:
             n = int((renders["view"] == view).sum())
@@ -327,68 +295,3 @@ def bench_farm_preview(quick: bool = False, *, subject: str = "JW11", task: int 
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return out
-
-
-def _variant() -> str:
-    try:
-        from cassi.renderer.variant import choose_variant  # noqa: PLC0415
-
-        return choose_variant()
-    except Exception as err:  # noqa: BLE001
-        return f"error: {type(err).__name__}: {err}"
-
-
-#: Figures copied to the top of the document, under the keys the issues name.
-HEADLINE = {"geometry": ("geometry_frames_per_s",),
-            "geometry_memory": ("geometry_peak_rss_mb",),
-            "image_memory": ("image_peak_rss_mb",),
-            "render": ("render_per_s", "render_pipeline_efficiency",
-                       "render_pipeline_efficiency_vs_own_pass", "render_rss_growth_mb",
-                       "bare_mi_render_frames_per_s"),
-            "farm_preview": ("farm_preview_frames_per_s", "farm_preview_cpu_frames_per_s")}
-
-
-def headline(benchmarks: dict) -> dict:
-    """The headline figures of the benchmark entries that produced them (errors have none)."""
-    out = {}
-    for name, keys in HEADLINE.items():
-        entry = benchmarks.get(name)
-        for key in keys:
-            if isinstance(entry, dict) and key in entry:
-                out[key] = entry[key]
-    return out
-
-
-#: The benchmarks of ``cassi bench``, in the order they run (``--only`` picks some): the module
-#: and function of each registered one; ``farm`` is this module's :func:`bench_farm`.
-BENCHMARKS = {"geometry": ("cassi.versions.bench", "bench_geometry"),
-              "render": ("cassi.renderer.bench", "bench_render"),
-              "geometry_memory": ("cassi.harness.bench_memory", "bench_geometry_memory"),
-              "image_memory": ("cassi.harness.bench_memory", "bench_image_memory"),
-              "farm_preview": ("cassi.harness.bench", "bench_farm_preview"),
-              "farm": None}
-
-
-def run_benchmarks(*, quick: bool = False, only=None) -> dict:
-    """Every benchmark (or those named in ``only``); the document ``cassi bench`` writes."""
-    chosen = tuple(BENCHMARKS if only is None else (n for n in BENCHMARKS if n in set(only)))
-    report = {"quick": quick, "cpu_count": os.cpu_count(),
-              "cpus_usable": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
-              "python": platform.python_version(), "machine": platform.machine(),
-              "variant": _variant(), "benchmarks": {}, "only": list(chosen)}
-    for name in chosen:
-        if BENCHMARKS[name] is not None:
-            report["benchmarks"][name] = _registered(*BENCHMARKS[name], quick)
-    if "farm" in chosen:
-        try:
-            farm = bench_farm(quick, repeats=1 if quick else 2)  # --quick: under a minute in all
-        except Exception as err:  # noqa: BLE001
-            farm = {"error": f"{type(err).__name__}: {err}",
-                    "traceback": traceback.format_exc().splitlines()[-6:]}
-        report["benchmarks"]["farm"] = farm
-        if "speedup_2_workers" in farm:
-            report["farm_speedup_2_workers"] = farm["speedup_2_workers"]
-        if "ray_overhead_vs_local" in farm:
-            report["ray_overhead_vs_local"] = farm["ray_overhead_vs_local"]
-    report.update(headline(report["benchmarks"]))
-    return report

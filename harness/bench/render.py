@@ -1,4 +1,4 @@
-"""Render benchmarks for ``cassi bench`` (``bench_render``).
+"""Render benchmarks: ``render`` in :data:`cassi.harness.bench.BENCHMARKS` (``bench_render``).
 
 Figures (all on this machine's variant, one process):
 
@@ -19,23 +19,20 @@ Figures (all on this machine's variant, one process):
 """
 from __future__ import annotations
 
-import os
+import io
 import statistics
-import time
 
 import numpy as np
 
-__all__ = ["bench_render", "rss_mb", "moving_positions", "bare_frame", "own_pass_frame",
-           "pipeline_frame"]
+from cassi.data.face.model import build_face, render_topology
+from cassi.renderer.images import png_bytes
+from cassi.renderer.render import FaceRenderer
+from cassi.renderer.variant import choose_variant
+from cassi.renderer.views import PRESET_NAMES, VIEW_NAMES
 
+from cassi.harness.bench.measure import loadavg, rss_mb, time_loop
 
-def rss_mb() -> float:
-    """Resident set size of this process in MB (Linux /proc; 0.0 where unavailable)."""
-    try:
-        with open("/proc/self/statm") as fh:
-            return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
-    except (OSError, ValueError, IndexError):
-        return 0.0
+__all__ = ["bench_render", "moving_positions", "bare_frame", "own_pass_frame", "pipeline_frame"]
 
 
 def moving_positions(base: np.ndarray, k: int, *, period: int = 40, amplitude: float = 25.0) -> np.ndarray:
@@ -53,32 +50,15 @@ def moving_positions(base: np.ndarray, k: int, *, period: int = 40, amplitude: f
 
 
 def _neutral():
-    from cassi.data.face.model import build_face, render_topology
-
     face = build_face()
     base = np.asarray(face.vertices, np.float32)
     return (lambda half: render_topology(face, half=half)), base
 
 
-def _loadavg() -> float | None:
-    # Timings on a shared machine mean little without the load they were taken under.
-    try:
-        return round(os.getloadavg()[0], 2)
-    except OSError:
-        return None
-
-
-def _time_loop(fn, n: int) -> float:
-    t = time.perf_counter()
-    for k in range(n):
-        fn(k)
-    return (time.perf_counter() - t) / n
-
-
 def bare_frame(renderer, positions: np.ndarray) -> None:
     """The least Mitsuba work a moving frame needs: upload the vertices (``params.update()``)
     and run the preset's one colour-giving ``mi.render``, waiting for it to finish."""
-    import drjit as dr
+    import drjit as dr  # noqa: PLC0415 - only once choose_variant has set DRJIT_LIBLLVM_PATH
 
     renderer.update(positions)
     dr.eval(renderer.render_pass())
@@ -95,10 +75,6 @@ def own_pass_frame(renderer, positions: np.ndarray) -> None:
 def pipeline_frame(renderer, positions: np.ndarray, metadata: dict | None = None) -> tuple[bytes, bytes]:
     """One frame end to end as the farm's render stage makes it: render, PNG in memory, mask and
     depth as ``.npz`` bytes. Returns (png, npz)."""
-    import io
-
-    from cassi.renderer.images import png_bytes
-
     res = renderer.render(positions)
     png = png_bytes(res.srgb8(), metadata={**res.metadata(), **(metadata or {})}, linear=False)
     buf = io.BytesIO()
@@ -114,12 +90,10 @@ def bench_render(quick: bool = False, *, topology_for=None, positions=None,
     ``topology_for(half: bool)`` and ``positions`` (V, 3) default to the neutral face of
     ``cassi.data.face.model``.
     """
-    from cassi.renderer.variant import choose_variant
-
     if topology_for is None or positions is None:
         topology_for, positions = _neutral()
     variant = choose_variant(variant)  # before drjit starts: it sets DRJIT_LIBLLVM_PATH
-    import drjit as dr
+    import drjit as dr  # noqa: PLC0415 - only after choose_variant, as the line above says
 
     # One core, as a farm worker has: the figures then compare with the farm's per worker.
     threads = dr.thread_count()
@@ -131,12 +105,9 @@ def bench_render(quick: bool = False, *, topology_for=None, positions=None,
 
 
 def _bench_render(quick, topology_for, positions, variant) -> dict:
-    from cassi.renderer.render import FaceRenderer
-    from cassi.renderer.views import PRESET_NAMES, VIEW_NAMES
-
     out: dict = {"variant": variant, "threads": 1, "quick": quick, "render_per_s": {}, "efficiency_by_view": {},
                  "efficiency_vs_own_pass_by_view": {},
-                 "ms_per_image": {}, "load_average_before": _loadavg()}
+                 "ms_per_image": {}, "load_average_before": loadavg()}
     n_preview = 6 if quick else 40
     renderers = {}
     for preset in PRESET_NAMES:
@@ -147,7 +118,7 @@ def _bench_render(quick, topology_for, positions, variant) -> dict:
             renderers[(view, preset)] = r
             r.render(moving_positions(positions, 0))  # load + compile kernels
             n = n_preview if preset == "preview" else (1 if quick else 3)
-            dt = _time_loop(lambda k: r.render(moving_positions(positions, k + 1)), n)
+            dt = time_loop(lambda k: r.render(moving_positions(positions, k + 1)), n)
             out["render_per_s"][f"{view}/{preset}"] = round(1.0 / dt, 2)
 
     # --- efficiency: bare Mitsuba frame vs the whole pipeline, alternating blocks -------------
@@ -157,9 +128,9 @@ def _bench_render(quick, topology_for, positions, variant) -> dict:
         frames = [moving_positions(positions, k) for k in range(block)]
         bare_t, own_t, pipe_t = [], [], []
         for _ in range(rounds):
-            bare_t.append(_time_loop(lambda k: bare_frame(r, frames[k]), block))
-            own_t.append(_time_loop(lambda k: own_pass_frame(r, frames[k]), block))
-            pipe_t.append(_time_loop(lambda k: pipeline_frame(r, frames[k]), block))
+            bare_t.append(time_loop(lambda k: bare_frame(r, frames[k]), block))
+            own_t.append(time_loop(lambda k: own_pass_frame(r, frames[k]), block))
+            pipe_t.append(time_loop(lambda k: pipeline_frame(r, frames[k]), block))
         b, o, p = (statistics.median(t) for t in (bare_t, own_t, pipe_t))
         out["efficiency_by_view"][view] = round(b / p, 3)
         out["efficiency_vs_own_pass_by_view"][view] = round(o / p, 3)
@@ -187,5 +158,5 @@ def _bench_render(quick, topology_for, positions, variant) -> dict:
     out["rss_samples_mb"] = samples
     out["rss_frames"] = n_frames
     out["scene_loads"] = {f"{v}/{p}": r.loads for (v, p), r in renderers.items()}
-    out["load_average_after"] = _loadavg()
+    out["load_average_after"] = loadavg()
     return out

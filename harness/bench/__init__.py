@@ -1,0 +1,85 @@
+"""``cassi bench``: the registered benchmarks (:data:`BENCHMARKS`) in one JSON document.
+
+- ``geometry``: frames per second of every version on one long task (:mod:`.geometry`);
+- ``render``: the renderer's frames per second, its share of bare Mitsuba work and its memory
+  over many frames (:mod:`.render`);
+- ``geometry_memory`` and ``image_memory``: peak RSS of one worker on a 100,000-row task
+  (:mod:`.memory`, ``geometry_peak_rss_mb``, ``image_peak_rss_mb``);
+- ``farm_preview`` and ``farm``: preview frames per second end to end in the farm, and jobs per
+  second with 1 and 2 local workers and with Ray (:mod:`.farm`).
+
+Every figure is measured in-process or read from structured output (a job's timing fields, a
+fresh process's JSON line), never parsed from log text (:mod:`.measure`). A benchmark that fails
+is reported as ``{"error": ...}``, never replaced by made-up numbers.
+"""
+from __future__ import annotations
+
+import os
+import platform
+
+from cassi.renderer.variant import choose_variant
+
+from cassi.harness.bench.farm import bench_farm, bench_farm_preview
+from cassi.harness.bench.geometry import bench_geometry
+from cassi.harness.bench.measure import guarded
+from cassi.harness.bench.memory import bench_geometry_memory, bench_image_memory
+from cassi.harness.bench.render import bench_render
+
+__all__ = ["BENCHMARKS", "HEADLINE", "headline", "run_benchmarks"]
+
+#: The benchmarks of ``cassi bench``, in the order they run (``--only`` picks some): name ->
+#: function of ``quick`` returning the benchmark's JSON-ready entry.
+BENCHMARKS = {"geometry": bench_geometry,
+              "render": bench_render,
+              "geometry_memory": bench_geometry_memory,
+              "image_memory": bench_image_memory,
+              "farm_preview": bench_farm_preview,
+              "farm": bench_farm}
+
+
+def _same(*keys: str) -> dict[str, str]:
+    return {key: key for key in keys}
+
+
+#: Figures copied to the top of the document, under the keys the issues name: benchmark ->
+#: {key in its entry: key in the document}.
+HEADLINE = {"geometry": _same("geometry_frames_per_s"),
+            "geometry_memory": _same("geometry_peak_rss_mb"),
+            "image_memory": _same("image_peak_rss_mb"),
+            "render": _same("render_per_s", "render_pipeline_efficiency",
+                            "render_pipeline_efficiency_vs_own_pass", "render_rss_growth_mb",
+                            "bare_mi_render_frames_per_s"),
+            "farm_preview": _same("farm_preview_frames_per_s", "farm_preview_cpu_frames_per_s"),
+            "farm": {"speedup_2_workers": "farm_speedup_2_workers",
+                     **_same("ray_overhead_vs_local")}}
+
+
+def headline(benchmarks: dict) -> dict:
+    """The headline figures of the benchmark entries that produced them (errors have none)."""
+    out = {}
+    for name, keys in HEADLINE.items():
+        entry = benchmarks.get(name)
+        for key, top in keys.items():
+            if isinstance(entry, dict) and key in entry:
+                out[top] = entry[key]
+    return out
+
+
+def _variant() -> str:
+    try:
+        return choose_variant()
+    except Exception as err:  # noqa: BLE001 - the document says which variant failed and why
+        return f"error: {type(err).__name__}: {err}"
+
+
+def run_benchmarks(*, quick: bool = False, only=None) -> dict:
+    """Every benchmark (or those named in ``only``); the document ``cassi bench`` writes."""
+    chosen = tuple(BENCHMARKS if only is None else (n for n in BENCHMARKS if n in set(only)))
+    report = {"quick": quick, "cpu_count": os.cpu_count(),
+              "cpus_usable": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
+              "python": platform.python_version(), "machine": platform.machine(),
+              "variant": _variant(), "benchmarks": {}, "only": list(chosen)}
+    for name in chosen:
+        report["benchmarks"][name] = guarded(BENCHMARKS[name], quick)
+    report.update(headline(report["benchmarks"]))
+    return report
