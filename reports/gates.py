@@ -18,15 +18,13 @@ from cassi.common.atomic import atomic_tmp_path, atomic_write_text
 from cassi.common.errors import CassiInputError
 from cassi.reports.media import read_rgb8
 from cassi.reports.runio import Run, load_run
+from cassi.renderer.compare import MAX_CHANGED_SHARE, compare_images
 from cassi.harness.rubric import CHECKS, verdicts
 
-#: Image gate thresholds. Preview renders are one ray per pixel centre with no sampling, so a
-#: frame is the same bytes in every run of a variant; llvm and scalar_rgb differ by at most one
-#: 8-bit level except where a ray grazes a silhouette edge (one pixel per view seen). A render
-#: fails when more than MAX_CHANGED_PX pixels differ from the golden image by more than
-#: LEVELS levels: lowering the jaw by 1 Parke unit (0.25 mm) already changes hundreds.
-LEVELS = 1
-MAX_CHANGED_PX = 16
+#: Image gates judge a render against its golden image by the renderer's one comparison rule
+#: (:func:`cassi.renderer.compare.compare_images`: at most MAX_CHANGED_SHARE of the pixels may
+#: differ by more than PIXEL_LEVELS levels), so a golden made on one machine and a night rendered
+#: on another pass when nothing changed (the rule's module says why and what it was measured on).
 #: What changed is shown where the evaluation looks: FLIP (perceived difference, 0..1) inside
 #: the mouth region the renderer records with every PNG (``cassi:mouth_box``).
 GATE_IMAGES = "gate-images"
@@ -83,22 +81,22 @@ def image_metrics(rendered: np.ndarray, reference: np.ndarray,
     Returns
     -------
     dict
-        ``changed_px`` pixels differing by more than LEVELS levels in any channel,
-        ``max_levels`` the largest difference, ``flip_mouth`` the mean FLIP error (0 = same,
-        1 = most different) inside ``box`` (the whole image when None) and ``flip_map`` its
-        per-pixel map, float (h, w).
+        ``comparison`` the :class:`~cassi.renderer.compare.ImageComparison` (the rule's verdict
+        and reason), ``changed_px`` pixels differing by more than PIXEL_LEVELS levels in any
+        channel, ``max_levels`` the largest difference, ``flip_mouth`` the mean FLIP error
+        (0 = same, 1 = most different) inside ``box`` (the whole image when None) and
+        ``flip_map`` its per-pixel map, float (h, w).
     """
     import flip_evaluator  # noqa: PLC0415
 
-    if rendered.shape != reference.shape:
-        raise ValueError(f"image shapes differ: {rendered.shape} vs {reference.shape}")
-    diff = np.abs(rendered.astype(np.int16) - reference.astype(np.int16)).max(axis=2)
+    comparison = compare_images(rendered, reference)
     r0, r1, c0, c1 = box or (0, rendered.shape[0], 0, rendered.shape[1])
     crop = [np.ascontiguousarray(im[r0:r1, c0:c1, :3], np.float32) / 255.0
             for im in (reference, rendered)]
     flip_map, flip_mean, _ = flip_evaluator.evaluate(crop[0], crop[1], "LDR", applyMagma=False)
-    return {"changed_px": int((diff > LEVELS).sum()), "max_levels": int(diff.max(initial=0)),
-            "flip_mouth": float(flip_mean), "flip_map": np.asarray(flip_map, np.float32).squeeze()}
+    return {"comparison": comparison, "changed_px": comparison.changed_px,
+            "max_levels": comparison.max_levels, "flip_mouth": float(flip_mean),
+            "flip_map": np.asarray(flip_map, np.float32).squeeze()}
 
 
 def _write_gate_images(out: Path, stem: Path, rendered: np.ndarray, reference: np.ndarray,
@@ -130,7 +128,7 @@ def _write_gate_images(out: Path, stem: Path, rendered: np.ndarray, reference: n
     return written
 
 
-def image_gates(run: Run, reference_dir: Path, *, max_changed_px: int = MAX_CHANGED_PX,
+def image_gates(run: Run, reference_dir: Path, *,
                 images_dir: Path | None = None) -> list[GateResult]:
     """Compare every render of ``run`` with its golden counterpart under ``reference_dir``.
 
@@ -156,16 +154,15 @@ def image_gates(run: Run, reference_dir: Path, *, max_changed_px: int = MAX_CHAN
         except (OSError, ValueError) as err:
             out.append(GateResult("image", row["subject"], row["version"], item, "fail", str(err)))
             continue
-        ok = m["changed_px"] <= max_changed_px
+        c = m["comparison"]
         where = "mouth region" if box is not None else "whole image (no mouth region recorded)"
-        reason = (f"{m['changed_px']} px differ by more than {LEVELS} level (max {m['max_levels']}; "
-                  f"allowed {max_changed_px}); FLIP in the {where} {m['flip_mouth']:.4f}")
-        if not ok:
+        reason = f"{c.reason}; FLIP in the {where} {m['flip_mouth']:.4f}"
+        if not c.passed:
             files = _write_gate_images(images_dir, golden_key(row), rendered, reference, m, box)
             reason += "; images: " + ", ".join(files)
         out.append(GateResult("image", row["subject"], row["version"], item,
-                              "pass" if ok else "fail", reason, float(m["changed_px"]),
-                              float(max_changed_px)))
+                              "pass" if c.passed else "fail", reason, c.changed_share,
+                              MAX_CHANGED_SHARE))
     return out
 
 

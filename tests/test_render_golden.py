@@ -11,16 +11,19 @@ writes the rendered, reference and difference images and names the folder (``CAS
 or pytest's tmp_path).
 
 What is compared, and why: the preview preset shades its colour from one ray through each pixel
-centre (no sampling), so a render is the same bytes in every run and process of a variant.
-
-- the mask: agreement >= 0.999 (it catches geometry and camera changes: lowering the jaw by 15
-  Parke units leaves 0.996 in the front view and 0.986 in the half view); llvm and scalar differ
-  in one silhouette pixel of the half and top views (the ray grazes an edge);
-- the colour, exactly up to one 8-bit level on every pixel where the masks agree (llvm against
-  scalar_rgb: at most one level; a skin 2% darker or the lights mirrored already fail).
+centre (no sampling), so a render is the same bytes in every run and process of one build on one
+machine (test_render_is_reproducible checks that exactly). Another machine compiles Dr.Jit's
+LLVM kernels for its own CPU, so a golden image made on one machine is compared with a render
+from another by the renderer's one rule (:func:`cassi.renderer.compare.compare_images`, the rule
+the nightly's image gates use; its module gives each tolerance's reason and measurement): part
+masks agree on >= 99.9% of the pixels, and at most 0.5% of the pixels differ by more than one
+8-bit level where they do. Renders from other code paths (scalar_rgb, llvm built for AVX2 with 8
+lanes) and the reported AVX-512 machine's highlight difference pass; a jaw lowered by 4 Parke
+units, a skin 2% darker and mirrored lights fail.
 """
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import os
 from pathlib import Path
@@ -28,14 +31,22 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cassi.renderer.images import read_image, to_srgb8, write_mask_png, write_png
+from cassi.data.face.model import render_topology
+from cassi.data.face.params import jaw_rotation
+from cassi.renderer import views
+from cassi.renderer.compare import compare_images
+from cassi.renderer.images import png_bytes, read_image, to_srgb8, write_mask_png, write_png
+from cassi.renderer.render import FaceRenderer
+from other_machine import CPU_LEVELS, CPU_PIXELS, as_another_cpu, llvm_target
 
 pytestmark = pytest.mark.render
 
 GOLDEN = Path(__file__).resolve().parent / "golden"
-LEVELS = 1
-MASK_AGREEMENT_MIN = 0.999
 REGEN = os.environ.get("CASSI_REGEN_GOLDEN", "") not in ("", "0")
+VIEWS = ("front", "side", "half", "top")
+#: The jaw opened by 0.5 degrees moves its farthest vertex (the chin) by 4.0 Parke units: the
+#: smallest geometric change the rule is meant to catch in every view ("a few Parke units").
+JAW_DEGREES = 0.5
 
 
 @pytest.fixture(scope="module")
@@ -45,20 +56,13 @@ def neutral():
     return face, np.asarray(face.vertices)
 
 
-def colour_difference(ref: np.ndarray, img: np.ndarray, same_part: np.ndarray) -> tuple[int, int]:
-    """(largest difference in 8-bit levels, pixels beyond LEVELS) of two uint8 (H, W, 3) images
-    over the pixels where ``same_part`` (bool (H, W)) is true."""
-    d = np.abs(ref.astype(int) - img.astype(int)).max(axis=2)[same_part]
-    return int(d.max(initial=0)), int((d > LEVELS).sum())
-
-
 def _failure_dir(tmp_path: Path) -> Path:
     out = Path(os.environ.get("CASSI_GOLDEN_OUT", tmp_path))
     out.mkdir(parents=True, exist_ok=True)
     return out
 
 
-@pytest.mark.parametrize("view", ["front", "side", "half", "top"])
+@pytest.mark.parametrize("view", VIEWS)
 def test_neutral_face_matches_golden(neutral, view, tmp_path):
     from cassi.data.face.model import render_topology
     from cassi.renderer.render import FaceRenderer
@@ -74,38 +78,37 @@ def test_neutral_face_matches_golden(neutral, view, tmp_path):
         write_mask_png(mask_ref, res.mask, metadata=res.metadata())
         pytest.skip(f"regenerated {colour_ref.name} and {mask_ref.name}")
 
-    problems = []
-    out = None
-    ref_mask = read_image(mask_ref)[..., 0].astype(int) if mask_ref.exists() else res.mask
-    if mask_ref.exists():
-        agree = float(np.mean(ref_mask == res.mask))
-        if agree < MASK_AGREEMENT_MIN:
-            problems.append(f"mask agreement {agree:.5f} < {MASK_AGREEMENT_MIN}")
-            out = _failure_dir(tmp_path)
-            write_mask_png(out / f"{view}.mask.rendered.png", res.mask)
-            diff = np.where(ref_mask != res.mask, 255, 0)
-            write_png(out / f"{view}.mask.diff.png", np.repeat(diff[..., None], 3, 2).astype(np.uint8),
-                      linear=False)
-    if colour_ref.exists():
-        ref = read_image(colour_ref)[..., :3]
-        worst, n_bad = colour_difference(ref, img, ref_mask == res.mask)
-        if n_bad:
-            problems.append(f"{n_bad} pixel(s) differ by more than {LEVELS} level (up to {worst})")
-            out = _failure_dir(tmp_path)
-            write_png(out / f"{view}.rendered.png", img, linear=False)
-            write_png(out / f"{view}.reference.png", ref, linear=False)
-            diff = np.clip(np.abs(img.astype(int) - ref.astype(int)) * 4, 0, 255).astype(np.uint8)
-            write_png(out / f"{view}.difference.png", diff, linear=False)
-    if problems:
-        pytest.fail(f"{view}: {'; '.join(problems)}; images in {out}")
     if not colour_ref.exists() or not mask_ref.exists():
         missing = [p.name for p in (colour_ref, mask_ref) if not p.exists()]
         pytest.skip(f"no golden reference {', '.join(missing)} (CASSI_REGEN_GOLDEN=1 makes it)")
+    ref, ref_mask = read_image(colour_ref)[..., :3], read_image(mask_ref)[..., 0].astype(int)
+    c = compare_images(img, ref, rendered_mask=res.mask, reference_mask=ref_mask)
+    if not c.passed:
+        out = _failure_dir(tmp_path)
+        write_png(out / f"{view}.rendered.png", img, linear=False)
+        write_png(out / f"{view}.reference.png", ref, linear=False)
+        diff = np.clip(np.abs(img.astype(int) - ref.astype(int)) * 4, 0, 255).astype(np.uint8)
+        write_png(out / f"{view}.difference.png", diff, linear=False)
+        write_mask_png(out / f"{view}.mask.rendered.png", res.mask)
+        pytest.fail(f"{view}: {c.reason}; images in {out}")
+
+
+def _golden(view: str) -> tuple[np.ndarray, np.ndarray]:
+    colour_ref, mask_ref = GOLDEN / f"neutral_{view}.png", GOLDEN / f"neutral_{view}.mask.png"
+    if not colour_ref.exists() or not mask_ref.exists():
+        pytest.skip(f"no golden reference for the {view} view")
+    return read_image(colour_ref)[..., :3], read_image(mask_ref)[..., 0].astype(int)
+
+
+def _render(face, view, positions, variant=None, view_obj=None):
+    topo = render_topology(face, half=(view == "half"))
+    return FaceRenderer(topo, view_obj or view, "preview", variant).render(positions)
 
 
 def test_render_is_reproducible(neutral):
-    """A new renderer, and the same renderer after another frame, give the same bits (vertex
-    normals are summed in a fixed order, see scenes.vertex_normals)."""
+    """Same-machine determinism, kept exact (the golden tolerance is for other machines): a new
+    renderer, and the same renderer after another frame, give the same bits and the same PNG
+    bytes (vertex normals are summed in a fixed order, see scenes.vertex_normals)."""
     from cassi.data.face.model import render_topology
     from cassi.renderer.render import FaceRenderer
 
@@ -119,6 +122,7 @@ def test_render_is_reproducible(neutral):
     for other in (b, c):
         assert np.array_equal(a.mask, other.mask) and np.array_equal(a.depth, other.depth)
         assert np.array_equal(a.rgb, other.rgb)
+        assert png_bytes(a.srgb8(), linear=False) == png_bytes(other.srgb8(), linear=False)
 
 
 def test_neutral_views_show_what_they_should(neutral):
@@ -144,34 +148,70 @@ def test_neutral_views_show_what_they_should(neutral):
             assert (res.mask[0] == 0).all()
 
 
-def test_colour_comparison_fires_on_a_planted_defect(neutral, monkeypatch):
-    """The other variant passes; a skin 2% darker, or the lights mirrored, does not."""
-    import dataclasses
-
-    from cassi.data.face.model import render_topology
-    from cassi.renderer import views
-    from cassi.renderer.render import FaceRenderer
-
+def test_other_code_paths_pass_against_the_goldens(neutral):
+    """Renders from other code paths than the goldens' pass the rule in every view: scalar_rgb
+    (no JIT), and llvm compiled for an AVX2 CPU with 8 lanes (here AVX-512 with 16). Both really
+    differ from the goldens somewhere, so the rule, not luck, lets them through."""
     face, pos = neutral
-    topo = render_topology(face)
-    res = FaceRenderer(topo, "front", "preview").render(pos)
-    base, mask = to_srgb8(res.rgb), res.mask
-    other = FaceRenderer(topo, "front", "preview", "scalar").render(pos)
-    assert colour_difference(base, to_srgb8(other.rgb), mask == other.mask)[1] == 0
+    goldens = {view: _golden(view) for view in VIEWS}
+    differing = {"scalar": 0, "llvm avx2 x8": 0}
+    renders = {("scalar", v): _render(face, v, pos, "scalar") for v in VIEWS}
+    with llvm_target("haswell", "+avx2,+fma", 8) as before:
+        assert before[2] != 8, "the native target already has 8 lanes: nothing would change"
+        renders.update({("llvm avx2 x8", v): _render(face, v, pos, "llvm") for v in VIEWS})
+    for (path, view), res in renders.items():
+        ref, ref_mask = goldens[view]
+        c = compare_images(res.srgb8(), ref, rendered_mask=res.mask, reference_mask=ref_mask)
+        assert c.passed, (path, view, c.reason)
+        differing[path] += int(np.any(res.srgb8() != ref))
+    assert all(differing.values()), differing
 
+
+def test_another_cpus_highlight_passes_and_real_changes_still_fail(neutral):
+    """The reported failure, simulated: the half view's eye highlight changed as the AVX-512
+    machine changed it (107 pixels beyond one level, up to 38) fails the old exact rule and
+    passes the new one; with the jaw lowered or the skin darker as well, it fails."""
+    face, pos = neutral
+    base = _render(face, "half", pos)
+    cpu = as_another_cpu(base.srgb8())
+    c = compare_images(cpu, base.srgb8(), rendered_mask=base.mask, reference_mask=base.mask)
+    assert c.changed_px == CPU_PIXELS and c.max_levels == CPU_LEVELS  # the old rule's failure
+    assert c.passed, c.reason
+    lowered = _render(face, "half", jaw_rotation(pos, JAW_DEGREES))
+    c = compare_images(as_another_cpu(lowered.srgb8()), base.srgb8(),
+                       rendered_mask=lowered.mask, reference_mask=base.mask)
+    assert not c.colour_ok and not c.mask_ok, c.reason
+
+
+def test_real_changes_fail(neutral, monkeypatch):
+    """The jaw lowered by 4 Parke units (every view), a skin 2% darker and the lights mirrored
+    (front view) fail the rule, each through the colour."""
+    face, pos = neutral
+    lowered = jaw_rotation(pos, JAW_DEGREES)
+    assert np.linalg.norm(lowered - pos, axis=1).max() == pytest.approx(4.0, abs=0.05)
+    for view in VIEWS:
+        base, moved = _render(face, view, pos), _render(face, view, lowered)
+        c = compare_images(moved.srgb8(), base.srgb8(), rendered_mask=moved.mask,
+                           reference_mask=base.mask)
+        assert not c.colour_ok, (view, c.reason)
+
+    base = _render(face, "front", pos)
     skin = views.MATERIALS["skin"]
     monkeypatch.setitem(views.MATERIALS, "skin",
                         dataclasses.replace(skin, rgb=tuple(0.98 * c for c in skin.rgb)))
-    darker = to_srgb8(FaceRenderer(topo, "front", "preview").render(pos).rgb)
+    darker = _render(face, "front", pos)
     monkeypatch.setitem(views.MATERIALS, "skin", skin)
-    assert colour_difference(base, darker, np.ones_like(mask, bool))[1] > 100
+    c = compare_images(darker.srgb8(), base.srgb8(), rendered_mask=darker.mask,
+                       reference_mask=base.mask)
+    assert c.mask_ok and not c.passed and c.max_levels <= 2, c.reason  # small, but everywhere
 
     front = views.VIEWS["front"]
     lights = tuple(dataclasses.replace(l, offset=(-l.offset[0], l.offset[1], l.offset[2]))
                    for l in front.lights)
-    mirrored = dataclasses.replace(front, lights=lights)
-    relit = to_srgb8(FaceRenderer(topo, mirrored, "preview").render(pos).rgb)
-    assert colour_difference(base, relit, np.ones_like(mask, bool))[1] > 100
+    relit = _render(face, "front", pos, view_obj=dataclasses.replace(front, lights=lights))
+    c = compare_images(relit.srgb8(), base.srgb8(), rendered_mask=relit.mask,
+                       reference_mask=base.mask)
+    assert not c.passed, c.reason
 
 
 def test_final_preset_path_traces(neutral):

@@ -4,9 +4,14 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
+from other_machine import as_another_cpu
 from reports_fixtures import image, results_rows, write_run
+from cassi.data.face.model import build_face, render_topology
+from cassi.data.face.params import jaw_rotation
 from cassi.harness.cli import main
+from cassi.renderer.render import FaceRenderer
 from cassi.reports.gates import gate, image_metrics, metric_gates, update_golden
 
 KEY = ("JW11", 19, "cassi-2.0", "front", 0)
@@ -18,9 +23,10 @@ def test_image_metrics_identical_one_level_and_shifted():
     assert same["changed_px"] == 0 and same["max_levels"] == 0 and same["flip_mouth"] == 0.0
     # one 8-bit level everywhere (llvm against scalar_rgb) is no change
     off = image_metrics(np.clip(a.astype(int) + 1, 0, 255).astype(np.uint8), a)
-    assert off["changed_px"] == 0
+    assert off["changed_px"] == 0 and off["comparison"].passed
     shifted = image_metrics(np.roll(a, 2, axis=1), a, (8, 40, 10, 50))
     assert shifted["changed_px"] > 50 and shifted["flip_mouth"] > 3 * off["flip_mouth"]
+    assert not shifted["comparison"].passed
     assert shifted["flip_map"].shape == (32, 40)  # the mouth box only
 
 
@@ -76,3 +82,41 @@ def test_gate_and_golden_commands_exit_codes(tmp_path, capsys):
     assert main(["gate", str(worse), "--baseline", str(tmp_path / "nothing")]) == 2
     assert main(["golden", str(base), "--golden", str(tmp_path / "g")]) == 0
     assert (tmp_path / "g" / "cassi-2.0" / "front" / "JW11_019_1_00000.png").is_file()
+
+
+@pytest.mark.render
+def test_night_from_another_code_path_passes_and_a_real_change_fails(tmp_path):
+    """A baseline night rendered with llvm, gated against a night of the same frames rendered
+    with scalar_rgb (its half view's eye highlight changed as another CPU changes it): passes,
+    against the previous night as a run and as a golden directory. The jaw lowered by 4 Parke
+    units (0.5 degrees) in the same other-path night fails."""
+    face = build_face()
+    pos = np.asarray(face.vertices)
+    keys = {"front": ("JW11", 19, "cassi-2.0", "front", 0),
+            "half": ("JW11", 19, "cassi-2.0", "half", 0)}
+
+    def night(variant, positions, highlight=False):
+        out = {}
+        for view, key in keys.items():
+            topo = render_topology(face, half=(view == "half"))
+            srgb = FaceRenderer(topo, view, "preview", variant).render(positions).srgb8()
+            out[key] = as_another_cpu(srgb) if highlight and view == "half" else srgb
+        return out
+
+    res = results_rows({})
+    base = write_run(tmp_path / "llvm", res, images=night("llvm", pos))
+    golden = tmp_path / "golden"
+    update_golden(base, golden)
+    other = write_run(tmp_path / "scalar", res, images=night("scalar", pos, highlight=True))
+    for baseline in (base, golden):
+        ok, results = gate(other, baseline)
+        image_results = [r for r in results if r.gate == "image"]
+        assert ok and [r.status for r in image_results] == ["pass", "pass"], results
+    half = next(r for r in image_results if r.item.startswith("half"))
+    assert half.value > 0.001  # the highlight's pixels were counted, and allowed
+
+    lowered = write_run(tmp_path / "lowered", res,
+                        images=night("scalar", jaw_rotation(pos, 0.5), highlight=True))
+    ok, results = gate(lowered, golden)
+    assert not ok
+    assert [r.status for r in results if r.gate == "image"] == ["fail", "fail"], results
