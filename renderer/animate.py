@@ -14,8 +14,10 @@ from cassi.common.atomic import atomic_tmp_path
 from cassi.common.errors import CassiInputError
 from cassi.data.xrmb.files import NOMINAL_PERIOD_US  # the XRMB frame period, us
 
-from cassi.renderer.images import to_srgb8
 from cassi.renderer.views import VIEW_NAMES
+from cassi.data.face.model import render_topology
+from cassi.renderer.render import FaceRenderer
+from cassi.renderer.images import contact_sheet, write_contact_sheet
 
 __all__ = ["side_by_side", "animation_frames", "write_animation", "animate_positions", "views_sheet",
            "realtime_fps"]
@@ -30,13 +32,9 @@ def realtime_fps(stride: int, *, period_us: float = NOMINAL_PERIOD_US, cap: floa
 
 def side_by_side(images: Sequence[np.ndarray], gap: int = 0) -> np.ndarray:
     """uint8 (H, sum W, 3) of equal-height images (linear float images are sRGB-encoded)."""
-    imgs = [i if i.dtype == np.uint8 else to_srgb8(i) for i in images]
-    if len({i.shape[0] for i in imgs}) != 1:
+    if len({i.shape[0] for i in images}) != 1:
         raise ValueError("side_by_side needs images of equal height")
-    if gap:
-        sep = np.zeros((imgs[0].shape[0], gap, 3), np.uint8)
-        imgs = [x for i in imgs for x in (i, sep)][:-1]
-    return np.concatenate([i[..., :3] for i in imgs], axis=1)
+    return contact_sheet(images, columns=len(images), gap=gap, background=(0, 0, 0), border=False)
 
 
 def animation_frames(renderers: Sequence, positions: Iterable[np.ndarray]) -> Iterator[np.ndarray]:
@@ -45,9 +43,14 @@ def animation_frames(renderers: Sequence, positions: Iterable[np.ndarray]) -> It
         yield side_by_side([r.render(pos).rgb for r in renderers])
 
 
-def write_animation(path: str | os.PathLike, frames: Iterable[np.ndarray], *, fps: float) -> Path:
-    """Stream uint8 (H, W, 3) frames to ``path`` (``.mp4``: H.264 yuv420p; ``.gif``), atomically.
+def write_animation(path: str | os.PathLike, frames: Iterable[np.ndarray], *, fps: float,
+                    quality: float = 7, audio: Path | None = None, audio_start_s: float = 0.0,
+                    duration_s: float | None = None) -> Path:
+    """Stream uint8 (H, W, 3) frames to ``path`` (``.mp4``: H.264 yuv420p; ``.gif``), atomically:
+    the one video writer (``cassi animate`` and the report's task videos).
 
+    ``quality`` is imageio-ffmpeg's 0-10 scale. With ``audio`` (a WAV; MP4 only), its part from
+    ``audio_start_s`` for ``duration_s`` is muxed in (AAC), so sound and picture start together.
     Returns the path. Raises CassiInputError for another suffix or no frames.
     """
     import imageio_ffmpeg
@@ -55,7 +58,13 @@ def write_animation(path: str | os.PathLike, frames: Iterable[np.ndarray], *, fp
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".mp4":
-        kw = dict(codec="libx264", pix_fmt_out="yuv420p", quality=7)
+        kw = dict(codec="libx264", pix_fmt_out="yuv420p", quality=quality)
+        if audio is not None:
+            trim = f"atrim=start={audio_start_s:.6f}"
+            if duration_s is not None:
+                trim += f":end={audio_start_s + duration_s:.6f}"
+            kw.update(audio_path=str(audio), audio_codec="aac",
+                      output_params=["-af", trim + ",asetpts=PTS-STARTPTS"])
     elif suffix == ".gif":
         kw = dict(codec="gif", pix_fmt_out="rgb8")
     else:
@@ -104,10 +113,6 @@ def animate_positions(face, positions: np.ndarray, out: str | os.PathLike, *,
     ``face`` is the ``cassi.data.face.model.FaceModel`` whose topology the positions follow.
     Returns a summary dict (frames written, views, fps, variant, path).
     """
-    from cassi.data.face.model import render_topology
-
-    from cassi.renderer.render import FaceRenderer
-
     positions = np.asarray(positions)
     if positions.ndim != 3 or positions.shape[2] != 3 or len(positions) == 0:
         raise CassiInputError(f"positions must be (F, V, 3) with F >= 1, not {positions.shape}")
@@ -130,11 +135,6 @@ def views_sheet(face, positions: np.ndarray, *, views: Sequence[str] = VIEW_NAME
                 out: str | os.PathLike | None = None) -> np.ndarray:
     """All ``views`` of one frame (positions (V, 3)) side by side as a uint8 contact sheet; also
     written as PNG to ``out`` when given (metadata: views, preset, variant)."""
-    from cassi.data.face.model import render_topology
-
-    from cassi.renderer.images import write_contact_sheet
-    from cassi.renderer.render import FaceRenderer
-
     results = [FaceRenderer(render_topology(face, half=(v == "half")), v, preset, variant)
                .render(positions) for v in views]
     sheet = side_by_side([r.rgb for r in results], gap=4)

@@ -240,8 +240,12 @@ def read_metadata(path: str | os.PathLike) -> dict:
 
 
 def contact_sheet(images: Sequence[np.ndarray], *, columns: int | None = None, gap: int = 4,
-                  background: tuple[int, int, int] = (32, 32, 32)) -> np.ndarray:
-    """Tile uint8 (H, W, 3) images (sizes may differ) into one uint8 grid image, row-major."""
+                  background: tuple[int, int, int] = (32, 32, 32),
+                  border: bool = True) -> np.ndarray:
+    """Tile uint8 (H, W, 3) images (sizes may differ; linear float ones are sRGB-encoded) into
+    one uint8 grid image, row-major: cells of the largest image's size, ``gap`` pixels of
+    ``background`` between them (and around them with ``border``). The one tiler of the
+    renderer's sheets and animations and of the report's contact sheets and videos."""
     if not images:
         raise CassiInputError("contact sheet needs at least one image")
     imgs = [np.asarray(i) for i in images]
@@ -251,12 +255,14 @@ def contact_sheet(images: Sequence[np.ndarray], *, columns: int | None = None, g
     rows = int(np.ceil(n / cols))
     ch = max(i.shape[0] for i in imgs)
     cw = max(i.shape[1] for i in imgs)
-    sheet = np.empty((rows * ch + (rows + 1) * gap, cols * cw + (cols + 1) * gap, 3), np.uint8)
+    edge = gap if border else 0
+    sheet = np.empty((rows * ch + (rows - 1) * gap + 2 * edge,
+                      cols * cw + (cols - 1) * gap + 2 * edge, 3), np.uint8)
     sheet[...] = np.asarray(background, np.uint8)
     for k, img in enumerate(imgs):
         r, c = divmod(k, cols)
-        y = gap + r * (ch + gap)
-        x = gap + c * (cw + gap)
+        y = edge + r * (ch + gap)
+        x = edge + c * (cw + gap)
         sheet[y:y + img.shape[0], x:x + img.shape[1]] = img[..., :3]
     return sheet
 

@@ -29,6 +29,8 @@ from cassi.common.errors import CassiInputError
 from cassi.renderer import raycast, scenes, shading
 from cassi.renderer.variant import activate_variant, choose_variant
 from cassi.renderer.views import Preset, View, mouth_box, preset as _preset, view as _view
+from cassi.renderer.images import to_srgb8
+from cassi.renderer.images import write_result
 
 __all__ = ["RenderResult", "FaceRenderer", "part_triangles", "BACKGROUND"]
 
@@ -76,7 +78,6 @@ class RenderResult:
         kernel gives it in JIT variants; else it is computed here)."""
         if self.srgb is not None:
             return self.srgb
-        from cassi.renderer.images import to_srgb8
         return to_srgb8(self.rgb)
 
     def part_mask(self, part: str) -> np.ndarray:
@@ -368,8 +369,6 @@ class FaceRenderer:
                         extra: dict | None = None) -> RenderResult:
         """Render one frame and write it (synchronously) with :func:`images.write_result`:
         ``<stem>.png``, ``<stem>.mask.png``, ``<stem>.json`` and, with ``exr=True``, ``<stem>.exr``."""
-        from cassi.renderer.images import write_result
-
         res = self.render(positions)
         if extra:
             res = dataclasses.replace(res, extra={**res.extra, **extra})

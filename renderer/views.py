@@ -23,6 +23,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from cassi.common.errors import CassiInputError
 
 __all__ = ["Camera", "Light", "View", "Preset", "Material", "VIEWS", "PRESETS", "MATERIALS",
            "DEFAULT_MATERIAL", "material_for", "mouth_box", "project", "view", "preset", "VIEW_NAMES", "PRESET_NAMES"]
@@ -258,7 +259,6 @@ def mouth_box(view: View, preset: Preset) -> tuple[int, int, int, int]:
 
 
 def view(name: str) -> View:
-    from cassi.common.errors import CassiInputError
     try:
         return VIEWS[name]
     except KeyError:
@@ -266,7 +266,6 @@ def view(name: str) -> View:
 
 
 def preset(name: str) -> Preset:
-    from cassi.common.errors import CassiInputError
     try:
         return PRESETS[name]
     except KeyError:

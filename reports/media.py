@@ -14,6 +14,8 @@ import pandas as pd
 
 from cassi.common.atomic import atomic_tmp_path
 from cassi.data.xrmb.files import NOMINAL_PERIOD_US
+from cassi.renderer.animate import write_animation
+from cassi.renderer.images import contact_sheet as tile
 
 
 def copy_image(src: str | os.PathLike, dest: Path) -> Path:
@@ -33,25 +35,13 @@ def read_rgb8(path) -> np.ndarray:
     return img[..., :3].astype(np.uint8)
 
 
-def tile(images: list[np.ndarray], *, columns: int, gap: int = 4) -> np.ndarray:
-    """Images (same height; widths may differ per column) laid out in a grid on white."""
-    if not images:
-        raise ValueError("no images to tile")
-    h = max(im.shape[0] for im in images)
-    w = max(im.shape[1] for im in images)
-    rows = -(-len(images) // columns)
-    sheet = np.full((rows * h + (rows - 1) * gap, columns * w + (columns - 1) * gap, 3), 255, np.uint8)
-    for i, im in enumerate(images):
-        r, c = divmod(i, columns)
-        sheet[r * (h + gap): r * (h + gap) + im.shape[0], c * (w + gap): c * (w + gap) + im.shape[1]] = im
-    return sheet
-
-
 def contact_sheet(paths: list[str], dest: Path, *, columns: int = 4) -> Path:
     """One PNG with the given renders in a grid (e.g. the four views at a check's frame)."""
     dest.parent.mkdir(parents=True, exist_ok=True)
     tmp = atomic_tmp_path(dest)
-    iio.imwrite(tmp, tile([read_rgb8(p) for p in paths], columns=columns), extension=".png")
+    sheet = tile([read_rgb8(p) for p in paths], columns=columns, gap=4,
+                 background=(255, 255, 255), border=False)
+    iio.imwrite(tmp, sheet, extension=".png")
     os.replace(tmp, dest)
     return dest
 
@@ -87,44 +77,6 @@ def video_frames(renders: pd.DataFrame, *, stride: int) -> list[int]:
     return sorted(f for f in common if (f - first) % stride == 0)
 
 
-def write_video(dest: Path, frames, *, fps: float, audio: Path | None = None,
-                audio_start_s: float = 0.0, duration_s: float | None = None) -> Path:
-    """Stream uint8 (H, W, 3) ``frames`` to an H.264 MP4 at ``fps``, atomically; with ``audio``
-    (a WAV), its part from ``audio_start_s`` for ``duration_s`` is muxed in (AAC), so sound and
-    picture start together."""
-    import imageio_ffmpeg  # noqa: PLC0415
-
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    tmp = atomic_tmp_path(dest)
-    writer = None
-    try:
-        for frame in frames:
-            if writer is None:
-                h, w = (frame.shape[0] // 2) * 2, (frame.shape[1] // 2) * 2  # yuv420p: even sizes
-                extra = {}
-                if audio is not None:
-                    trim = f"atrim=start={audio_start_s:.6f}"
-                    if duration_s is not None:
-                        trim += f":end={audio_start_s + duration_s:.6f}"
-                    extra = dict(audio_path=str(audio), audio_codec="aac",
-                                 output_params=["-af", trim + ",asetpts=PTS-STARTPTS"])
-                writer = imageio_ffmpeg.write_frames(str(tmp), (w, h), fps=fps, codec="libx264",
-                                                     pix_fmt_out="yuv420p", macro_block_size=1,
-                                                     ffmpeg_log_level="error", **extra)
-                writer.send(None)
-            writer.send(np.ascontiguousarray(frame[:h, :w]))
-        if writer is None:
-            raise ValueError("no frames to write")
-        writer.close()
-        writer = None
-        os.replace(tmp, dest)
-    finally:
-        if writer is not None:
-            writer.close()
-        tmp.unlink(missing_ok=True)
-    return dest
-
-
 def task_video(renders: pd.DataFrame, dest: Path, *, stride: int, columns: list[tuple[str, str]],
                audio: Path | None = None) -> dict | None:
     """A video of one task file: per frame, one labelled panel per (version, view) of
@@ -150,10 +102,14 @@ def task_video(renders: pd.DataFrame, dest: Path, *, stride: int, columns: list[
             panels = [label_panel(read_rgb8(paths[(v, w, f)]),
                                   [f"{v} | {w}", f"{subject} task {task} | t = {t:6.3f} s"])
                       for v, w in columns]
-            yield tile(panels, columns=len(panels), gap=2)
+            sheet = tile(panels, columns=len(panels), gap=2, background=(255, 255, 255),
+                         border=False)
+            h, w = (sheet.shape[0] // 2) * 2, (sheet.shape[1] // 2) * 2  # yuv420p: even sizes
+            yield sheet[:h, :w]
 
     duration = len(frames) / fps
-    write_video(dest, composed(), fps=fps, audio=audio, audio_start_s=frames[0] * ROW_US / 1e6,
-                duration_s=duration)
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    write_animation(dest, composed(), fps=fps, quality=5, audio=audio,
+                    audio_start_s=frames[0] * ROW_US / 1e6, duration_s=duration)
     return {"path": dest, "frames": len(frames), "fps": round(fps, 3), "stride": stride,
             "audio": audio is not None, "seconds": round(duration, 2)}

@@ -23,6 +23,7 @@ from cassi.harness.rubric import (AGGREGATION_RULES, CHECKS, RATINGS, component_
                                   file_verdicts, rating_counts, table_c_rule, table_title,
                                   version_comparisons)
 from cassi.reports.tables import markdown_table
+from cassi.data.corpus.disk import Corpus
 
 #: How many fired checks per version and task file show the four views of their frame on a
 #: subject page (the rest link to the frame's number only).
@@ -232,8 +233,6 @@ def _audio_for(run: Run):
     cannot be opened: the videos are then silent, and say so)."""
     root = run.meta.get("corpus_resolved")
     try:
-        from cassi.data.corpus.disk import Corpus  # noqa: PLC0415
-
         corpus = Corpus(root) if root else None
     except Exception:  # noqa: BLE001 - a moved corpus must not stop the report
         corpus = None

@@ -15,6 +15,7 @@ from cassi.common.errors import CassiInputError
 from cassi.harness.farm.results import read_results
 from cassi.harness.farm.runner import RENDER_COLUMNS  # the render index the farm writes
 from cassi.harness.farm.tableset import SUMMARY_FILE, verify_table_set
+from cassi.harness.rubric.tables import order_versions as rubric_order
 
 
 @dataclass
@@ -71,8 +72,6 @@ class Run:
 
 def order_versions(names) -> list[str]:
     """The thesis's order of versions (the rubric's); others (third-party) follow by name."""
-    from cassi.harness.rubric.tables import order_versions as rubric_order  # noqa: PLC0415
-
     return rubric_order({str(n) for n in names})
 
 

@@ -17,14 +17,15 @@ import pytest
 from cassi.common.atomic import atomic_write_text
 from cassi.common.errors import CassiInputError
 from cassi.data.synth.corpus import make_corpus
-from cassi.harness import provenance, rubric
+from cassi.harness import rubric
+from cassi.harness.evaluation import provenance
 from cassi.harness.cli import main as cli_main
 from cassi.harness.evaluation.config import RunConfig
 from cassi.harness.farm.executors import require_ray
 from cassi.harness.evaluation.run import run, worker_count
 from cassi.harness.farm.tableset import TableSetError, verify_table_set, write_table_set
 from cassi.reports.gates import MismatchedBaseline, gate
-from cassi.reports.nightly import NIGHT_DONE, night_name
+from cassi.harness.evaluation.nightly import NIGHT_DONE, night_name
 from cassi.reports.runio import load_run
 
 from reports_fixtures import results_rows, write_run
@@ -258,16 +259,17 @@ def test_an_interrupted_night_is_resumed_a_finished_one_is_not(tmp_path):
 def test_a_killed_nightly_finishes_tonight_with_its_jobs(corpus, tmp_path):
     import datetime as dt
 
-    from cassi.reports.nightly import nightly
+    from cassi.harness.evaluation.nightly import nightly
+    from cassi.reports.nightly import review_night
 
     cfg = RunConfig(subjects=("JW45",), tasks=(2,), **GEOMETRY)
     day = dt.date(2026, 12, 1)
-    nightly(tmp_path, corpus=corpus, config=cfg, today=day, progress=False)
+    nightly(tmp_path, review=review_night, corpus=corpus, config=cfg, today=day, progress=False)
     night = tmp_path / "runs" / "2026-12-01"
     # As if killed before the tables and the report: the jobs' outputs are there, nothing else.
     for name in (NIGHT_DONE, "tables.json", "results.parquet"):
         (night / name).unlink()
-    passed, index = nightly(tmp_path, corpus=corpus, config=cfg, today=day, progress=False)
+    passed, index = nightly(tmp_path, review=review_night, corpus=corpus, config=cfg, today=day, progress=False)
     assert passed and index.is_file()
     assert sorted(p.name for p in (tmp_path / "runs").iterdir()) == ["2026-12-01"]
     summary = json.loads((night / "summary.json").read_text())

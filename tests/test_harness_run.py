@@ -12,6 +12,7 @@ from cassi.common.errors import CassiInputError
 from cassi.harness.evaluation import caches as P
 from cassi.harness.evaluation import frames as F
 from cassi.harness.evaluation import stages as S
+from cassi.common.lazy import resolve
 from cassi.harness.commands import register
 from cassi.harness.evaluation.config import RunConfig
 from cassi.harness.evaluation.run import run
@@ -23,7 +24,7 @@ def _cli(argv) -> int:
     p = argparse.ArgumentParser()
     register(p.add_subparsers(dest="command"))
     args = p.parse_args(argv)
-    return args.func(args)
+    return resolve(args.func)(args)
 
 
 @pytest.mark.parametrize("change, match", [

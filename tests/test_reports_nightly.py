@@ -9,7 +9,8 @@ import pandas as pd
 import pytest
 
 from cassi.harness.evaluation.config import RunConfig
-from cassi.reports.nightly import nightly
+from cassi.harness.evaluation.nightly import nightly
+from cassi.reports.nightly import review_night
 
 from reports_fixtures import rewrite_results
 
@@ -21,13 +22,13 @@ SMALL = RunConfig(subjects=("JW45",), tasks=(13,), versions=("cassi-1.0", "cassi
 
 def test_two_nights_then_a_planted_regression_fails_the_gate(tmp_path):
     day1, day2, day3 = (dt.date(2026, 11, d) for d in (20, 21, 22))
-    ok1, index1 = nightly(tmp_path, config=SMALL, today=day1, progress=False)
+    ok1, index1 = nightly(tmp_path, review=review_night, config=SMALL, today=day1, progress=False)
     assert ok1 and index1 == tmp_path / "reports" / "2026-11-20" / "index.html"
     gate1 = json.loads((tmp_path / "runs" / "2026-11-20" / "gate.json").read_text())
     assert gate1["passed"] and gate1["gates"] == []  # first night: nothing to compare with
     assert "Synthetic corpus" in index1.read_text()
 
-    ok2, index2 = nightly(tmp_path, config=SMALL, today=day2, progress=False)
+    ok2, index2 = nightly(tmp_path, review=review_night, config=SMALL, today=day2, progress=False)
     assert ok2, (tmp_path / "runs" / "2026-11-21" / "gate.md").read_text()
     html = index2.read_text()
     assert "Changes since 2026-11-20" in html and "trend.png" in html
@@ -47,7 +48,7 @@ def test_two_nights_then_a_planted_regression_fails_the_gate(tmp_path):
     assert len(fired), "the small evaluation fired no check; pick another task"
     res.loc[fired.index[:1], "negatives"] = 0
     rewrite_results(prev.parent, res)
-    ok3, _ = nightly(tmp_path, config=SMALL, today=day3, progress=False)
+    ok3, _ = nightly(tmp_path, review=review_night, config=SMALL, today=day3, progress=False)
     assert not ok3
     gate3 = (tmp_path / "runs" / "2026-11-22" / "gate.md").read_text()
     assert "FAILED" in gate3 and str(fired["check"].iloc[0]) in gate3

@@ -424,7 +424,8 @@ def test_the_rubric_on_streamed_chunks_equals_the_rubric_on_the_whole_task(corpu
                                                                            tmp_path):
     """The geometry stage's path for 3.0 (positions streamed to a file, checks a chunk at a
     time, on the face the version animates) gives the same rows, exactly."""
-    from cassi.harness.evaluation.caches import animate_to_file, get_neutral
+    from cassi.harness.evaluation.caches import get_neutral
+    from cassi.harness.evaluation.stages import animate_to_file
     from cassi.harness.rubric import run_geometry_checks
 
     profile, face, rec = _inputs(corpus, "JW40", 118)

@@ -60,7 +60,7 @@ def test_the_rubric_on_chunks_from_a_file_equals_the_rubric_on_the_whole_array(
     """The geometry stage's path (positions streamed to a file, checks read back a chunk at a
     time, jitter windows and frame steps with their halo) gives the same rows, exactly."""
     from cassi.harness.evaluation.caches import get_neutral
-from cassi.harness.evaluation.stages import animate_to_file
+    from cassi.harness.evaluation.stages import animate_to_file
     from cassi.harness.rubric import run_geometry_checks
 
     v = get_version(version)

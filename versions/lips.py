@@ -57,6 +57,8 @@ from cassi.versions.lips_thickness import (
     thick_from_lipthick,
 )
 from cassi.versions.lips_track import track_x
+from cassi.versions.mapping import model_jaw_length
+from cassi.versions.cassi10 import parameters_frame
 
 if TYPE_CHECKING:
     from cassi.versions.protocol import TaskContext
@@ -559,8 +561,6 @@ class LipMovementStage:
     def _setup(self, ctx: "TaskContext") -> dict:
         plan = ctx.state.get("lips20")
         if plan is None:
-            from cassi.versions.mapping import model_jaw_length
-
             before = np.array(ctx.start, dtype=np.float64)
             rest = LipRest(before)
             subject = lip_subject(ctx.profile, model_jaw_length(ctx.neutral), float(ctx.mapping.origin[0]))
@@ -600,6 +600,5 @@ class LipMovementStage:
         ctx.diagnostics.update(lips.diagnostics)
         ctx.diagnostics["thickness_rule"] = np.full(len(lips.xyz), plan["rule"].name, dtype=object)
         # Table 4.1's lip parameters drive steps 1-4 exactly as in 1.0: same diagnostics.
-        from cassi.versions.cassi10 import parameters_frame
 
         parameters_frame(ctx, {63: ("UL", 0), 64: ("UL", 1), 65: ("LL", 0), 66: ("LL", 1)})

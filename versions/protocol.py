@@ -26,13 +26,13 @@ import numpy as np
 import pandas as pd
 
 from cassi.common.errors import CassiInputError
+from cassi.versions.mapping import XrmbToParke
+from cassi.data.face import numbering
 
 if TYPE_CHECKING:  # only for annotations: the data layer owns these types
     from cassi.data.face.model import FaceModel
     from cassi.data.corpus.profile import SubjectProfile
     from cassi.data.xrmb.files import TaskRecording
-
-    from cassi.versions.mapping import XrmbToParke
 
 __all__ = [
     "Animation",
@@ -286,15 +286,12 @@ class StagedVersion:
     def context(self, profile: "SubjectProfile", face: "FaceModel", rec: "TaskRecording") -> TaskContext:
         """Find the first valid row, hold missing pellets, map to Parke space (4.1.1), on the
         face this version animates (:func:`version_face`)."""
-        from cassi.versions.mapping import XrmbToParke
-
         face = version_face(self, face)
 
         xy_mm = np.asarray(rec.xy_mm)
         if xy_mm.ndim != 3 or xy_mm.shape[1:] != (8, 2):
             raise CassiInputError(f"pellets must be (F, 8, 2) mm, got {xy_mm.shape}",
                                   path=getattr(rec, "path", None))
-        from cassi.data.face import numbering
 
         n_vertices = np.shape(face.vertices)[0]
         if n_vertices < numbering.CORNER_MIDDLE:

@@ -39,7 +39,8 @@ import numpy as np
 import pandas as pd
 
 from cassi.common.errors import CassiInputError
-from cassi.data.xrmb.files import PELLETS, TaskRecording
+from cassi.data.corpus.disk import Corpus
+from cassi.data.xrmb.files import PELLETS, read_txy
 
 __all__ = ["PELLET_COLUMNS", "SCALARS", "KinematicStats", "compare", "corpus_stats",
            "recording_stats", "summarise"]
@@ -219,9 +220,6 @@ def _selected(path: Path, tasks: set[int] | None):
     Mis.dat (logged mistracking would be measured as movement); pellets lost without a log are
     masked row by row. ``tasks`` restricts the task numbers.
     """
-    from cassi.data.corpus.disk import Corpus
-    from cassi.data.xrmb.files import read_txy
-
     if not path.exists():
         raise CassiInputError("not found", path=path)
     if path.is_file():

@@ -23,6 +23,9 @@ from pathlib import Path
 from typing import Iterable
 
 import numpy as np
+from cassi.harness.rubric import registry_table
+from cassi.harness.evaluation.config import package_version
+from cassi.harness.farm.store import sha256_file
 
 #: The namespace packages of cassi-farm itself.
 CASSI_PACKAGES = ("cassi.data", "cassi.versions", "cassi.renderer", "cassi.harness",
@@ -75,16 +78,12 @@ def version_code_digest(versions: Iterable[str]) -> str:
 
 def rubric_digest() -> str:
     """Digest of the rubric registry: every check with its thresholds and negatives."""
-    from cassi.harness.rubric import registry_table  # noqa: PLC0415
-
     table = registry_table()
     return hashlib.sha256(table.to_csv(index=False).encode()).hexdigest()
 
 
 def code_provenance(versions: Iterable[str]) -> dict[str, str]:
     """The code a run's outputs come from (saved in run.json, part of every job digest)."""
-    from cassi.harness.evaluation.config import package_version  # noqa: PLC0415
-
     return {"package_version": package_version(), "code_digest": code_digest(),
             "versions_code_digest": version_code_digest(versions),
             "rubric_digest": rubric_digest()}
@@ -115,7 +114,6 @@ def profile_digest(profile) -> str:
 def file_digest(path: Path | None) -> str:
     if path is None:
         return "-"
-    from cassi.harness.farm.store import sha256_file  # noqa: PLC0415
 
     return sha256_file(path)
 

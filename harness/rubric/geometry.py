@@ -20,6 +20,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cassi.common.errors import CassiInputError
+from cassi.data.face.build import MATERIAL_NAMES
+from cassi.data.face import numbering as N
+from cassi.versions.mapping import XrmbToParke
 
 __all__ = [
     "MouthParts", "mouth_parts", "mm_per_unit", "surface_hits", "front_triangles",
@@ -137,7 +140,6 @@ def _material_name(materials, mat) -> str | None:
             return m if isinstance(m, str) else getattr(m, "name", None)
         except (KeyError, IndexError, TypeError):
             pass
-    from cassi.data.face.build import MATERIAL_NAMES  # noqa: PLC0415 - the face's own names
     return MATERIAL_NAMES.get(int(mat))
 
 
@@ -165,8 +167,6 @@ def mouth_parts(face) -> MouthParts:
     teeth polygons using the lower teeth's vertices (255-286) are the lower set. The occlusal
     line ends are the tips of tooth quad 7 (the second molars) and of quad 0 (the incisors).
     """
-    from cassi.data.face import numbering as N  # noqa: PLC0415 - data layer, imported lazily
-
     V = np.asarray(face.vertices).shape[0]
     teeth = _polys_by_material(face, {"teeth"})
     is_lower = np.any((teeth >= N.LOWER_TEETH_FIRST - 1) & (teeth <= N.LOWER_TEETH_LAST - 1), axis=1)
@@ -219,8 +219,6 @@ def mm_per_unit(face_vertices: np.ndarray, jaw_length_mm: float | None) -> float
         Without a positive jaw length, or when the face's jaw length p is zero: no millimetre
         can be measured, and a guessed scale would grade every check wrongly.
     """
-    from cassi.versions.mapping import XrmbToParke  # noqa: PLC0415 - the one mapping
-
     if jaw_length_mm is None:
         raise CassiInputError("the subject's jaw length (profile.jaw_length_mm) is needed to "
                               "measure in millimetres (thesis 4.1.1)")

@@ -19,6 +19,9 @@ from cassi.harness.rubric.frames import ArrayFrames, Frames
 from cassi.harness.rubric.measures import GeometryContext
 from cassi.harness.rubric.model import Check, Measurement
 from cassi.harness.rubric.registry import TRACE_STEP, TRACE_TASKS, checks_for, get_check
+from cassi.data.face.model import build_face
+from cassi.versions.mapping import XrmbToParke
+from cassi.harness.rubric.fidelity import FidelityContext, traces
 
 __all__ = ["run_geometry_checks", "run_image_checks"]
 
@@ -87,8 +90,6 @@ def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | N
         jaw = getattr(profile, "jaw_length_mm", None) if profile is not None else None
         mm_per_unit = G.mm_per_unit(rest if rest is not None else pos.frame(0), jaw)
     if neutral is None and face is not None:
-        from cassi.data.face.model import build_face  # noqa: PLC0415 - Table B's reference only
-
         neutral = build_face().vertices
     ctx = GeometryContext(pos, parts, rest=rest, mm_per_unit=mm_per_unit,
                           diagnostics=getattr(anim, "diagnostics", None), neutral=neutral, task=task)
@@ -117,10 +118,6 @@ def _measured_rows(checks, ctx, ids: dict, wanted, frame_no) -> list[dict]:
 
 
 def _fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no) -> list[dict]:
-    from cassi.versions.mapping import XrmbToParke  # noqa: PLC0415 - the one 4.1.1 mapping
-
-    from cassi.harness.rubric.fidelity import FidelityContext, traces  # noqa: PLC0415
-
     jaw = getattr(profile, "jaw_length_mm", None)
     if face is None or jaw is None:
         raise CassiInputError("fidelity checks need the face and the subject's jaw length "
