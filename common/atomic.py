@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 import tempfile
 from pathlib import Path
 from typing import IO, Iterator
@@ -100,3 +101,23 @@ def atomic_tmp_path(path: str | os.PathLike) -> Path:
         raise _with_path(err, path) from None
     os.close(fd)
     return Path(tmp)
+
+
+def link_or_copy(src: str | os.PathLike, dest: str | os.PathLike) -> Path:
+    """Put the file ``src`` at ``dest`` atomically: a hard link (no bytes copied, no disk used)
+    where both lie on one file system, else a copy. Only for files nobody writes into again
+    (content-addressed blobs, finished media)."""
+    dest = Path(dest)
+    tmp = atomic_tmp_path(dest)  # a fresh name; the link needs it free
+    try:
+        try:
+            tmp.unlink()
+            os.link(src, tmp)
+        except OSError:
+            shutil.copyfile(src, tmp)
+        os.replace(tmp, dest)
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+    return dest
+

@@ -13,7 +13,9 @@ from cassi.common.errors import CassiInputError
 from cassi.harness.bench import BENCHMARKS, run_benchmarks
 from cassi.harness.commands import config_from_args
 from cassi.harness.evaluation.caches import get_corpus, get_face, get_profile, get_version_face
+from cassi.harness.evaluation.nightly import gc
 from cassi.harness.evaluation.run import run
+from cassi.harness.farm.store import collect_garbage, store_lock
 from cassi.renderer.commands import NEUTRAL
 from cassi.versions.registry import get_version
 
@@ -67,3 +69,22 @@ def task_positions(corpus_dir, subject: str, task: int, rep: int, version: str):
     anim = ver.animate(profile, face, rec)
     face = get_version_face(corpus, subject, profile, ver)  # the face the version animated
     return face, np.asarray(anim.frames, np.int64), np.asarray(anim.positions, np.float32)
+
+
+def cmd_gc(args: argparse.Namespace) -> int:
+    root = Path(args.dir)
+    if (root / "runs").is_dir():
+        out = gc(root, keep=args.keep)
+        print(f"kept {len(out['nights_kept'])} night(s), removed {len(out['nights_removed'])}"
+              + (f" ({', '.join(out['nights_removed'])})" if out["nights_removed"] else ""))
+    elif (root / "objects").is_dir() and (root / "manifests").is_dir():
+        with store_lock(root, exclusive=True):
+            c = collect_garbage(root)
+        out = {"blobs_removed": c.blobs, "manifests_removed": c.manifests, "bytes_freed": c.bytes}
+    else:
+        raise CassiInputError("neither a nightly directory (runs/) nor a store (objects/, "
+                              "manifests/)", path=root)
+    print(f"store: removed {out['blobs_removed']} object(s) and {out['manifests_removed']} "
+          f"manifest(s), {out['bytes_freed'] / 1e6:.1f} MB freed")
+    return 0
+

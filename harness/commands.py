@@ -7,6 +7,7 @@ from pathlib import Path
 from cassi.common.errors import CassiInputError
 
 from cassi.harness.evaluation import config as C
+from cassi.harness.evaluation.config import KEEP_NIGHTS
 
 
 def _add_run(sub) -> None:
@@ -40,6 +41,8 @@ def _add_run(sub) -> None:
     p.add_argument("--threads", help="CPU threads per worker process (default 1)")
     p.add_argument("--retries", help="retries of a job whose worker died (default 1)")
     p.add_argument("--out", type=Path, help="output directory (required here or in --config)")
+    p.add_argument("--cache", type=Path, help="a store shared between runs: jobs it holds with "
+                                              "the same inputs and code are reused, not run")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.set_defaults(func="cassi.harness.actions:cmd_run")
 
@@ -56,10 +59,23 @@ def _add_bench(sub) -> None:
     p.set_defaults(func="cassi.harness.actions:cmd_bench")
 
 
+def _add_gc(sub) -> None:
+    p = sub.add_parser("gc", help="remove old nights and what no kept night needs",
+                       description="In a nightly directory: keep the newest --keep nights (runs "
+                       "and reports), remove the older ones and every object of the shared "
+                       "store that no kept night links. Given a store (cassi run --cache DIR), "
+                       "remove what no run directory links.")
+    p.add_argument("dir", type=Path, help="a nightly directory (cassi nightly --out) or a store")
+    p.add_argument("--keep", type=int, default=KEEP_NIGHTS,
+                   help=f"nights to keep (default {KEEP_NIGHTS}: a month)")
+    p.set_defaults(func="cassi.harness.actions:cmd_gc")
+
+
 def register(sub) -> None:
-    """Add ``run`` and ``bench`` to the ``cassi`` subcommands."""
+    """Add ``run``, ``bench`` and ``gc`` to the ``cassi`` subcommands."""
     _add_run(sub)
     _add_bench(sub)
+    _add_gc(sub)
 
 
 def config_from_args(args: argparse.Namespace) -> C.RunConfig:

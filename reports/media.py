@@ -4,27 +4,31 @@ labelled, in real time, with the task's sound when the corpus has it. Reads imag
 the corpus's WAV files) only; never re-renders."""
 from __future__ import annotations
 
+import functools
+import hashlib
+import importlib.metadata as md
+import json
 import os
-import shutil
+import sys
 from pathlib import Path
 
 import imageio.v3 as iio
 import numpy as np
 import pandas as pd
 
-from cassi.common.atomic import atomic_tmp_path
+from cassi.common.atomic import atomic_tmp_path, link_or_copy
+from cassi.harness.farm.store import sha256_file
+from cassi.renderer import animate, images
 from cassi.data.xrmb.files import NOMINAL_PERIOD_US
 from cassi.renderer.animate import write_animation
 from cassi.renderer.images import contact_sheet as tile
 
 
 def copy_image(src: str | os.PathLike, dest: Path) -> Path:
-    """Copy a render beside the report (so the report is self-contained), atomically."""
+    """Put a render beside the report (so the report is self-contained), atomically: a hard
+    link where the run and the report share a file system (renders are never written again)."""
     dest.parent.mkdir(parents=True, exist_ok=True)
-    tmp = atomic_tmp_path(dest)
-    shutil.copyfile(src, tmp)
-    os.replace(tmp, dest)
-    return dest
+    return link_or_copy(src, dest)
 
 
 def read_rgb8(path) -> np.ndarray:
@@ -77,8 +81,29 @@ def video_frames(renders: pd.DataFrame, *, stride: int) -> list[int]:
     return sorted(f for f in common if (f - first) % stride == 0)
 
 
+@functools.lru_cache(maxsize=None)
+def _media_code() -> str:
+    """Digest of the code that composes a video (this module, the writer, the tiler) and of
+    the encoder's version: a cached video is reused only when both are unchanged."""
+    h = hashlib.sha256(md.version("imageio-ffmpeg").encode())
+    for module in (sys.modules[__name__], animate, images):
+        h.update(Path(module.__file__).read_bytes())
+    return h.hexdigest()
+
+
+def _video_key(frames: list[int], paths: pd.Series, columns, stride: int, subject: str,
+               task: int, audio: Path | None) -> str:
+    """What a task video is made of: the renders (content-addressed: their names are their
+    SHA-256), the panels, the time base, the labels, the sound and the code."""
+    doc = {"columns": [list(c) for c in columns], "stride": stride, "subject": subject,
+           "task": task, "frames": [[v, w, f, Path(str(paths[(v, w, f)])).name]
+                                    for f in frames for v, w in columns],
+           "audio": sha256_file(audio) if audio is not None else None, "code": _media_code()}
+    return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
+
+
 def task_video(renders: pd.DataFrame, dest: Path, *, stride: int, columns: list[tuple[str, str]],
-               audio: Path | None = None) -> dict | None:
+               audio: Path | None = None, cache: Path | None = None) -> dict | None:
     """A video of one task file: per frame, one labelled panel per (version, view) of
     ``columns``, side by side, played in real time (one frame per ``stride`` rows of 6866 us).
 
@@ -86,7 +111,8 @@ def task_video(renders: pd.DataFrame, dest: Path, *, stride: int, columns: list[
     is labelled with version, view, subject, task and time. With ``audio`` (the task's WAV, time
     0 = the recording's first row) the video carries the sound in sync. Returns a description
     (path, frames, fps, stride, audio) or None when fewer than two grid frames exist in every
-    panel.
+    panel. With ``cache`` (a directory shared between reports, e.g. a nightly store's media),
+    a video made of the same renders, sound and code before is linked, not encoded again.
     """
     wanted = renders[[(v, w) in set(columns) for v, w in zip(renders["version"], renders["view"])]]
     frames = video_frames(wanted, stride=stride)
@@ -109,7 +135,16 @@ def task_video(renders: pd.DataFrame, dest: Path, *, stride: int, columns: list[
 
     duration = len(frames) / fps
     dest.parent.mkdir(parents=True, exist_ok=True)
-    write_animation(dest, composed(), fps=fps, quality=5, audio=audio,
-                    audio_start_s=frames[0] * ROW_US / 1e6, duration_s=duration)
+    cached = None
+    if cache is not None:
+        cached = cache / f"{_video_key(frames, paths, columns, stride, subject, task, audio)}.mp4"
+    if cached is not None and cached.is_file():
+        link_or_copy(cached, dest)
+    else:
+        write_animation(dest, composed(), fps=fps, quality=5, audio=audio,
+                        audio_start_s=frames[0] * ROW_US / 1e6, duration_s=duration)
+        if cached is not None:
+            cache.mkdir(parents=True, exist_ok=True)
+            link_or_copy(dest, cached)
     return {"path": dest, "frames": len(frames), "fps": round(fps, 3), "stride": stride,
             "audio": audio is not None, "seconds": round(duration, 2)}

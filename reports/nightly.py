@@ -9,7 +9,8 @@ from pathlib import Path
 import pandas as pd
 
 from cassi.common.atomic import atomic_write_text
-from cassi.harness.evaluation.nightly import Night
+from cassi.harness.evaluation.nightly import STORE_DIR, Night
+from cassi.harness.farm.store import MEDIA_DIR
 from cassi.harness.rubric import version_totals
 from cassi.reports.gates import (GOLDEN_MARK, GateResult, MismatchedBaseline, gate, job_gates,
                                  write_gate_report)
@@ -61,5 +62,6 @@ def review_night(night: Night, *, common_only: bool = False) -> tuple[bool, Path
 
     timer.stop()
     with timer("report (tables, pages, videos)"):
-        index = write_report(run_dir, night.report_dir, compare=night.previous, history=history)
+        index = write_report(run_dir, night.report_dir, compare=night.previous, history=history,
+                             media_cache=root / STORE_DIR / MEDIA_DIR)
     return passed, index

@@ -247,7 +247,7 @@ def _audio_for(run: Run):
     return find
 
 
-def _videos(run: Run, out: Path) -> list[dict]:
+def _videos(run: Run, out: Path, media_cache: Path | None = None) -> list[dict]:
     """From the renders on the run's ``animate_stride`` grid: a four-view video per task file
     and version that was rendered in every view, and the versions side by side wherever
     several versions were rendered in the comparison view."""
@@ -282,13 +282,13 @@ def _videos(run: Run, out: Path) -> list[dict]:
                 continue  # rendered for the comparisons only
             dest = out / "videos" / f"{stem}_{slug(version)}.mp4"
             add("task", f"{name}, {version}",
-                media.task_video(g, dest, stride=stride, audio=audio,
+                media.task_video(g, dest, stride=stride, audio=audio, cache=media_cache,
                                  columns=[(version, v) for v in all_views]), dest)
         compared = [v for v in versions if COMPARISON_VIEW in on_grid[v]]
         if len(compared) > 1:
             dest = out / "animations" / f"{stem}_{COMPARISON_VIEW}.mp4"
             add("comparison", f"{name}, {COMPARISON_VIEW} view ({', '.join(compared)})",
-                media.task_video(g, dest, stride=stride, audio=audio,
+                media.task_video(g, dest, stride=stride, audio=audio, cache=media_cache,
                                  columns=[(v, COMPARISON_VIEW) for v in compared]), dest)
     return videos
 
@@ -309,7 +309,8 @@ def _meta_items(run: Run) -> list[tuple[str, str]]:
 
 def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
                  compare: str | os.PathLike | None = None,
-                 history: pd.DataFrame | None = None) -> Path:
+                 history: pd.DataFrame | None = None,
+                 media_cache: str | os.PathLike | None = None) -> Path:
     """Write ``out_dir/index.html`` (+ subject pages, tables, plots, images) for a run.
 
     Parameters
@@ -322,6 +323,9 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
         A previous run to compare with.
     history : DataFrame, optional
         Columns night, version, negatives: a trend plot over nights (``cassi nightly``).
+    media_cache : path, optional
+        Videos made before from the same renders, sound and code (a nightly store's media):
+        linked instead of encoded again.
     """
     run = load_run(run_dir)
     previous = load_run(compare) if compare else None
@@ -346,7 +350,7 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
     html = env.get_template("index.html.j2").render(
         run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
         summaries=_summaries(run), comparison=_comparison(run, previous, out),
-        tables=_table_sections(run, cr, out), videos=_videos(run, out),
+        tables=_table_sections(run, cr, out), videos=_videos(run, out, None if media_cache is None else Path(media_cache)),
         rules=AGGREGATION_RULES,
         subjects=subject_links, trend=trend, gate=gate,
         jobs={"counts": run.summary.get("counts", {}), "failed": run.failed,

@@ -15,6 +15,7 @@ Example ``run.toml``::
     executor = "local"               # or "ray" (with address = "host:port", else a local cluster)
     workers = 2                      # default: one per usable core
     threads = 1                      # CPU threads per worker (renderer); a worker is one core
+    cache = "runs/store"             # optional: a store shared between runs (jobs reused)
 
 Fields are checked when loaded (types and ranges, unknown keys with the list of valid ones);
 names (subjects, tasks, versions, views, presets) are checked against what exists before any
@@ -62,6 +63,8 @@ DEFAULT_EXTREMES = 4
 NIGHTLY_STRIDE = 0
 NIGHTLY_EXTREMES = 2
 NIGHTLY_ANIMATE_STRIDE = 24
+#: Nights ``cassi gc`` keeps by default: a month of nightly runs.
+KEEP_NIGHTS = 30
 #: The thesis's final version gets a four-view video of every task file.
 NIGHTLY_VIDEO_VERSIONS = ("cassi-2.1",)
 
@@ -72,6 +75,9 @@ class RunConfig:
 
     out: Path | None = None
     corpus: Path | None = None
+    #: A store shared with other runs (a nightly directory's ``store/``): jobs it holds with the
+    #: same digest are reused, not run (:class:`cassi.harness.farm.store.OutputStore`).
+    cache: Path | None = None
     subjects: tuple[str, ...] | None = None
     tasks: tuple[int, ...] | None = None
     versions: tuple[str, ...] | None = None
@@ -166,7 +172,7 @@ def validate(raw: Mapping[str, Any], *, source: str | Path | None = None,
             if n < _INTS[key]:
                 raise CassiInputError(f"{key}: must be at least {_INTS[key]}, got {n}", **where)
             values[key] = n
-        elif key in ("out", "corpus"):
+        elif key in ("out", "corpus", "cache"):
             if not isinstance(value, (str, Path)) or not str(value).strip():
                 raise CassiInputError(f"{key}: expected a path, got {value!r}", **where)
             path = Path(str(value)).expanduser()

@@ -5,6 +5,9 @@ Layout of the nightly directory::
     DIR/runs/<YYYY-MM-DD>[-N]/      each night's run (cassi run output)
     DIR/reports/<same name>/        its report (index.html, tables, images)
     DIR/golden/                     golden renders (only `cassi golden` writes them)
+    DIR/store/                      the store every night shares: a job with the same inputs
+                                    and code as an earlier night's is reused, not run
+                                    (`cassi gc DIR` removes what no kept night links)
     DIR/history.csv                 night, version, negatives, gate (one row per version a night)
     DIR/latest.txt                  the name of the newest night
 
@@ -17,6 +20,7 @@ from __future__ import annotations
 import datetime as dt
 import json
 import os
+import shutil
 import sys
 import time
 from dataclasses import dataclass
@@ -24,11 +28,15 @@ from pathlib import Path
 from typing import Callable
 
 from cassi.common.atomic import atomic_write_text
-from cassi.harness.evaluation.config import RunConfig
+from cassi.common.errors import CassiInputError
+from cassi.harness.evaluation.config import KEEP_NIGHTS, RunConfig
 from cassi.harness.evaluation.run import run as run_farm
 from cassi.harness.farm.runner import RunResult
+from cassi.harness.farm.store import Collected, collect_garbage, store_lock
 from cassi.harness.farm.tableset import SET_FILE as TABLE_SET
 
+#: The store all nights of a nightly directory share (:class:`cassi.harness.farm.store.OutputStore`).
+STORE_DIR = "store"
 #: Written into a night's run directory once the whole night (run, gates, history, report) is
 #: done; a night of today's date without it was interrupted and is resumed.
 NIGHT_DONE = "night.json"
@@ -53,6 +61,30 @@ def previous_night(runs_dir: Path, current: str) -> Path | None:
                      and (p / TABLE_SET).is_file()), key=lambda p: p.name)
     earlier = [p for p in nights if p.name < current]
     return earlier[-1] if earlier else None
+
+
+def gc(out_dir: str | os.PathLike, *, keep: int = KEEP_NIGHTS) -> dict:
+    """Keep the newest ``keep`` nights of a nightly directory (their runs and reports), remove
+    the older ones, then every blob of the shared store that no kept night links
+    (:func:`cassi.harness.farm.store.collect_garbage`). The golden directory holds copies and
+    is never touched. Returns what was removed."""
+    root = Path(out_dir)
+    runs_dir = root / "runs"
+    if not runs_dir.is_dir():
+        raise CassiInputError("not a nightly directory (no runs/)", path=root)
+    if keep < 1:
+        raise CassiInputError(f"--keep must be at least 1, got {keep}")
+    nights = sorted(p.name for p in runs_dir.iterdir() if p.is_dir())
+    old = nights[:-keep]
+    with store_lock(root / STORE_DIR, exclusive=True):  # no night may write it meanwhile
+        for name in old:
+            for d in (runs_dir / name, root / "reports" / name):
+                if d.is_dir():
+                    shutil.rmtree(d)
+        freed = (collect_garbage(root / STORE_DIR) if (root / STORE_DIR).is_dir()
+                 else Collected(0, 0, 0))
+    return {"nights_removed": old, "nights_kept": nights[-keep:], "blobs_removed": freed.blobs,
+            "manifests_removed": freed.manifests, "bytes_freed": freed.bytes}
 
 
 @dataclass
@@ -81,9 +113,12 @@ def nightly(out_dir: str | os.PathLike, *, review: Callable[[Night], tuple[bool,
     runs_dir.mkdir(parents=True, exist_ok=True)
     name = night_name(runs_dir, today)
     run_dir = runs_dir / name
-    cfg = (config or RunConfig()).replace(out=run_dir, corpus=Path(corpus) if corpus else None)
+    cfg = (config or RunConfig()).replace(out=run_dir, corpus=Path(corpus) if corpus else None,
+                                          cache=root / STORE_DIR)
     with timer("run"):
         result = run_farm(cfg, progress=progress)
+    timer.say(f"jobs reused from earlier nights (same inputs and code): "
+              f"{result.summary.reused} of {len(result.records)}")
     timer.worker_seconds(result)
     timer.say(f"variant: {_variant_of(run_dir)}")
     passed, index = review(Night(root, name, run_dir, reports_dir / name, result,

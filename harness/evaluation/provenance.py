@@ -14,11 +14,13 @@ a rerun into the same ``--out`` never reports old numbers as current.
 """
 from __future__ import annotations
 
+import ast
 import functools
 import hashlib
 import importlib.util
 import json
-from importlib.metadata import entry_points
+from importlib.metadata import PackageNotFoundError, entry_points
+from importlib.metadata import version as pkg_version
 from pathlib import Path
 from typing import Iterable
 
@@ -27,10 +29,17 @@ from cassi.harness.rubric import registry_table
 from cassi.harness.evaluation.config import package_version
 from cassi.harness.farm.store import sha256_file
 
-#: The namespace packages of cassi-farm itself.
-CASSI_PACKAGES = ("cassi.data", "cassi.versions", "cassi.renderer", "cassi.harness",
-                  "cassi.reports")
+#: The packages of cassi-farm whose code shapes a job's outputs. The reports and the benchmarks
+#: never run inside a job (they read what jobs wrote), so changing them reuses every job.
+CASSI_PACKAGES = ("cassi.common", "cassi.data", "cassi.versions", "cassi.renderer",
+                  "cassi.harness")
+EXCLUDED_PACKAGES = ("cassi.harness.bench",)
+#: Third-party packages whose versions shape results: the numbers (numpy, scipy, pandas), the
+#: tables' bytes (pyarrow), the renders (mitsuba, drjit) and the image checks (scikit-image).
+#: Upgrading one recomputes every job.
+RESULT_PACKAGES = ("numpy", "scipy", "pandas", "pyarrow", "mitsuba", "drjit", "scikit-image")
 _SKIP_DIRS = {"__pycache__"}
+VERSIONS_PACKAGE = "cassi.versions"
 
 
 def _package_dirs(name: str) -> list[Path]:
@@ -42,14 +51,22 @@ def _package_dirs(name: str) -> list[Path]:
     return [Path(spec.origin)]
 
 
-def tree_digest(paths: Iterable[Path]) -> str:
-    """SHA-256 over the relative names and bytes of every file under ``paths`` (sorted)."""
+def _files(root: Path, exclude: Iterable[Path] = ()) -> list[Path]:
+    exclude = [e.resolve() for e in exclude]
+    if root.is_file():
+        return [root]
+    return sorted(p for p in root.rglob("*") if p.is_file() and not _SKIP_DIRS & set(p.parts)
+                  and p.suffix not in (".pyc", ".pyo")
+                  and not any(p.resolve().is_relative_to(e) for e in exclude))
+
+
+def tree_digest(paths: Iterable[Path], *, exclude: Iterable[Path] = ()) -> str:
+    """SHA-256 over the relative names and bytes of every file under ``paths`` (sorted), less
+    the files under ``exclude``."""
+    exclude = list(exclude)
     h = hashlib.sha256()
     for root in paths:
-        files = [root] if root.is_file() else sorted(
-            p for p in root.rglob("*") if p.is_file() and not _SKIP_DIRS & set(p.parts)
-            and p.suffix not in (".pyc", ".pyo"))
-        for path in files:
+        for path in _files(root, exclude):
             rel = path.name if path == root else path.relative_to(root).as_posix()
             h.update(f"{root.name}/{rel}\0".encode())
             h.update(path.read_bytes())
@@ -57,23 +74,121 @@ def tree_digest(paths: Iterable[Path]) -> str:
     return h.hexdigest()
 
 
+def _module_imports(path: Path, package: str) -> set[str]:
+    """The modules of ``package`` that the module at ``path`` imports (absolute names)."""
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                 else [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level
+                 else [])
+        if isinstance(node, ast.ImportFrom) and not node.level:
+            names += [f"{node.module}.{a.name}" for a in node.names]
+        out.update(n for n in names if n == package or n.startswith(package + "."))
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def _versions_modules() -> dict[str, Path]:
+    """Module name -> file of every module of cassi.versions."""
+    mods = {}
+    for root in _package_dirs(VERSIONS_PACKAGE):
+        for path in _files(root):
+            if path.suffix == ".py":
+                stem = path.relative_to(root).with_suffix("").as_posix().replace("/", ".")
+                mods[f"{VERSIONS_PACKAGE}.{stem}".removesuffix(".__init__")] = path
+    return mods
+
+
+def versions_closure(files: Iterable[Path]) -> frozenset[str]:
+    """The modules of cassi.versions that ``files`` import, directly or through each other."""
+    mods = _versions_modules()
+    todo = [m for f in files for m in _module_imports(f, VERSIONS_PACKAGE) if m in mods]
+    seen: set[str] = set()
+    while todo:
+        m = todo.pop()
+        if m not in seen:
+            seen.add(m)
+            todo += [n for n in _module_imports(mods[m], VERSIONS_PACKAGE) if n in mods]
+    return frozenset(seen)
+
+
+def _version_sources(name: str) -> tuple[list[Path], list[Path]]:
+    """(files of cassi.versions the version's entry module starts from, its own third-party
+    package directories) for a registered version."""
+    ep = {e.name: e for e in entry_points(group="cassi.versions")}.get(name)
+    if ep is None:
+        return [], []  # registered at run time (tests): shared code only
+    module = ep.value.split(":")[0]
+    if module.startswith(VERSIONS_PACKAGE + "."):
+        return [_versions_modules()[module]], []
+    dirs = _package_dirs(module.split(".")[0])
+    return [f for d in dirs for f in _files(d) if f.suffix == ".py"], dirs
+
+
+@functools.lru_cache(maxsize=None)
+def _closures() -> dict[str, frozenset[str]]:
+    """Every registered version's closure in cassi.versions (its entry module included)."""
+    out = {}
+    for ep in entry_points(group="cassi.versions"):
+        files, _ = _version_sources(ep.name)
+        own = ({ep.value.split(":")[0]} if ep.value.startswith(VERSIONS_PACKAGE + ".") else set())
+        out[ep.name] = versions_closure(files) | own
+    return out
+
+
 @functools.lru_cache(maxsize=None)
 def code_digest() -> str:
-    """Digest of every file of the installed cassi packages (source, templates, data)."""
-    return tree_digest(d for name in CASSI_PACKAGES for d in _package_dirs(name))
+    """Digest of the cassi code every job shares: every file of :data:`CASSI_PACKAGES` (source,
+    templates, data) less :data:`EXCLUDED_PACKAGES` and less the modules of cassi.versions that
+    belong to some version (:func:`version_digest` covers those, per version)."""
+    return tree_digest(_shared_roots(), exclude=_shared_excluded())
+
+
+def _shared_roots() -> list[Path]:
+    return [d for name in CASSI_PACKAGES for d in _package_dirs(name)]
+
+
+def _shared_excluded() -> list[Path]:
+    mods = _versions_modules()
+    owned = {mods[m] for c in _closures().values() for m in c}
+    return [d for name in EXCLUDED_PACKAGES for d in _package_dirs(name)] + sorted(owned)
+
+
+def shared_code_files() -> list[Path]:
+    """The files :func:`code_digest` reads."""
+    excluded = _shared_excluded()
+    return [f for root in _shared_roots() for f in _files(root, excluded)]
+
+
+@functools.lru_cache(maxsize=None)
+def version_digest(name: str) -> str:
+    """Digest of the code only ``name`` runs: the modules of cassi.versions its entry module
+    imports (directly or not; shared ones such as the protocol included) and, for a third-party
+    version, its own package. A change to ``versions/cassi21.py`` changes the digests of
+    cassi-2.1 and of the versions that import it, not cassi-1.0's."""
+    files, dirs = _version_sources(name)
+    mods = _versions_modules()
+    own = _closures().get(name, versions_closure(files))
+    return tree_digest([mods[m] for m in sorted(own)] + dirs)
 
 
 def version_code_digest(versions: Iterable[str]) -> str:
-    """Digest of the modules behind third-party versions (entry points outside cassi)."""
-    eps = {ep.name: ep for ep in entry_points(group="cassi.versions")}
-    dirs: list[Path] = []
+    """One digest over the versions' own code (:func:`version_digest` of each)."""
+    h = hashlib.sha256()
     for name in sorted(set(versions)):
-        ep = eps.get(name)
-        if ep is None or ep.value.startswith("cassi."):
-            continue  # built-in (in code_digest) or registered at run time (tests)
-        top = ep.value.split(":")[0].split(".")[0]
-        dirs += _package_dirs(top)
-    return tree_digest(dirs)
+        h.update(f"{name}\0{version_digest(name)}\0".encode())
+    return h.hexdigest()
+
+
+def package_versions() -> dict[str, str]:
+    """The installed versions of :data:`RESULT_PACKAGES` (``"-"`` where one is missing)."""
+    out = {}
+    for name in RESULT_PACKAGES:
+        try:
+            out[name] = pkg_version(name)
+        except PackageNotFoundError:
+            out[name] = "-"
+    return out
 
 
 def rubric_digest() -> str:
@@ -82,11 +197,21 @@ def rubric_digest() -> str:
     return hashlib.sha256(table.to_csv(index=False).encode()).hexdigest()
 
 
-def code_provenance(versions: Iterable[str]) -> dict[str, str]:
-    """The code a run's outputs come from (saved in run.json, part of every job digest)."""
+def code_provenance(versions: Iterable[str]) -> dict:
+    """The code a run's outputs come from (saved in run.json, part of every job digest): the
+    shared code, the rubric, the packages that shape results, and per version its own code
+    (``version_digests``; a job's digest takes only its version's)."""
+    versions = sorted(set(versions))
     return {"package_version": package_version(), "code_digest": code_digest(),
             "versions_code_digest": version_code_digest(versions),
-            "rubric_digest": rubric_digest()}
+            "version_digests": {v: version_digest(v) for v in versions},
+            "packages": package_versions(), "rubric_digest": rubric_digest()}
+
+
+def shared_provenance(provenance: dict) -> dict:
+    """The part of :func:`code_provenance` every job's digest takes (not the versions' own)."""
+    return {k: v for k, v in provenance.items()
+            if k not in ("versions_code_digest", "version_digests")}
 
 
 def _array_bytes(a) -> bytes:

@@ -17,7 +17,7 @@ from cassi.harness.evaluation.evalset import default_tasks, explicit_tasks
 from cassi.harness.farm.executors import make_executor, require_ray
 from cassi.harness.evaluation.inputs import check_inputs
 from cassi.harness.farm.jobs import GEOMETRY_VIEW, StageContext
-from cassi.harness.evaluation.provenance import code_provenance
+from cassi.harness.evaluation.provenance import code_provenance, shared_provenance
 from cassi.harness.farm.runner import Pipeline, RunResult, run_batch
 from cassi.harness.farm.store import OutputStore
 from cassi.harness.farm.workers import worker_env
@@ -102,7 +102,7 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
         print(f"cassi run: {sum(t.usable for t in tasks)} task file(s) x {len(versions)} "
               f"version(s) x {len(views)} view(s): at most {n} frame(s) to render "
               f"({cfg.preset}, {workers} worker(s))", file=sys.stderr, flush=True)
-    store = OutputStore(cfg.out)
+    store = OutputStore(cfg.out, cache=cfg.cache)
     store.prepare()
     ctx = StageContext(out_dir=store.root.resolve(), corpus=corpus.root.resolve(),
                        stride=cfg.stride, chunk_size=cfg.chunk, preset=cfg.preset,
@@ -110,8 +110,10 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
                        options=(("extremes", cfg.extremes),
                                 ("animate_stride", cfg.animate_stride),
                                 ("video_versions", cfg.video_versions)),
-                       provenance=json.dumps(provenance, sort_keys=True),
-                       ship=cfg.executor == "ray")
+                       provenance=json.dumps(shared_provenance(provenance), sort_keys=True),
+                       version_provenance=tuple(sorted(provenance["version_digests"].items())),
+                       ship=cfg.executor == "ray",
+                       cache_dir=None if cfg.cache is None else cfg.cache.resolve())
     meta = C.resolved(cfg, corpus_resolved=str(ctx.corpus), synthetic=synthetic,
                       versions_resolved=versions, views_resolved=views,
                       variant_resolved=variant, workers_resolved=workers,

@@ -119,8 +119,10 @@ class StageContext:
     """Run settings every stage sees (picklable; sent to worker processes).
 
     ``provenance`` names the code the outputs come from (package version, a digest of the
-    installed cassi code and of the rubric registry, :mod:`.provenance`): part of every job's
-    digest, so new code or a changed threshold recomputes. ``ship`` makes workers take their
+    installed cassi code and of the rubric registry, the packages that shape results),
+    ``version_provenance`` each version's own code: part of every job's digest, so new code or
+    a changed threshold recomputes. ``cache_dir`` is a store shared between runs (a nightly
+    directory's nights): jobs whose digest it holds are reused from it. ``ship`` makes workers take their
     inputs from the job and hand their outputs back instead of using ``out_dir`` (a cluster
     whose nodes do not share the driver's filesystem).
     """
@@ -134,15 +136,21 @@ class StageContext:
     synthetic: bool = False
     options: tuple[tuple[str, object], ...] = ()
     provenance: str = ""
+    version_provenance: tuple[tuple[str, str], ...] = ()
     ship: bool = False
+    cache_dir: Path | None = None
 
-    def salt(self) -> str:
-        """The settings that change outputs (not out_dir, which only says where they go)."""
+    def salt(self, version: str | None = None) -> str:
+        """The settings that change a job's outputs (not out_dir or cache_dir, which only say
+        where they go): the shared ``provenance`` and ``version``'s own code
+        (``version_provenance``), so a change to one version's code leaves the others' jobs."""
         return json.dumps({"corpus": str(self.corpus), "stride": self.stride,
                            "chunk": self.chunk_size, "preset": self.preset,
                            "variant": self.variant, "synthetic": self.synthetic,
                            "options": [list(o) for o in self.options],
-                           "provenance": self.provenance}, sort_keys=True)
+                           "provenance": self.provenance,
+                           "version": dict(self.version_provenance).get(version, "")},
+                          sort_keys=True)
 
     def option(self, name: str, default=None):
         return dict(self.options).get(name, default)
@@ -254,7 +262,7 @@ def execute_job(stage: StageFn, job: Job, ctx: StageContext, digest: str,
     Exceptions other than :class:`SkipJob` propagate (the executor reports them).
     """
     t0, c0 = time.perf_counter(), time.process_time()
-    store = None if ctx.ship else OutputStore(ctx.out_dir)
+    store = None if ctx.ship else OutputStore(ctx.out_dir, cache=ctx.cache_dir)
     inputs = dict(shipped or {}) if ctx.ship else parent_inputs(store, job)
     if inputs is None:
         return Outcome(job.key, State.SKIPPED, reason="a parent job has no outputs")

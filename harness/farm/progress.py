@@ -36,6 +36,8 @@ class Summary:
     records: dict[str, JobRecord]
     seconds: float = 0.0
     worker_crashes: int = 0
+    #: Jobs (among the cached ones) reused from the store shared with other runs.
+    reused: int = 0
 
     def counts(self) -> dict[str, int]:
         c = Counter(r.state.value for r in self.records.values())
@@ -52,6 +54,7 @@ class Summary:
     def to_dict(self) -> dict:
         return {"counts": self.counts(), "seconds": round(self.seconds, 3),
                 "jobs": len(self.records), "worker_crashes": self.worker_crashes,
+                "reused": self.reused,
                 "skipped": {r.key: r.reason for r in sorted(self.skipped, key=lambda r: r.key)},
                 "failed": {r.key: r.reason for r in sorted(self.failed, key=lambda r: r.key)}}
 
@@ -60,6 +63,8 @@ class Summary:
         lines = [f"jobs: {len(self.records)} - {c['done']} done, {c['cached']} skipped as already "
                  f"done (outputs verified), {c['skipped']} skipped, {c['failed']} failed; "
                  f"{self.seconds:.1f} s"]
+        if self.reused:
+            lines.append(f"reused from the shared store (same inputs and code): {self.reused}")
         if self.worker_crashes:
             lines.append(f"worker processes that died: {self.worker_crashes}")
         reasons = Counter(r.reason for r in self.skipped)

@@ -81,8 +81,7 @@ class Scheduler:
     def __init__(self, plan: BatchPlan, pipeline: Pipeline, ctx: StageContext, executor, *,
                  progress: bool = True):
         self.plan, self.pipeline, self.ctx, self.executor = plan, pipeline, ctx, executor
-        self.store = OutputStore(ctx.out_dir)
-        self.salt = ctx.salt()
+        self.store = OutputStore(ctx.out_dir, cache=ctx.cache_dir)
         self.jobs: dict[str, Job] = {}
         self.digests: dict[str, str] = {}
         self.records: dict[str, JobRecord] = {}
@@ -122,7 +121,7 @@ class Scheduler:
     def _schedule(self, job: Job) -> None:
         """CACHED if its outputs verify, else submitted."""
         self.jobs[job.key] = job
-        digest = self.digests[job.key] = job.digest(self.salt)
+        digest = self.digests[job.key] = job.digest(self.ctx.salt(job.version))
         self.bars.planned(job.stage)
         manifest = self.store.verified(job.key, digest)
         if manifest is not None:
@@ -228,7 +227,8 @@ def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterabl
     table = R.combine(frames)
     rated = pipeline.ratings(table) if pipeline.ratings is not None else R.empty_ratings()
     summary = Summary(records, time.perf_counter() - t0,
-                      worker_crashes=getattr(executor, "crashes", 0))
+                      worker_crashes=getattr(executor, "crashes", 0),
+                      reused=len(scheduler.store.reused))
     render_index = pd.DataFrame(renders, columns=list(RENDER_COLUMNS)).sort_values(
         ["subject", "task", "rep", "version", "view", "frame"], kind="mergesort")
     try:

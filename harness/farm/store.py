@@ -8,6 +8,17 @@ Layout of an output directory::
     OUT/logs/<job key>.log       a job's log
     OUT/results.parquet|csv, ratings.parquet|csv, run.json, summary.json
 
+A store may share a cache with other runs (``cache``: the nightly directory's ``store/``, or
+``cassi run --cache DIR``)::
+
+    CACHE/objects/ab/abcdef...ext    the blobs, once for every run that made them
+    CACHE/manifests/ab/<digest>.json a job's manifest by its digest (inputs, settings, code)
+
+Then a blob is written into the cache and hard-linked into ``OUT/objects`` (copied where the
+two are on different file systems), so a run directory stays whole by itself and costs no
+more disk; a job whose digest the cache holds is reused from it (its manifest and blobs linked
+into OUT) instead of run. :func:`collect_garbage` removes what no kept run links any more.
+
 A job is done when its manifest exists, names the same input digest as the job about to run,
 and every blob it lists exists and hashes to its name. The manifest is written last, so a
 killed job leaves at most unreferenced blobs (harmless, reused) and temporary files (removed
@@ -27,10 +38,39 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, Mapping
 
-from cassi.common.atomic import atomic_write_bytes, atomic_write_text
+from cassi.common.atomic import atomic_write_bytes, atomic_write_text, link_or_copy
 from cassi.common.errors import CassiInputError
 
 LOCK_NAME = ".cassi-run.lock"
+#: In a shared store: media a report made from content-addressed inputs, by their key.
+MEDIA_DIR = "media"
+#: In a shared store: held shared by every run using it, exclusively by the garbage collector.
+STORE_LOCK_NAME = ".cassi-store.lock"
+
+
+@contextlib.contextmanager
+def store_lock(cache: str | os.PathLike, *, exclusive: bool) -> Iterator[None]:
+    """Hold a shared store: runs share it (``exclusive=False``), :func:`collect_garbage` needs
+    it alone; the other side gets a clear :class:`CassiInputError` at once, never a wait."""
+    path = Path(cache) / STORE_LOCK_NAME
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError as err:
+        raise CassiInputError(f"cannot open the store lock: {err.strerror}", path=path) from err
+    try:
+        try:
+            fcntl.flock(fd, (fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH) | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise CassiInputError(
+                "a run is using this store: collect its garbage when no run is going" if exclusive
+                else "the store's garbage is being collected: run again when it is done",
+                path=Path(cache)) from None
+        yield
+    finally:
+        with contextlib.suppress(OSError):
+            fcntl.flock(fd, fcntl.LOCK_UN)
+        os.close(fd)
 
 
 def sha256_bytes(data: bytes) -> str:
@@ -67,12 +107,17 @@ class BlobRef:
 
 
 class OutputStore:
-    """The outputs of one run directory (see the module docstring for the layout)."""
+    """The outputs of one run directory (see the module docstring for the layout), with an
+    optional ``cache`` shared between runs."""
 
-    def __init__(self, root: str | os.PathLike):
+    def __init__(self, root: str | os.PathLike, cache: str | os.PathLike | None = None):
         self.root = Path(root)
+        self.cache = None if cache is None else Path(cache)
         # Blobs this object has written or hashed: each is hashed at most once per run.
         self._good: set[str] = set()
+        self._cache_good: set[str] = set()
+        #: Keys of the jobs reused from the cache (not from this run directory).
+        self.reused: set[str] = set()
 
     # -- set-up -------------------------------------------------------------------------------
     def prepare(self) -> None:
@@ -81,6 +126,9 @@ class OutputStore:
             self.root.mkdir(parents=True, exist_ok=True)
             for sub in ("objects", "jobs", "logs"):
                 (self.root / sub).mkdir(exist_ok=True)
+            if self.cache is not None:
+                for sub in ("objects", "manifests"):
+                    (self.cache / sub).mkdir(parents=True, exist_ok=True)
             probe = self.root / f".write-probe-{os.getpid()}"
             probe.write_bytes(b"ok")
             probe.unlink()
@@ -114,7 +162,11 @@ class OutputStore:
                     path=self.root) from None
             os.ftruncate(fd, 0)
             os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
-            yield
+            if self.cache is None:
+                yield
+            else:
+                with store_lock(self.cache, exclusive=False):
+                    yield
         finally:
             with contextlib.suppress(OSError):
                 fcntl.flock(fd, fcntl.LOCK_UN)
@@ -140,10 +192,34 @@ class OutputStore:
         short is found and its job run again. Manifests, which say a job is done, stay fsynced.
         """
         ref = BlobRef(sha256_bytes(data), suffix)
+        if self.cache is not None:
+            if not self._cache_blob_ok(ref):
+                atomic_write_bytes(self.cache / ref.relpath, data, durable=False)
+                self._cache_good.add(ref.relpath)
+            if not self._blob_ok(ref):
+                self._link_from_cache(ref)
+            return ref
         if not self._blob_ok(ref):
             atomic_write_bytes(self.root / ref.relpath, data, durable=False)
             self._good.add(ref.relpath)
         return ref
+
+    def _cache_blob_ok(self, ref: BlobRef) -> bool:
+        if ref.relpath in self._cache_good:
+            return (self.cache / ref.relpath).is_file()
+        try:
+            ok = sha256_file(self.cache / ref.relpath) == ref.sha256
+        except OSError:
+            return False
+        if ok:
+            self._cache_good.add(ref.relpath)
+        return ok
+
+    def _link_from_cache(self, ref: BlobRef) -> None:
+        """Put the cache's (verified) blob into this run directory: a hard link, or a copy
+        where the cache is on another file system; atomic either way."""
+        link_or_copy(self.cache / ref.relpath, self.root / ref.relpath)
+        self._good.add(ref.relpath)
 
     def _blob_ok(self, ref: BlobRef) -> bool:
         """Whether the blob exists and hashes to its name (hashed once, then remembered)."""
@@ -180,7 +256,15 @@ class OutputStore:
                "outputs": {n: {"sha256": r.sha256, "suffix": r.suffix}
                            for n, r in sorted(outputs.items())},
                "meta": dict(meta or {})}
-        atomic_write_text(self.manifest_path(key), json.dumps(doc, indent=1, sort_keys=True))
+        text = json.dumps(doc, indent=1, sort_keys=True)
+        if self.cache is not None:
+            atomic_write_text(self._cache_manifest(digest), text)
+        atomic_write_text(self.manifest_path(key), text)
+
+    def _cache_manifest(self, digest: str) -> Path:
+        if not all(c in "0123456789abcdef" for c in digest) or len(digest) != 64:
+            raise ValueError(f"not a SHA-256 digest: {digest!r}")
+        return self.cache / "manifests" / digest[:2] / f"{digest}.json"
 
     def read_manifest(self, key: str) -> dict | None:
         path = self.manifest_path(key)
@@ -194,8 +278,74 @@ class OutputStore:
     def verified(self, key: str, digest: str) -> dict | None:
         """The manifest of ``key`` if it was made from the same inputs and every blob verifies."""
         doc = self.read_manifest(key)
-        if doc is None or doc.get("digest") != digest:
+        if doc is not None and doc.get("digest") == digest and all(
+                self._blob_ok(ref) for ref in doc["outputs"].values()):
+            return doc
+        return self._from_cache(key, digest)
+
+    def _from_cache(self, key: str, digest: str) -> dict | None:
+        """The cache's manifest of ``digest`` with its blobs linked in, or None."""
+        if self.cache is None:
             return None
-        if not all(self._blob_ok(ref) for ref in doc["outputs"].values()):
+        try:
+            doc = json.loads(self._cache_manifest(digest).read_text(encoding="utf-8"))
+            outputs = {n: BlobRef(o["sha256"], o["suffix"]) for n, o in doc["outputs"].items()}
+        except (OSError, ValueError, KeyError, TypeError):
             return None
-        return doc
+        if doc.get("digest") != digest or not all(self._cache_blob_ok(r) for r in outputs.values()):
+            return None
+        for ref in outputs.values():
+            if not self._blob_ok(ref):
+                self._link_from_cache(ref)
+        atomic_write_text(self.manifest_path(key), json.dumps(
+            {**doc, "key": key}, indent=1, sort_keys=True))
+        self.reused.add(key)
+        return {**doc, "key": key, "outputs": outputs}
+
+
+@dataclass(frozen=True)
+class Collected:
+    """What :func:`collect_garbage` removed: blobs and manifests, and the bytes freed."""
+
+    blobs: int
+    manifests: int
+    bytes: int
+
+
+def collect_garbage(cache: str | os.PathLike) -> Collected:
+    """Remove from a shared store every blob no run directory links any more (its only name is
+    the store's) and every manifest that names a removed blob.
+
+    Run directories hold hard links to the blobs they use, so a blob that a kept run needs has
+    more than one link and stays; a run directory on another file system holds copies and never
+    depends on the store. Call it holding :func:`store_lock` exclusively (runs hold it shared):
+    a run writing into the store meanwhile could have a new blob removed before it links it.
+    """
+    root = Path(cache)
+    removed, freed = set(), 0
+    for path in sorted((root / "objects").glob("*/*")):
+        try:
+            st = path.stat()
+        except FileNotFoundError:
+            continue
+        if path.is_file() and st.st_nlink <= 1:
+            path.unlink()
+            removed.add(path.relative_to(root).as_posix())
+            freed += st.st_size
+    for path in sorted((root / MEDIA_DIR).glob("*")):  # report media (cassi.reports.media)
+        st = path.stat()
+        if path.is_file() and st.st_nlink <= 1:
+            path.unlink()
+            freed += st.st_size
+    manifests = 0
+    for path in sorted((root / "manifests").glob("*/*.json")):
+        try:
+            doc = json.loads(path.read_text(encoding="utf-8"))
+            names = [BlobRef(o["sha256"], o["suffix"]).relpath for o in doc["outputs"].values()]
+        except (OSError, ValueError, KeyError, TypeError):
+            names = None  # unreadable: of no use to any run
+        if names is None or any(n in removed or not (root / n).is_file() for n in names):
+            path.unlink(missing_ok=True)
+            manifests += 1
+    return Collected(len(removed), manifests, freed)
+
