@@ -153,3 +153,14 @@ def test_a_second_night_reuses_its_jobs_and_its_videos(corpus, tmp_path, monkeyp
     gates = json.loads((tmp_path / "runs" / "2026-11-21" / "gate.json").read_text())
     assert gates["passed"] and all(g["status"] == "pass" for g in gates["gates"])
     assert pd.read_csv(tmp_path / "history.csv")["night"].nunique() == 2
+
+
+def test_cassi_gc_command(corpus, tmp_path, capsys):
+    from cassi.harness.cli import main as cli_main
+
+    store = tmp_path / "store"
+    run(_cfg(corpus, tmp_path / "a", store), progress=False)
+    assert cli_main(["gc", str(store)]) == 0          # an ad-hoc store: run a links everything
+    assert "removed 0 object(s)" in capsys.readouterr().out
+    assert cli_main(["gc", str(tmp_path / "a")]) == 2  # neither a nightly directory nor a store
+    assert "neither a nightly directory" in capsys.readouterr().err

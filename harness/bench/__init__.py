@@ -6,7 +6,9 @@
 - ``geometry_memory`` and ``image_memory``: peak RSS of one worker on a 100,000-row task
   (:mod:`.memory`, ``geometry_peak_rss_mb``, ``image_peak_rss_mb``);
 - ``farm_preview`` and ``farm``: preview frames per second end to end in the farm, and jobs per
-  second with 1 and 2 local workers and with Ray (:mod:`.farm`).
+  second with 1 and 2 local workers and with Ray (:mod:`.farm`);
+- ``incremental_night``: a second night with nothing changed over the first, side by side in
+  one run (:mod:`.night`, ``incremental_night_fraction``).
 
 Every figure is measured in-process or read from structured output (a job's timing fields, a
 fresh process's JSON line), never parsed from log text (:mod:`.measure`). A benchmark that fails
@@ -17,24 +19,23 @@ from __future__ import annotations
 import os
 import platform
 
-from cassi.renderer.variant import choose_variant
-
-from cassi.harness.bench.farm import bench_farm, bench_farm_preview
-from cassi.harness.bench.geometry import bench_geometry
+from cassi.common.lazy import resolve
 from cassi.harness.bench.measure import guarded
-from cassi.harness.bench.memory import bench_geometry_memory, bench_image_memory
-from cassi.harness.bench.render import bench_render
+from cassi.renderer.variant import choose_variant
 
 __all__ = ["BENCHMARKS", "HEADLINE", "headline", "run_benchmarks"]
 
 #: The benchmarks of ``cassi bench``, in the order they run (``--only`` picks some): name ->
-#: function of ``quick`` returning the benchmark's JSON-ready entry.
-BENCHMARKS = {"geometry": bench_geometry,
-              "render": bench_render,
-              "geometry_memory": bench_geometry_memory,
-              "image_memory": bench_image_memory,
-              "farm_preview": bench_farm_preview,
-              "farm": bench_farm}
+#: the ``"module:function"`` of ``quick`` returning the benchmark's JSON-ready entry. Named, not
+#: imported: a memory benchmark's fresh process imports its own module only, so its peak is a
+#: worker's, not a worker's plus every other benchmark's imports.
+BENCHMARKS = {"geometry": "cassi.harness.bench.geometry:bench_geometry",
+              "render": "cassi.harness.bench.render:bench_render",
+              "geometry_memory": "cassi.harness.bench.memory:bench_geometry_memory",
+              "image_memory": "cassi.harness.bench.memory:bench_image_memory",
+              "farm_preview": "cassi.harness.bench.farm:bench_farm_preview",
+              "farm": "cassi.harness.bench.farm:bench_farm",
+              "incremental_night": "cassi.harness.bench.night:bench_incremental_night"}
 
 
 def _same(*keys: str) -> dict[str, str]:
@@ -51,7 +52,8 @@ HEADLINE = {"geometry": _same("geometry_frames_per_s"),
                             "bare_mi_render_frames_per_s"),
             "farm_preview": _same("farm_preview_frames_per_s", "farm_preview_cpu_frames_per_s"),
             "farm": {"speedup_2_workers": "farm_speedup_2_workers",
-                     **_same("ray_overhead_vs_local")}}
+                     **_same("ray_overhead_vs_local")},
+            "incremental_night": _same("incremental_night_fraction")}
 
 
 def headline(benchmarks: dict) -> dict:
@@ -80,6 +82,7 @@ def run_benchmarks(*, quick: bool = False, only=None) -> dict:
               "python": platform.python_version(), "machine": platform.machine(),
               "variant": _variant(), "benchmarks": {}, "only": list(chosen)}
     for name in chosen:
-        report["benchmarks"][name] = guarded(BENCHMARKS[name], quick)
+        report["benchmarks"][name] = guarded(lambda q, target=BENCHMARKS[name]: resolve(target)(q),
+                                             quick)
     report.update(headline(report["benchmarks"]))
     return report
