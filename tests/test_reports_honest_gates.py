@@ -93,6 +93,10 @@ def test_the_night_after_a_failed_night_compares_with_the_newest_complete_one(tm
     _run(runs / "2026-01-03", [("JW11", 19)])
     assert previous_night(runs, "2026-01-04") == runs / "2026-01-03"
     assert previous_night(runs, "2026-01-01") is None
+    # a night whose tables do not verify (here: under another run.json) is passed over too
+    meta = json.loads((runs / "2026-01-03" / "run.json").read_text())
+    (runs / "2026-01-03" / "run.json").write_text(json.dumps({**meta, "preset": "final"}))
+    assert previous_night(runs, "2026-01-04") == runs / "2026-01-01"
 
 
 # -- 2. nothing compared ---------------------------------------------------------------------

@@ -28,7 +28,7 @@ from cassi.harness.evaluation.config import RunConfig
 from cassi.harness.evaluation.run import run as run_farm
 from cassi.harness.farm.runner import RunResult
 from cassi.harness.farm.tableset import SET_FILE as TABLE_SET
-from cassi.harness.farm.tableset import SUMMARY_FILE
+from cassi.harness.farm.tableset import SUMMARY_FILE, TableSetError, verify_table_set
 
 #: Written into a night's run directory once the whole night (run, gates, history, report) is
 #: done; a night of today's date without it was interrupted and is resumed.
@@ -49,8 +49,9 @@ def night_name(runs_dir: Path, today: dt.date | None = None) -> str:
 
 
 def previous_night(runs_dir: Path, current: str) -> Path | None:
-    """The newest night before ``current`` whose run is complete: a table set and no failed
-    job (a failed night is no baseline: its missing results would pass or blame tonight)."""
+    """The newest night before ``current`` whose run is complete: a table set that verifies and
+    no failed job (a failed night is no baseline: its missing results would pass or blame
+    tonight)."""
     nights = sorted((p for p in runs_dir.iterdir() if p.is_dir() and p.name < current
                      and (p / TABLE_SET).is_file()), key=lambda p: p.name, reverse=True)
     return next((p for p in nights if _complete(p)), None)
@@ -58,8 +59,9 @@ def previous_night(runs_dir: Path, current: str) -> Path | None:
 
 def _complete(run_dir: Path) -> bool:
     try:
+        verify_table_set(run_dir)
         summary = json.loads((run_dir / SUMMARY_FILE).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+    except (OSError, ValueError, TableSetError):
         return False
     return isinstance(summary, dict) and not summary.get("failed")
 
