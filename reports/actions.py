@@ -4,8 +4,11 @@
 from __future__ import annotations
 
 import argparse
+import errno
 from functools import partial
+from pathlib import Path
 
+from cassi.common.errors import CassiInputError
 from cassi.harness.evaluation.config import RunConfig
 from cassi.harness.evaluation.nightly import nightly
 from cassi.reports.gates import gate, update_golden
@@ -13,7 +16,21 @@ from cassi.reports.nightly import review_night
 from cassi.reports.report import write_report
 
 
+def _writable(out: Path) -> None:
+    """Prove the report directory writable before any work, as ``cassi run`` does (exit 2)."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / ".write-probe"
+        probe.write_bytes(b"ok")
+        probe.unlink()
+    except OSError as err:
+        why = "no space left on the device" if err.errno == errno.ENOSPC else (
+            err.strerror or str(err))
+        raise CassiInputError(f"report directory is not writable: {why}", path=out) from err
+
+
 def cmd_report(args: argparse.Namespace) -> int:
+    _writable(args.out)
     index = write_report(args.run, args.out, compare=args.compare)
     print(index)
     return 0
@@ -37,6 +54,11 @@ def cmd_gate(args: argparse.Namespace) -> int:
     skips = sum(r.status == "skip" for r in results)
     print(f"{'PASSED' if passed else 'FAILED'}: {len(results) - len(fails) - skips} passed, "
           f"{len(fails)} failed, {skips} skipped (see {args.run / 'gate.md'})")
+    failed_jobs = [r.item for r in fails if r.gate == "jobs"]
+    if failed_jobs:
+        # an incomplete run is bad input to a gate, not a regression
+        raise CassiInputError(f"the run has {len(failed_jobs)} failed job(s), so its gates are "
+                              f"incomplete: {', '.join(failed_jobs[:6])}", path=args.run)
     return 0 if passed else 1
 
 

@@ -44,7 +44,9 @@ def register(sub) -> None:
 
     p = sub.add_parser("gate", help="apply the regression gates to a run",
                        description="Compare RUN with a baseline run or golden directory; write "
-                       "gate.json and gate.md into RUN; exit 0 when all gates hold, 1 otherwise.")
+                       "gate.json and gate.md into RUN; exit 0 when all gates hold, 1 otherwise, "
+                       "2 when they cannot compare (a side with failed or missing jobs, another "
+                       "scope or corpus, nothing compared).")
     p.add_argument("run", type=Path)
     p.add_argument("--baseline", type=Path, required=True, help="a run directory or golden directory")
     p.add_argument("--common-only", action="store_true", dest="common_only",
@@ -54,7 +56,7 @@ def register(sub) -> None:
 
     p = sub.add_parser("golden", help="make a run's renders the golden images (explicit only)",
                        description="Copy RUN's renders and results into GOLDEN; the only way "
-                       "golden images change.")
+                       "golden images change. A run with failed or missing jobs is refused (exit 2).")
     p.add_argument("run", type=Path)
     p.add_argument("--golden", type=Path, required=True, help="golden directory to (re)write")
     p.set_defaults(func="cassi.reports.actions:cmd_golden")

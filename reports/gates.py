@@ -16,6 +16,7 @@ import pandas as pd
 
 from cassi.common.atomic import atomic_tmp_path, atomic_write_text
 from cassi.common.errors import CassiInputError
+from cassi.harness.farm.store import sha256_file
 from cassi.reports.media import read_rgb8
 from cassi.reports.runio import Run, load_run
 from cassi.renderer.compare import MAX_CHANGED_SHARE, compare_images
@@ -147,6 +148,13 @@ def image_gates(run: Run, reference_dir: Path, *,
             out.append(GateResult("image", row["subject"], row["version"], item, "skip",
                                   f"no golden image {ref}"))
             continue
+        same = _same_bytes(Path(row["path"]), ref)
+        if same:
+            # content-addressed renders: equal digests are equal images, nothing to decode
+            out.append(GateResult("image", row["subject"], row["version"], item, "pass",
+                                  f"the same bytes as {ref} (SHA-256 {same[:12]})", 0.0,
+                                  MAX_CHANGED_SHARE))
+            continue
         try:
             rendered, reference = read_rgb8(Path(row["path"])), read_rgb8(ref)
             box = mouth_box_of(Path(row["path"]), rendered.shape)
@@ -164,6 +172,16 @@ def image_gates(run: Run, reference_dir: Path, *,
                               "pass" if c.passed else "fail", reason, c.changed_share,
                               MAX_CHANGED_SHARE))
     return out
+
+
+def _same_bytes(a: Path, b: Path) -> str | None:
+    """The SHA-256 both files share, or None (unequal or unreadable: the comparison rule
+    then decides, or says why it cannot)."""
+    try:
+        digest = sha256_file(a)
+        return digest if sha256_file(b) == digest else None
+    except OSError:
+        return None
 
 
 def tolerance(check: str) -> int:
@@ -203,6 +221,14 @@ class MismatchedBaseline(CassiInputError):
     """The baseline was run on other tasks, versions, views or preset than the run."""
 
 
+class IncompleteRun(CassiInputError):
+    """A run (or the baseline) with failed or missing jobs where the gate compares."""
+
+
+class NothingCompared(CassiInputError):
+    """No metric or image gate could be applied: nothing compared is not a pass."""
+
+
 def run_scope(meta: dict) -> dict[str, set]:
     """A run's scope from its resolved config (run.json): task files (subject, task, rep),
     versions, views and preset."""
@@ -210,6 +236,55 @@ def run_scope(meta: dict) -> dict[str, set]:
             "versions": set(meta.get("versions_resolved") or []),
             "views": set(meta.get("views_resolved") or []),
             "preset": {meta.get("preset")}}
+
+
+def input_digests(meta: dict) -> dict[tuple, str] | None:
+    """(subject, task, rep) -> the digest of the corpus files its jobs read (run.json's
+    ``tasks_resolved``, sixth field), or None when the run does not record them."""
+    rows = meta.get("tasks_resolved") or []
+    if not rows or any(len(r) < 6 for r in rows):
+        return None
+    return {(str(s), int(t), int(r)): str(d) for s, t, r, _, _, d, *_ in rows if d}
+
+
+def _job_task(key: str) -> tuple | None:
+    """(subject, task, rep, version) of a farm job key ``JW11/019-1/cassi-2.0/...``."""
+    parts = key.split("/")
+    try:
+        task, rep = parts[1].split("-")
+        return parts[0], int(task), int(rep), parts[2]
+    except (IndexError, ValueError):
+        return None
+
+
+def incomplete_jobs(meta: dict, summary: dict, results: pd.DataFrame | None,
+                    keys: set[tuple] | None = None) -> tuple[list[str], list[str]]:
+    """What a run lacks among ``keys`` (subject, task, rep, version; None: all it planned):
+    its failed jobs (``job: reason``) and the task files and versions its plan holds that have
+    neither results nor a failed or skipped job (``task/version``)."""
+    def wanted(key: str) -> bool:
+        where = _job_task(key)
+        return keys is None or where is None or where in keys
+
+    failed = [f"{k} failed: {why}" for k, why in sorted((summary.get("failed") or {}).items())
+              if wanted(k)]
+    missing = []
+    if results is not None and meta.get("tasks_resolved") is not None:
+        accounted = {_job_task(k) for k in (*(summary.get("failed") or {}),
+                                            *(summary.get("skipped") or {}))}
+        present = set(zip(results["subject"].astype(str), results["task"].astype(int),
+                          results["rep"].astype(int), results["version"].astype(str)))
+        for s, t, r, usable, *_ in meta["tasks_resolved"]:
+            for v in meta.get("versions_resolved") or []:
+                key = (str(s), int(t), int(r), str(v))
+                if (usable and (keys is None or key in keys) and key not in present
+                        and key not in accounted):
+                    missing.append(f"{s}/{int(t):03d}-{int(r)}/{v}: no results and no job record")
+    return failed, missing
+
+
+def _fmt_list(items: list[str]) -> str:
+    return "; ".join(items[:6]) + (f"; and {len(items) - 6} more" if len(items) > 6 else "")
 
 
 def _fmt(items: set) -> str:
@@ -264,7 +339,13 @@ def gate(run_dir: str | os.PathLike, baseline: str | os.PathLike, *,
     Raises
     ------
     MismatchedBaseline
-        When the scopes differ and ``common_only`` is False (the message says what differs).
+        When the scopes or the corpus files (their digests) differ and ``common_only`` is
+        False (the message says what differs).
+    IncompleteRun
+        When the baseline has failed or missing jobs among what is compared, or the run has
+        missing ones (its failed jobs are failed gates, listed).
+    NothingCompared
+        When no metric or image gate could be applied.
     """
     run = load_run(run_dir)
     base_path = Path(baseline)
@@ -272,10 +353,12 @@ def gate(run_dir: str | os.PathLike, baseline: str | os.PathLike, *,
         base_meta = json.loads((base_path / GOLDEN_MARK).read_text(encoding="utf-8")).get("run", {})
         snap = base_path / "results.parquet"
         base_results = pd.read_parquet(snap) if snap.is_file() else None
+        base_summary: dict = {}  # cassi golden refuses runs with failed jobs
         reference = base_path
     elif (base_path / "results.parquet").is_file():
         base_run = load_run(base_path)
         base_meta, base_results = base_run.meta, base_run.results
+        base_summary = base_run.summary
         reference = None
     else:
         raise CassiInputError("baseline is neither a run directory (results.parquet) nor a "
@@ -285,13 +368,26 @@ def gate(run_dir: str | os.PathLike, baseline: str | os.PathLike, *,
     scope, base_scope = run_scope(run.meta), run_scope(base_meta)
     known = all(m.get("tasks_resolved") is not None for m in (run.meta, base_meta))
     differences = scope_differences(scope, base_scope) if known else []
+    digests, base_digests = input_digests(run.meta), input_digests(base_meta)
+    changed: set[tuple] = set()
+    if digests is None or base_digests is None:
+        who = " and ".join(w for w, d in (("the run", digests), ("the baseline", base_digests))
+                           if d is None)
+        notes.append(f"The corpus files were not compared: {who} does not record their digests "
+                     "(run.json from before they were recorded).")
+    else:
+        changed = {t for t in set(digests) & set(base_digests) if digests[t] != base_digests[t]}
+        if changed:
+            differences.append(f"corpus files differ for {len(changed)} task file(s) "
+                               f"({_fmt(changed)}): the runs read other data")
     if differences and not common_only:
         raise MismatchedBaseline("the baseline does not cover what the run covers, so their "
                                  "gates cannot compare like with like: " + "; ".join(differences)
                                  + " (rerun with the same settings, or pass --common-only to "
                                  "compare only what both share)", path=base_path)
+    keys = None
     if differences:
-        keys = {(s, t, r, v) for s, t, r in scope["tasks"] & base_scope["tasks"]
+        keys = {(s, t, r, v) for s, t, r in (scope["tasks"] & base_scope["tasks"]) - changed
                 for v in scope["versions"] & base_scope["versions"]}
         views = scope["views"] & base_scope["views"]
         run_results = _restrict(run_results, keys, views)
@@ -299,12 +395,30 @@ def gate(run_dir: str | os.PathLike, baseline: str | os.PathLike, *,
         renders = _restrict(renders, keys, views)
         notes.append("Compared on the common task files, versions and views only (--common-only): "
                      + "; ".join(differences) + ".")
+    base_failed, base_missing = incomplete_jobs(base_meta, base_summary, base_results, keys)
+    if base_failed or base_missing:
+        raise IncompleteRun("the baseline has failed or missing jobs, so its results cannot "
+                            "stand for what the run is compared with: "
+                            + _fmt_list(base_failed + base_missing) + " (gate against a "
+                            "complete run or golden directory)", path=base_path)
+    _, missing = incomplete_jobs(run.meta, run.summary, run.results, keys)
+    if missing:
+        raise IncompleteRun("the run lacks jobs it planned (neither results nor a job record): "
+                            + _fmt_list(missing), path=run.root)
     results = job_gates(run) if jobs else []
     if base_results is not None:
         results += metric_gates(run_results, base_results)
     if reference is None:
         reference = _renders_as_golden(base_run, run.root / ".gate-baseline")
     results += image_gates(Run(run.root, run_results, run.ratings, run.meta, renders), reference)
+    compared = [r for r in results if r.gate in ("metric", "image") and r.status != "skip"]
+    if not compared:
+        where = " on what both share (--common-only)" if differences else ""
+        raise NothingCompared(
+            f"nothing was compared with the baseline {base_path}{where}: {len(run_results)} "
+            f"result rows and {len(renders)} renders gave no metric or image gate "
+            f"({sum(r.gate == 'image' for r in results)} renders without a baseline image); "
+            "a gate that compares nothing is not a pass", path=run.root)
     passed = not any(r.status == "fail" for r in results)
     write_gate_report(Path(out_dir or run.root), passed, results, baseline=str(base_path),
                       notes=notes)
@@ -347,6 +461,11 @@ def update_golden(run_dir: str | os.PathLike, golden_dir: str | os.PathLike) -> 
     Returns the number of images written.
     """
     run = load_run(run_dir)
+    failed, missing = incomplete_jobs(run.meta, run.summary, run.results)
+    if failed or missing:
+        raise IncompleteRun("a run with failed or missing jobs cannot be the golden baseline: "
+                            + _fmt_list(failed + missing) + " (rerun it to completion first)",
+                            path=run.root)
     golden = Path(golden_dir)
     n = 0
     for _, row in run.renders.iterrows():

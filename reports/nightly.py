@@ -12,8 +12,8 @@ from cassi.common.atomic import atomic_write_text
 from cassi.harness.evaluation.nightly import STORE_DIR, Night
 from cassi.harness.farm.store import MEDIA_DIR
 from cassi.harness.rubric import version_totals
-from cassi.reports.gates import (GOLDEN_MARK, GateResult, MismatchedBaseline, gate, job_gates,
-                                 write_gate_report)
+from cassi.reports.gates import (GOLDEN_MARK, GateResult, IncompleteRun, MismatchedBaseline,
+                                 NothingCompared, gate, job_gates, write_gate_report)
 from cassi.reports.report import write_report
 from cassi.reports.runio import load_run
 
@@ -29,8 +29,9 @@ def read_history(path: Path) -> pd.DataFrame:
 def review_night(night: Night, *, common_only: bool = False) -> tuple[bool, Path]:
     """Gate, record and report one night. Returns (gates passed, report index path).
 
-    A previous night or golden set of another scope fails tonight's gate with the reason
-    (unless ``common_only``), and a failed job fails it too; the report is written anyway.
+    A previous night or golden set of another scope, or one that is incomplete or compares
+    nothing, fails tonight's gate with the reason (unless ``common_only`` for the scope), and
+    a failed job fails it too; the report is written anyway.
     """
     timer, root, run_dir = night.timer, night.root, night.run_dir
     timer.start("gates")
@@ -42,7 +43,7 @@ def review_night(night: Night, *, common_only: bool = False) -> tuple[bool, Path
     for baseline in baselines:
         try:
             gate_results += gate(run_dir, baseline, common_only=common_only, jobs=False)[1]
-        except MismatchedBaseline as err:
+        except (MismatchedBaseline, IncompleteRun, NothingCompared) as err:
             gate_results.append(GateResult("baseline", "all", "all", str(baseline), "fail",
                                            err.reason))
     passed = not any(r.status == "fail" for r in gate_results)

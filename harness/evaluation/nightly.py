@@ -34,6 +34,7 @@ from cassi.harness.evaluation.run import run as run_farm
 from cassi.harness.farm.runner import RunResult
 from cassi.harness.farm.store import Collected, collect_garbage, store_lock
 from cassi.harness.farm.tableset import SET_FILE as TABLE_SET
+from cassi.harness.farm.tableset import SUMMARY_FILE, TableSetError, verify_table_set
 
 #: The store all nights of a nightly directory share (:class:`cassi.harness.farm.store.OutputStore`).
 STORE_DIR = "store"
@@ -56,11 +57,21 @@ def night_name(runs_dir: Path, today: dt.date | None = None) -> str:
 
 
 def previous_night(runs_dir: Path, current: str) -> Path | None:
-    """The newest night before ``current`` with a complete table set."""
-    nights = sorted((p for p in runs_dir.iterdir() if p.is_dir() and p.name != current
-                     and (p / TABLE_SET).is_file()), key=lambda p: p.name)
-    earlier = [p for p in nights if p.name < current]
-    return earlier[-1] if earlier else None
+    """The newest night before ``current`` whose run is complete: a table set that verifies and
+    no failed job (a failed night is no baseline: its missing results would pass or blame
+    tonight)."""
+    nights = sorted((p for p in runs_dir.iterdir() if p.is_dir() and p.name < current
+                     and (p / TABLE_SET).is_file()), key=lambda p: p.name, reverse=True)
+    return next((p for p in nights if _complete(p)), None)
+
+
+def _complete(run_dir: Path) -> bool:
+    try:
+        verify_table_set(run_dir)
+        summary = json.loads((run_dir / SUMMARY_FILE).read_text(encoding="utf-8"))
+    except (OSError, ValueError, TableSetError):
+        return False
+    return isinstance(summary, dict) and not summary.get("failed")
 
 
 def gc(out_dir: str | os.PathLike, *, keep: int = KEEP_NIGHTS) -> dict:

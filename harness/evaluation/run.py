@@ -11,6 +11,7 @@ import sys
 import time
 
 from cassi.common.atomic import atomic_write_text
+from cassi.common.errors import CassiInputError
 
 from cassi.harness.evaluation import config as C
 from cassi.harness.evaluation.evalset import default_tasks, explicit_tasks
@@ -83,6 +84,10 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
     if cfg.executor == "ray":
         require_ray()
     corpus, tasks, versions, views = plan(cfg)
+    if not tasks or not versions:
+        what = "task files for the chosen subjects and tasks" if not tasks else "versions"
+        raise CassiInputError(f"nothing to run: the corpus has no {what}, and a run of 0 jobs "
+                              "would prove nothing", path=corpus.root)
     variant = cfg.variant
     if views:
         variant = choose_variant(cfg.variant)  # an unknown or unusable variant fails here
@@ -117,7 +122,8 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
     meta = C.resolved(cfg, corpus_resolved=str(ctx.corpus), synthetic=synthetic,
                       versions_resolved=versions, views_resolved=views,
                       variant_resolved=variant, workers_resolved=workers,
-                      tasks_resolved=[[t.subject, t.task, t.rep, t.usable, t.reason] for t in tasks],
+                      tasks_resolved=[[t.subject, t.task, t.rep, t.usable, t.reason, t.inputs]
+                                      for t in tasks],
                       provenance=provenance,
                       started=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
     if synthetic:
