@@ -135,3 +135,79 @@ def test_temporary_directories_of_dead_workers_are_removed_on_the_next_start(cor
     left = sorted(p.name for p in tmp.iterdir())
     assert left == sorted([live.name, other_host.name])  # nothing of the worker's own stays
     assert remove_stale_temp_dirs(tmp) == []
+
+
+# -- 4. an unreachable cluster -----------------------------------------------------------------
+def test_an_unreachable_ray_cluster_fails_fast_and_writes_nothing(corpus, tmp_path):
+    pytest.importorskip("ray")
+    out = tmp_path / "out"
+    t0 = time.monotonic()
+    proc = subprocess.run([sys.executable, "-m", "cassi.harness.cli", "run", "--executor", "ray",
+                           "--address", "127.0.0.1:1", "--corpus", str(corpus), "--subjects",
+                           "JW12", "--tasks", "2", "--versions", "cassi-1.0", "--views",
+                           "geometry", "--out", str(out), "--no-progress"],
+                          capture_output=True, text=True, timeout=90)
+    assert proc.returncode == 2, proc.stderr
+    assert "cannot reach the Ray cluster at 127.0.0.1:1" in proc.stderr
+    assert time.monotonic() - t0 < 45
+    assert not out.exists()
+
+
+# -- 5. SIGTERM stops the workers --------------------------------------------------------------
+def _children(pid: int) -> list[int]:
+    """Worker processes (multiprocessing's spawn) whose parent is ``pid``."""
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+            cmd = (stat.parent / "cmdline").read_bytes()
+        except OSError:
+            continue
+        if int(fields[1]) == pid and b"spawn_main" in cmd:
+            found.append(int(stat.parent.name))
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+def test_sigterm_stops_the_workers_at_once(corpus, tmp_path):
+    data = shutil.copytree(corpus, tmp_path / "c")
+    path = data / "JW12" / "tp002.txy"
+    rows = [line.split("\t") for line in path.read_text().splitlines()]
+    step = int(rows[1][0]) - int(rows[0][0])
+    # A long task file (about 30,000 rows): its geometry job runs for several seconds.
+    path.write_text("".join("\t".join([str((k * len(rows) + i) * step), *r[1:]]) + "\n"
+                            for k in range(30) for i, r in enumerate(rows)))
+    out = tmp_path / "out"
+    driver = subprocess.Popen([sys.executable, "-m", "cassi.harness.cli", "run", "--corpus",
+                               str(data), "--subjects", "JW12", "--tasks", "2", "--versions",
+                               "cassi-1.0", "--views", "geometry", "--out", str(out),
+                               "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              text=True)
+    workers: list[int] = []
+    try:
+        deadline = time.monotonic() + 60
+        while not ((out / "run.json").exists() and _children(driver.pid)):
+            assert driver.poll() is None and time.monotonic() < deadline, driver.communicate()
+            time.sleep(0.1)
+        workers = _children(driver.pid)
+        time.sleep(1.0)  # the worker is inside its job now
+        driver.send_signal(signal.SIGTERM)
+        _, err = driver.communicate(timeout=30)
+        stopped = time.monotonic()
+        while any(_alive(w) for w in workers) and time.monotonic() - stopped < 3:
+            time.sleep(0.05)
+        assert not [w for w in workers if _alive(w)], "workers still running after SIGTERM"
+        assert driver.returncode == 128 + signal.SIGTERM and "terminated" in err, err
+    finally:
+        if driver.poll() is None:
+            driver.kill()
+        for w in workers:
+            if _alive(w):
+                os.kill(w, signal.SIGKILL)
