@@ -211,3 +211,25 @@ def test_sigterm_stops_the_workers_at_once(corpus, tmp_path):
         for w in workers:
             if _alive(w):
                 os.kill(w, signal.SIGKILL)
+
+
+# -- 5. links out of the corpus ----------------------------------------------------------------
+@pytest.mark.parametrize("link", ["task", "subject"])
+def test_a_link_out_of_the_corpus_says_so(corpus, tmp_path, capsys, link):
+    outside = shutil.copytree(corpus / "JW12", tmp_path / "outside")
+    data = tmp_path / "c"
+    data.mkdir()
+    if link == "task":
+        shutil.copytree(corpus / "JW12", data / "JW12")
+        (data / "JW12" / "tp005.txy").unlink()
+        os.symlink(outside / "tp005.txy", data / "JW12" / "tp005.txy")
+        name, task = data / "JW12" / "tp005.txy", "5"
+    else:
+        os.symlink(outside, data / "JW12")
+        name, task = data / "JW12", "2"
+    code = cli_main(["run", "--corpus", str(data), "--subjects", "JW12", "--tasks", task,
+                     "--versions", "cassi-1.0", "--views", "geometry", "--out",
+                     str(tmp_path / "out"), "--no-progress"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert f"{name}: is a symbolic link that leads outside the corpus directory" in err

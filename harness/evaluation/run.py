@@ -11,6 +11,7 @@ import sys
 import time
 
 from cassi.common.atomic import atomic_write_text
+from cassi.common.errors import CassiInputError
 
 from cassi.harness.evaluation import config as C
 from cassi.harness.evaluation.evalset import default_tasks, explicit_tasks
@@ -43,7 +44,17 @@ def plan(cfg: C.RunConfig):
     """
     corpus = get_corpus(cfg.corpus)
     cat = catalog(corpus)
-    C.check_names(cfg, cat)
+    try:
+        C.check_names(cfg, cat)
+    except CassiInputError as err:
+        # A name the corpus lacks because its file or directory was refused (a link out of
+        # the corpus): the refusal is the answer, not "did you mean".
+        refused = list(corpus.problems) + [p for s in (cfg.subjects or cat.subjects)
+                                           if s in cat.subjects
+                                           for p in corpus.subject(s).problems]
+        if refused:
+            raise CassiInputError("\n".join([*dict.fromkeys(refused), str(err)])) from None
+        raise
     subjects = list(cfg.subjects) if cfg.subjects else list(cat.subjects)
     if cfg.tasks:
         tasks = explicit_tasks(corpus, subjects, cfg.tasks)
