@@ -32,7 +32,7 @@ from cassi.common.errors import CassiInputError
 
 from cassi.harness.farm.plan import TaskSpec
 from cassi.harness.evaluation.provenance import (code_digest, file_digest, profile_digest,
-                                                 rubric_digest, task_inputs_digest)
+                                                 task_inputs_digest)
 from cassi.harness.evaluation.config import package_version
 
 #: The name under which ``TaskSpec.reads`` holds the subject profile's digest.
@@ -180,13 +180,14 @@ _verified_code: set[str] = set()
 
 
 def verify_code(ctx) -> None:
-    """This process runs the code the driver planned with (same package version, cassi
-    files and rubric); a cluster node with other code fails its jobs with the reason."""
+    """This process runs the code the driver planned with (same package version and cassi
+    files); a cluster node with other code fails its jobs with the reason. The rubric digest
+    is not compared: the registry is built from those same files, and a driver may patch it
+    in-process (tests) without the workers seeing it."""
     if not ctx.provenance or ctx.provenance in _verified_code:
         return
     planned = json.loads(ctx.provenance)
-    here = {"package_version": package_version(), "code_digest": code_digest(),
-            "rubric_digest": rubric_digest()}
+    here = {"package_version": package_version(), "code_digest": code_digest()}
     differ = [k for k, v in here.items() if k in planned and planned[k] != v]
     if differ:
         raise CassiInputError(
