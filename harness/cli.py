@@ -9,13 +9,25 @@ from __future__ import annotations
 
 import argparse
 import logging
+import signal
 import sys
+import threading
 from importlib.metadata import entry_points, version
 
 from cassi.common.errors import CassiInputError
 from cassi.common.lazy import resolve
 
 EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_TERMINATED = 128 + signal.SIGTERM
+
+
+class Terminated(Exception):
+    """SIGTERM, raised in the main thread so that every ``with`` block unwinds (a run's
+    executor stops its workers) instead of the process vanishing with its workers running."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated()
 
 
 class _Parser(argparse.ArgumentParser):
@@ -42,8 +54,14 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO,
                         format="%(levelname)s %(name)s: %(message)s")
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _on_sigterm) if main_thread else None
     try:
         return int(resolve(args.func)(args) or EXIT_OK)
+    except Terminated:
+        print("cassi: terminated (SIGTERM); finished jobs are kept, rerun the same command "
+              "to resume", file=sys.stderr)
+        return EXIT_TERMINATED
     except CassiInputError as err:
         print(f"cassi: error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -54,6 +72,9 @@ def main(argv: list[str] | None = None) -> int:
         logging.getLogger("cassi").debug("failure", exc_info=True)
         print(f"cassi: failed: {type(err).__name__}: {err}", file=sys.stderr)
         return EXIT_FAILURE
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

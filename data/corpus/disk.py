@@ -51,7 +51,9 @@ def ensure_inside(root: Path, path: Path) -> Path:
     real_root = root.resolve()
     real = path.resolve()
     if real != real_root and real_root not in real.parents:
-        raise CassiInputError(f"leads outside the corpus directory {root} (to {real})", path=path)
+        link = "is a symbolic link that " if path.is_symlink() else ""
+        raise CassiInputError(f"{link}leads outside the corpus directory {root} (to {real}): "
+                              f"not read; copy it into the corpus", path=path)
     return real
 
 

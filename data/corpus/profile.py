@@ -130,12 +130,15 @@ def file_measures(rec: TaskRecording) -> dict[str, float]:
     }
 
 
-def select_files(subject: SubjectData, *, max_files: int = MAX_FILES
+def select_files(subject: SubjectData, *, max_files: int = MAX_FILES,
+                 problems: list[str] | None = None
                  ) -> list[tuple[TaskRecording, tuple[int, int]]]:
     """Pick up to ``max_files`` error-free files (task 118 first when error-free).
 
     Tasks listed in Mis.dat are skipped without reading; one repetition per task (the lowest
-    error-free one). Returns ``[(recording, (task, rep)), ...]`` in task order.
+    error-free one). A malformed file is left out with a logged warning, or, when ``problems``
+    is a list, appended to it (``file:line: reason``) for the caller to refuse. Returns
+    ``[(recording, (task, rep)), ...]`` in task order.
     """
     by_task: dict[int, list[int]] = {}
     for task, rep in subject.tasks():
@@ -155,7 +158,10 @@ def select_files(subject: SubjectData, *, max_files: int = MAX_FILES
             try:
                 rec = subject.load(task, rep, require_valid=False)
             except CassiInputError as err:
-                log.warning("%s", err)
+                if problems is None:
+                    log.warning("%s", err)
+                else:
+                    problems.append(str(err))
                 continue
             if subject.usability(task, rep, recording=rec).error_free:
                 chosen.append((rec, (task, rep)))
@@ -171,9 +177,10 @@ def _pharynx(subject: SubjectData) -> np.ndarray | None:
     return subject.pharynx_mm
 
 
-def profile_subject(subject: SubjectData, *, max_files: int = MAX_FILES) -> SubjectProfile:
-    """Preprocess one subject (see the module docstring)."""
-    chosen = select_files(subject, max_files=max_files)
+def profile_subject(subject: SubjectData, *, max_files: int = MAX_FILES,
+                    problems: list[str] | None = None) -> SubjectProfile:
+    """Preprocess one subject (see the module docstring; ``problems``: :func:`select_files`)."""
+    chosen = select_files(subject, max_files=max_files, problems=problems)
     if not chosen:
         raise CassiInputError(f"subject {subject.name} has no error-free task file to preprocess",
                               path=subject.directory)
@@ -191,12 +198,14 @@ def profile_subject(subject: SubjectData, *, max_files: int = MAX_FILES) -> Subj
 
 
 def preprocess(corpus: Corpus, subjects=None, *, max_files: int = MAX_FILES,
-               skipped: list[str] | None = None) -> dict[str, SubjectProfile]:
+               skipped: list[str] | None = None,
+               problems: list[str] | None = None) -> dict[str, SubjectProfile]:
     """Profiles of ``subjects`` (default: all subjects of the corpus).
 
     When ``subjects`` is None, a subject that cannot be preprocessed (no error-free file, like the
     thesis's JW29) is left out with a logged warning that is also appended to ``skipped``; a
-    subject named explicitly raises :class:`CassiInputError` instead.
+    subject named explicitly raises :class:`CassiInputError` instead. ``problems`` collects the
+    malformed task files met (:func:`select_files`) instead of logging them.
     """
     explicit = subjects is not None
     names = list(subjects) if explicit else corpus.subjects
@@ -204,7 +213,7 @@ def preprocess(corpus: Corpus, subjects=None, *, max_files: int = MAX_FILES,
     for name in names:
         subj = corpus.subject(name)
         try:
-            out[subj.name] = profile_subject(subj, max_files=max_files)
+            out[subj.name] = profile_subject(subj, max_files=max_files, problems=problems)
         except CassiInputError as err:
             if explicit:
                 raise

@@ -62,11 +62,17 @@ def get_corpus(corpus: Path | str | None):
         return _corpora[root]
 
 
-def get_profile(corpus, subject: str):
+def get_profile(corpus, subject: str, *, problems: list[str] | None = None):
+    """The subject's profile (cached); ``problems`` receives the malformed task files that
+    preprocessing met (kept with the profile, so a cached one reports them too)."""
     key = (str(corpus.root), subject)
     if key not in _profiles:
-        _profiles[key] = preprocess(corpus, [subject])[subject]
-    return _profiles[key]
+        met: list[str] = []
+        _profiles[key] = (preprocess(corpus, [subject], problems=met)[subject], tuple(met))
+    profile, met = _profiles[key]
+    if problems is not None:
+        problems.extend(met)
+    return profile
 
 
 def get_face(corpus, subject: str, profile):

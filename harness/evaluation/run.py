@@ -44,7 +44,17 @@ def plan(cfg: C.RunConfig):
     """
     corpus = get_corpus(cfg.corpus)
     cat = catalog(corpus)
-    C.check_names(cfg, cat)
+    try:
+        C.check_names(cfg, cat)
+    except CassiInputError as err:
+        # A name the corpus lacks because its file or directory was refused (a link out of
+        # the corpus): the refusal is the answer, not "did you mean".
+        refused = list(corpus.problems) + [p for s in (cfg.subjects or cat.subjects)
+                                           if s in cat.subjects
+                                           for p in corpus.subject(s).problems]
+        if refused:
+            raise CassiInputError("\n".join([*dict.fromkeys(refused), str(err)])) from None
+        raise
     subjects = list(cfg.subjects) if cfg.subjects else list(cat.subjects)
     if cfg.tasks:
         tasks = explicit_tasks(corpus, subjects, cfg.tasks)
@@ -107,6 +117,18 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
         print(f"cassi run: {sum(t.usable for t in tasks)} task file(s) x {len(versions)} "
               f"version(s) x {len(views)} view(s): at most {n} frame(s) to render "
               f"({cfg.preset}, {workers} worker(s))", file=sys.stderr, flush=True)
+    # The executor first: an unreachable cluster fails here, before --out holds anything.
+    executor = make_executor(cfg.executor, workers=workers, address=cfg.address,
+                             retries=cfg.retries, initializer=worker_env,
+                             initargs=(cfg.threads,), threads=cfg.threads)
+    with executor:
+        return _run(cfg, executor, corpus, tasks, versions, views, variant, synthetic, pipeline,
+                    provenance, workers, progress)
+
+
+def _run(cfg, executor, corpus, tasks, versions, views, variant, synthetic, pipeline, provenance,
+         workers, progress) -> RunResult:
+    """The part of :func:`run` that writes ``cfg.out``, once the executor is up."""
     store = OutputStore(cfg.out, cache=cfg.cache)
     store.prepare()
     ctx = StageContext(out_dir=store.root.resolve(), corpus=corpus.root.resolve(),
@@ -132,12 +154,8 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
     with store.lock():
         store.remove_partials()
         atomic_write_text(store.root / "run.json", json.dumps(meta, indent=1, default=str))
-        executor = make_executor(cfg.executor, workers=workers, address=cfg.address,
-                                 retries=cfg.retries, initializer=worker_env,
-                                 initargs=(cfg.threads,), threads=cfg.threads)
-        with executor:
-            result = run_batch(tasks, versions, views, pipeline, ctx, executor,
-                               progress=progress, extra_meta={"synthetic": synthetic})
+        result = run_batch(tasks, versions, views, pipeline, ctx, executor,
+                           progress=progress, extra_meta={"synthetic": synthetic})
         meta["summary"] = result.summary.to_dict()
         meta["finished"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
         atomic_write_text(store.root / "run.json", json.dumps(meta, indent=1, default=str))

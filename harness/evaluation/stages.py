@@ -7,6 +7,10 @@ worker process (:func:`cassi.harness.farm.jobs.execute_job`), with the worker's 
 from __future__ import annotations
 
 import io
+import os
+import platform
+import re
+import shutil
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,19 +26,76 @@ from cassi.harness.evaluation.caches import (get_corpus, get_face, get_neutral, 
 from cassi.harness.evaluation.config import Catalog
 from cassi.harness.evaluation.evalset import task_catalog
 from cassi.harness.evaluation.frames import DEFAULT_EXTREMES, frames_to_render, image_views
+from cassi.harness.evaluation.inputs import (read_planned, verify_code, verify_profile,
+                                             verify_subject_files)
 from cassi.harness.farm.jobs import Job, SkipJob, StageContext, StageOutput, npz_bytes
 from cassi.harness.farm.runner import Pipeline
 from cassi.harness.rubric.frames import CHUNK_FRAMES, FileFrames
 from cassi.harness.rubric.measures import DIAGNOSTICS_READ
 from cassi.renderer.images import png_bytes
 from cassi.renderer.views import PRESET_NAMES, VIEW_NAMES
+from cassi.data.xrmb.files import parse_txy
 from cassi.versions.registry import available_versions, get_version
 
+#: A geometry job's temporary directory: ``cassi-geometry-<pid>-<host>-<random>``, so the next
+#: worker on the host can tell (and remove) the ones a killed worker left behind.
+TEMP_PREFIX = "cassi-geometry-"
+_swept: set[str] = set()
 
-def load_usable(subject_data, job: Job):
-    """The job's recording, parsed once; SkipJob with the reason when it cannot be animated."""
+
+def _host() -> str:
+    return re.sub(r"[^A-Za-z0-9.]", "_", platform.node()) or "host"
+
+
+def _pid_alive(pid: int) -> bool:
     try:
-        rec = subject_data.load(job.task, job.rep, require_valid=False)
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True  # another user's process
+    return True
+
+
+def remove_stale_temp_dirs(root: str | os.PathLike | None = None) -> list[Path]:
+    """Remove this user's geometry temporary directories whose process (on this host) is gone
+    (a worker killed with ``kill -9`` or by the OOM killer leaves its positions file behind:
+    hundreds of MB for a long task). Returns what was removed."""
+    root = Path(root or tempfile.gettempdir())
+    removed = []
+    pattern = re.compile(re.escape(TEMP_PREFIX) + r"(\d+)-" + re.escape(_host()) + r"-")
+    for path in root.glob(TEMP_PREFIX + "*"):
+        m = pattern.match(path.name)
+        try:
+            mine = path.is_dir() and not path.is_symlink() and path.stat().st_uid == os.getuid()
+        except OSError:
+            continue
+        if m and mine and int(m[1]) != os.getpid() and not _pid_alive(int(m[1])):
+            shutil.rmtree(path, ignore_errors=True)
+            removed.append(path)
+    return removed
+
+
+def geometry_temp_dir() -> tempfile.TemporaryDirectory:
+    """A temporary directory for one geometry job, named after this process; the first call in
+    a process removes those of dead processes first."""
+    root = tempfile.gettempdir()
+    if root not in _swept:
+        remove_stale_temp_dirs(root)
+        _swept.add(root)
+    return tempfile.TemporaryDirectory(prefix=f"{TEMP_PREFIX}{os.getpid()}-{_host()}-")
+
+
+def load_usable(subject_data, job: Job, data: bytes | None = None):
+    """The job's recording, parsed once (from ``data``, its bytes as read, when given); SkipJob
+    with the reason when it cannot be animated."""
+    try:
+        if data is None:
+            rec = subject_data.load(job.task, job.rep, require_valid=False)
+        else:
+            rec = parse_txy(data, path=subject_data.task_path(job.task, job.rep),
+                            subject=subject_data.name, task=job.task, rep=job.rep,
+                            require_valid=False)
         u = subject_data.usability(job.task, job.rep, recording=rec)
     except CassiInputError as err:
         raise SkipJob(str(err)) from err
@@ -51,14 +112,20 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
     ``meta["render_frames"]``.
     """
     corpus = get_corpus(ctx.corpus)
-    rec = load_usable(corpus.subject(job.subject), job)
+    verify_code(ctx, job.version)
+    subject = corpus.subject(job.subject)
+    verify_subject_files(job, subject)
+    # The bytes parsed are the bytes verified: the file is read once.
+    data = read_planned(job, corpus, subject.task_path(job.task, job.rep))
+    rec = load_usable(subject, job, data)
     try:
         profile = get_profile(corpus, job.subject)
     except CassiInputError as err:
         raise SkipJob(f"subject cannot be preprocessed: {err}") from err
+    verify_profile(job, profile)
     version = get_version(job.version)
     face = get_face(corpus, job.subject, profile)
-    with tempfile.TemporaryDirectory(prefix="cassi-geometry-") as tmp:
+    with geometry_temp_dir() as tmp:
         anim = animate_to_file(version, profile, face, rec, Path(tmp))
         face = get_version_face(corpus, job.subject, profile, version)  # what it animated
         rows = rubric.run_geometry_checks(anim, face, profile, task=job.task, subject=job.subject,
@@ -154,7 +221,9 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
     all_frames = data["frames"].tolist()
     positions = data["positions"]  # read once: each data[...] access decodes the array again
     corpus = get_corpus(ctx.corpus)
+    verify_code(ctx, job.version)
     profile = get_profile(corpus, job.subject)
+    verify_profile(job, profile)
     face = get_version_face(corpus, job.subject, profile, get_version(job.version))
     renderer = get_renderer(corpus, job.subject, face, job.view, ctx.preset, ctx.variant)
     files = {}
@@ -189,6 +258,7 @@ def image_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> Sta
             yield int(f), StoredFrame(d["mask"].astype(np.int32), d["depth"],
                                       tuple(str(n) for n in d["part_names"]))
 
+    verify_code(ctx, job.version)
     rows = rubric.run_image_checks({job.view: frames()}, task=job.task, subject=job.subject,
                                    rep=job.rep, version=job.version)
     return StageOutput(rows=pd.DataFrame(rows),

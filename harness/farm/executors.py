@@ -15,6 +15,7 @@ from __future__ import annotations
 import collections
 import multiprocessing as mp
 import os
+import socket
 from dataclasses import dataclass
 from multiprocessing.connection import wait as mp_wait
 from typing import Any, Callable
@@ -109,8 +110,9 @@ class LocalExecutor:
         self.start()
         return self
 
-    def __exit__(self, *exc):
-        self.close()
+    def __exit__(self, exc_type, *exc):
+        # Leaving on an error or a signal: stop the workers now, not after their current job.
+        self.close(abort=exc_type is not None)
 
     def _spawn(self) -> tuple[Any, Any]:
         parent, child = self._ctx.Pipe(duplex=True)
@@ -210,16 +212,24 @@ class LocalExecutor:
         self._dispatch()
         return done
 
-    def close(self) -> None:
+    def close(self, *, abort: bool = False) -> None:
+        """Stop the workers: idle ones are told to exit; with ``abort`` (or when they do not
+        exit) they are terminated, busy ones included, then killed."""
         for proc, conn in self._procs:
+            if abort:
+                proc.terminate()
+                continue
             try:
                 conn.send(None)
             except (BrokenPipeError, OSError):
                 pass
         for proc, conn in self._procs:
-            proc.join(timeout=10)
+            proc.join(timeout=2 if abort else 10)
             if proc.is_alive():
                 proc.terminate()
+                proc.join(timeout=5)
+            if proc.is_alive():
+                proc.kill()
                 proc.join(timeout=5)
             conn.close()
         self._procs = []
@@ -242,13 +252,18 @@ class RayExecutor:
         cluster (``num_cpus``) for this run and stops it at the end.
     retries : int
         Ray's ``max_retries`` for tasks whose worker died.
+    connect_timeout : float
+        Seconds to wait for the cluster's address to answer (:func:`probe_address`): Ray's own
+        connection retries last minutes.
     """
 
     name = "ray"
 
     def __init__(self, address: str | None = None, *, retries: int = 1, num_cpus: int = 2,
-                 initializer: Callable | None = None, initargs: tuple = ()):
+                 initializer: Callable | None = None, initargs: tuple = (),
+                 connect_timeout: float = 10.0):
         self.address = address
+        self.connect_timeout = float(connect_timeout)
         self._init = (initializer, initargs)
         self.retries = int(retries)
         self.num_cpus = int(num_cpus)
@@ -268,6 +283,7 @@ class RayExecutor:
 
         if not ray.is_initialized():
             if self.address:
+                probe_address(self.address, self.connect_timeout)
                 try:
                     ray.init(address=self.address, include_dashboard=False,
                              log_to_driver=False, logging_level="WARNING")
@@ -322,6 +338,24 @@ class RayExecutor:
         if self._owns_cluster and ray.is_initialized():
             ray.shutdown()
             self._owns_cluster = False
+
+
+def probe_address(address: str, timeout: float) -> None:
+    """Fail fast, with the reason, when nothing answers at a cluster's ``host:port`` (or
+    ``ray://host:port``); ``auto`` is left to Ray, which finds a local cluster by its files."""
+    if address in ("auto", "local"):
+        return
+    host, _, port = address.split("://", 1)[-1].rpartition(":")
+    if not host or not port.isdigit():
+        raise CassiInputError(f"--address {address!r}: expected host:port, ray://host:port "
+                              f"or auto")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout).close()
+    except OSError as err:
+        raise CassiInputError(
+            f"cannot reach the Ray cluster at {address}: {err.strerror or err} (waited up to "
+            f"{timeout:g} s); start it with `ray start --head`, or give --address the head "
+            f"node's host:port") from None
 
 
 def require_ray():

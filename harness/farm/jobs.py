@@ -79,6 +79,10 @@ class Job:
     inputs : str
         Digest of the corpus files the job reads (task file, subject files, profile), so a
         changed input invalidates exactly the jobs that read it.
+    reads : tuple of (name, digest)
+        Each input as planned (a file's name and SHA-256), for the stage to verify what it
+        reads against: a file edited after planning fails the job instead of being stored
+        under a digest that does not describe it.
     """
 
     stage: str
@@ -92,6 +96,7 @@ class Job:
     parents: tuple[str, ...] = ()
     parent_digest: str = ""
     inputs: str = ""
+    reads: tuple[tuple[str, str], ...] = ()
 
     @property
     def key(self) -> str:
@@ -107,6 +112,10 @@ class Job:
     @property
     def task_key(self) -> tuple[str, int, int, str]:
         return (self.subject, self.task, self.rep, self.version)
+
+    def planned(self, name: str) -> str | None:
+        """The planned digest of input ``name`` (None when the job was planned without it)."""
+        return dict(self.reads).get(name)
 
     def digest(self, salt: str = "") -> str:
         """SHA-256 of the job and ``salt`` (the run settings and code its outputs depend on)."""

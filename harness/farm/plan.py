@@ -26,7 +26,9 @@ class TaskSpec:
 
     ``usable`` False makes its jobs SKIPPED with ``reason``. ``inputs`` is the digest of every
     file its jobs read (the task file, the subject's files and profile); it is part of each
-    job's identity, so a changed input recomputes exactly the jobs that read it.
+    job's identity, so a changed input recomputes exactly the jobs that read it. ``reads``
+    names each of those files (and any derived input) with its digest as planned, so a worker
+    can refuse bytes that changed after planning.
     """
 
     subject: str
@@ -35,6 +37,7 @@ class TaskSpec:
     usable: bool = True
     reason: str = ""
     inputs: str = ""
+    reads: tuple[tuple[str, str], ...] = ()
 
 
 def outputs_digest(manifests: Iterable[Mapping]) -> str:
@@ -75,7 +78,7 @@ class BatchPlan:
         for spec in tasks:
             for version in versions:
                 job = Job("geometry", spec.subject, spec.task, spec.rep, version,
-                          inputs=spec.inputs)
+                          inputs=spec.inputs, reads=spec.reads)
                 if spec.usable:
                     geometry.append(job)
                 else:
@@ -97,7 +100,8 @@ class BatchPlan:
             frames = meta.get("render_frames_by_view", {}).get(view, meta.get("render_frames", []))
             out[view] = tuple(
                 Job("render", *geometry.task_key, view, chunk, i, parents=(geometry.key,),
-                    parent_digest=parent, inputs=geometry.inputs)
+                    parent_digest=parent, inputs=geometry.inputs,
+                    reads=geometry.reads)
                 for i, chunk in enumerate(chunk_frames(frames, self.chunk_size)))
         return out
 
@@ -108,7 +112,8 @@ class BatchPlan:
         return Job("image", *first.task_key, first.view,
                    tuple(f for job in renders for f in job.frames),
                    parents=tuple(job.key for job in renders),
-                   parent_digest=outputs_digest(manifests), inputs=first.inputs)
+                   parent_digest=outputs_digest(manifests), inputs=first.inputs,
+                   reads=first.reads)
 
     @property
     def size(self) -> int:

@@ -99,8 +99,13 @@ class FileFrames(Frames):
         arr = np.ascontiguousarray(positions, dtype=np.float32)
         if arr.ndim != 3 or arr.shape[1:] != (self.n_vertices, 3):
             raise ValueError(f"positions must be (n, {self.n_vertices}, 3), got {arr.shape}")
-        with open(self.path, "ab") as fh:
-            arr.tofile(fh)
+        try:
+            with open(self.path, "ab") as fh:
+                arr.tofile(fh)
+        except OSError as err:  # numpy's message names neither the file nor its directory
+            raise OSError(err.errno, f"cannot write {arr.nbytes} bytes of positions to "
+                          f"{self.path} ({err.strerror or err}); a full temporary "
+                          f"directory? set TMPDIR to one with room", str(self.path)) from err
         self.n_frames += arr.shape[0]
 
     def read(self, start: int, stop: int) -> np.ndarray:
