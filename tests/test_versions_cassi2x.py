@@ -14,11 +14,16 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from _versions_toy import ToyFace, toy_profile, toy_recording, toy_vertices
+from data_helpers import FIXTURES
+from cassi.data.corpus.profile import SubjectProfile, read_lipthick, read_maxprotru
+from cassi.data.xrmb.files import read_txy
 from cassi.versions import lips_constants as LK
 from cassi.versions.cassi10 import Cassi10
 from cassi.versions.cassi20 import Cassi20
 from cassi.versions.cassi21 import Cassi21
 from cassi.versions.lips import LIP_VERTICES, LipMovementStage
+from cassi.versions.lips_thickness import LowLipsReading
+from cassi.versions.mapping import model_jaw_length
 from cassi.versions.registry import get_version
 
 UL, LL = 0, 1
@@ -204,9 +209,38 @@ def test_below_lip_bound_keeps_41_to_43_from_folding():
     np.testing.assert_allclose(again, bounded, atol=1e-9)          # a projection
 
 
+def _ul_raised(rec, dy_mm):
+    xy = rec.xy_mm.copy()
+    xy[:, UL, 1] += dy_mm
+    return dataclasses.replace(rec, xy_mm=xy)
+
+
 def test_2_1_identical_to_2_0_for_well_centred_subjects(face, profile, rec, anims):
-    assert anims["cassi-2.1"].diagnostics["thickness_rule"].iloc[0] == "equal"
-    np.testing.assert_array_equal(anims["cassi-2.1"].positions, anims["cassi-2.0"].positions)
+    # The toy's inside edge starts ~4 units above 226: not 20 below (the text's reading).
+    a21 = Cassi21(reading="text").animate(profile, face, rec)
+    assert a21.diagnostics["thickness_rule"].iloc[0] == "equal"
+    np.testing.assert_array_equal(a21.positions, anims["cassi-2.0"].positions)
+    # ... but lower than 20 above: the default (results) reading adjusts it.
+    assert anims["cassi-2.1"].diagnostics["thickness_rule"].iloc[0] == "low-lips"
+
+
+def test_2_1_leaves_lips_centred_high_alone(face, profile, rec):
+    """The results' reading spares lips whose inside edge starts more than 20 units above 226
+    (JW16, JW18: "centered high", unchanged by 2.1): the upper lip raised 8 mm puts it ~36 above."""
+    high = _ul_raised(rec, 8.0)
+    a21 = Cassi21().animate(profile, face, high)
+    d = a21.diagnostics
+    assert d["low_lips_inside_edge"].iloc[0] > LK.LOW_LIPS_THRESHOLD
+    assert d["low_lips_margin"].iloc[0] < 0 and d["thickness_rule"].iloc[0] == "equal"
+    np.testing.assert_array_equal(a21.positions, Cassi20().animate(profile, face, high).positions)
+
+
+def test_2_1_reading_is_a_parameter():
+    assert Cassi21().reading is LowLipsReading.RESULTS
+    assert Cassi21(reading="text").reading is LowLipsReading.TEXT
+    assert Cassi21(reading="text").thickness_policy().reading is LowLipsReading.TEXT
+    with pytest.raises(ValueError):
+        Cassi21(reading="prose")
 
 
 def test_2_1_thins_the_upper_lip_of_low_lip_subjects(face, rec):
@@ -291,20 +325,25 @@ def test_real_face_no_jump_at_the_ellipse_switch(real_face, profile):
 
 @settings(max_examples=25, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(lipthick=st.floats(0.2, 2.5), ul_dy=st.floats(-6.0, 4.0))
-def test_2_1_differs_from_2_0_exactly_for_low_lip_subjects(face, lipthick, ul_dy):
+@given(lipthick=st.floats(0.2, 2.5), ul_dy=st.floats(-6.0, 12.0),
+       reading=st.sampled_from(list(LowLipsReading)))
+def test_2_1_differs_from_2_0_exactly_for_low_lip_subjects(face, lipthick, ul_dy, reading):
     """Thesis 4.3.1: 2.1 changes a subject only when, with 2.0's equal thicknesses, the upper
-    lip's inside edge (61) starts more than 20 units below vertex 226; then only the lips (and
+    lip's inside edge (z67 - currthick) starts beyond the threshold (more than 20 units below
+    vertex 226 by the text, lower than 20 above it by the results); then only the lips (and
     what follows them) change."""
     prof = dataclasses.replace(toy_profile(), lipthick=lipthick)
-    rec = toy_recording(60)
-    xy = rec.xy_mm.copy()
-    xy[:, UL, 1] += ul_dy            # the upper lip starts higher or lower over the teeth
-    rec = dataclasses.replace(rec, xy_mm=xy)
+    rec = _ul_raised(toy_recording(60), ul_dy)   # the upper lip starts higher or lower
     a20 = Cassi20().animate(prof, face, rec)
-    a21 = Cassi21().animate(prof, face, rec)
+    a21 = Cassi21(reading=reading).animate(prof, face, rec)
     z226 = face.vertices[225, 2]
-    low = z226 - a20.vertex(61)[0, 2] > LK.LOW_LIPS_THRESHOLD
+    edge = a20.vertex(67)[0, 2] - a20.diagnostics["currthick"].iloc[0]
+    if reading is LowLipsReading.TEXT:
+        low = z226 - edge > LK.LOW_LIPS_THRESHOLD
+    else:
+        low = edge - z226 < LK.LOW_LIPS_THRESHOLD
+    np.testing.assert_allclose(a21.diagnostics["low_lips_inside_edge"].iloc[0], edge - z226,
+                               atol=1e-3)
     assert a21.diagnostics["thickness_rule"].iloc[0] == ("low-lips" if low else "equal")
     if not low:
         np.testing.assert_array_equal(a21.positions, a20.positions)
@@ -313,3 +352,34 @@ def test_2_1_differs_from_2_0_exactly_for_low_lip_subjects(face, lipthick, ul_dy
         changed = {i + 1 for i in np.nonzero(diff > 1e-4)[0]}
         assert 61 in changed
         assert changed <= set(LIP_VERTICES) | set(NEIGHBOURS) | set(NOSE_TIP)
+
+
+#: thesis Figure 3.9 via tests/fixtures/SOURCES.md: the first 16 rows of JW45 task 13.
+JW45_TASK_13 = FIXTURES / "xrmb" / "JW45" / "JW45_013.TXY"
+
+
+def _jw45():
+    """JW45 task 13 (the fixture) with JW45's rows of maxprotru.txt and lipthick.txt (thesis
+    Figures 4.16, 4.25); the jaw length is this file's MNI-MNM at its first valid row."""
+    rec = read_txy(JW45_TASK_13, subject="JW45", task=13)
+    row = rec.xy_mm[rec.first_valid_index]
+    mp = read_maxprotru(FIXTURES / "profiles" / "maxprotru.txt")["JW45"]
+    lt = read_lipthick(FIXTURES / "profiles" / "lipthick.txt")["JW45"]
+    prof = SubjectProfile("JW45", float(np.hypot(*(row[6] - row[7]))), mp.rest_ul, mp.rest_ll,
+                          mp.max_ul, mp.max_ll, mp.min_ul, mp.min_ll, lt)
+    return prof, rec
+
+
+def test_real_face_jw45_task_13_fires_under_the_results_reading(real_face):
+    """JW45's first valid row (thesis Figure 3.9) puts the inside edge 1.0 mm above 226; the
+    thesis reports 2.1 changed JW45: the results' reading adjusts it, the text's does not."""
+    prof, rec = _jw45()
+    res = Cassi21(reading="results").animate(prof, real_face, rec).diagnostics
+    text = Cassi21(reading="text").animate(prof, real_face, rec).diagnostics
+    units_per_mm = model_jaw_length(real_face.vertices) / prof.jaw_length_mm
+    edge_mm = res["low_lips_inside_edge"].iloc[0] / units_per_mm
+    assert edge_mm == pytest.approx(1.0, abs=0.1)
+    assert res["thickness_rule"].iloc[0] == "low-lips" and res["low_lips_margin"].iloc[0] > 0
+    assert text["thickness_rule"].iloc[0] == "equal" and text["low_lips_margin"].iloc[0] < 0
+    # one decision per task: the same values in every frame
+    assert res["low_lips_margin"].nunique() == 1 and (res["low_lips_reading"] == "results").all()

@@ -21,9 +21,11 @@ from cassi.versions.lips import (
     LowLipsThicknessPolicy,
     EqualThicknessPolicy,
     corner_stretch,
+    inside_edge_start,
     lip_frames,
 )
-from cassi.versions.lips_thickness import EQUAL_THICKNESS, LOW_LIPS_THICKNESS
+from cassi.versions.lips_thickness import (EQUAL_THICKNESS, LOW_LIPS_THICKNESS, LowLipsReading,
+                                           is_low_lips)
 
 TRACK_OF = {  # the centre-line vertex whose parabolic track each outline vertex rides
     67: 67, 68: 67, 69: 67, 49: 49, 50: 49, 51: 49,
@@ -268,24 +270,84 @@ def test_any_trajectory_gives_finite_ordered_lips(rows):
 
 
 # --- CASSI 2.1 against 2.0 ------------------------------------------------------------------
-def test_2_1_policy_leaves_well_centred_subjects_alone():
+TEXT, RESULTS = LowLipsReading.TEXT, LowLipsReading.RESULTS
+
+
+def test_2_1_policy_leaves_unadjusted_subjects_alone():
     ul, ll = protrusion_trajectory()
-    # Vertex 226 at z = -20; 61 starts at -10 - 8 = -18, above it: not low.
-    rule, blend = LowLipsThicknessPolicy().choose(ul[:1], ll[:1], REST, SUBJECT, -20.0)
-    assert (rule, blend) == (EQUAL_THICKNESS, False)
+    # The inside edge starts at z67 - Thick = -10 - 8 = -18 (c' = 65 at the first row: no rounding).
+    assert inside_edge_start(ul[:1], SUBJECT) == pytest.approx(-18.0)
+    # Text: 226 at z = -20, the edge 2 above it, not 20 below. Results: 226 at -40, the edge 22
+    # above it, not lower than 20 above (lips centred high).
+    for reading, z226 in ((TEXT, -20.0), (RESULTS, -40.0)):
+        rule, blend = LowLipsThicknessPolicy(reading=reading).choose(ul[:1], ll[:1], REST, SUBJECT, z226)
+        assert (rule, blend) == (EQUAL_THICKNESS, False), reading
     assert EqualThicknessPolicy().choose(ul[:1], ll[:1], REST, SUBJECT, 100.0) == (EQUAL_THICKNESS, False)
     a = lip_frames(ul, ll, REST, SUBJECT)
     b = lip_frames(ul, ll, REST, SUBJECT, rule=rule, blend_inner_corner=blend)
     np.testing.assert_array_equal(a.xyz, b.xyz)
 
 
-def test_2_1_policy_adjusts_low_lips():
+@pytest.mark.parametrize("reading, fires, spares", [
+    (TEXT, 3.0, 1.5),         # the edge 21 / 19.5 units below 226 (more than 20 below?)
+    (RESULTS, -37.0, -38.5),  # the edge 19 / 20.5 units above 226 (lower than 20 above?)
+])
+def test_2_1_criterion_threshold_by_reading(reading, fires, spares):
     ul, ll = protrusion_trajectory()
-    # 61 starts at -18; with 226 at z = 3 it is 21 units below: low lips (> 20).
-    assert LowLipsThicknessPolicy().choose(ul[:1], ll[:1], REST, SUBJECT, 3.0) == (
-        LOW_LIPS_THICKNESS, True)
-    # 19.5 below: not low.
-    assert LowLipsThicknessPolicy().choose(ul[:1], ll[:1], REST, SUBJECT, 1.5)[0] == EQUAL_THICKNESS
+    policy = LowLipsThicknessPolicy(reading=reading)
+    assert policy.choose(ul[:1], ll[:1], REST, SUBJECT, fires) == (LOW_LIPS_THICKNESS, True)
+    assert policy.choose(ul[:1], ll[:1], REST, SUBJECT, spares) == (EQUAL_THICKNESS, False)
+    margin = lambda z226: policy.criterion(ul[:1], ll[:1], REST, SUBJECT, z226)  # noqa: E731
+    assert margin(fires)["low_lips_margin"] == pytest.approx(1.0)
+    assert margin(spares)["low_lips_margin"] == pytest.approx(-0.5)
+    assert margin(fires)["low_lips_inside_edge"] == pytest.approx(-18.0 - fires)
+    assert margin(fires)["low_lips_reading"] == reading.value
+
+
+def test_2_1_inside_edge_is_z67_minus_currthick_not_vertex_61():
+    """4.3.1 compares z67 - currthick ("the upper lip ... an equal thickness to the lower lip"),
+    not vertex 61, which compress_pressed lifts when the pellets press the lips together."""
+    ul, ll = pellets(np.full(3, 100.0), ulz=-10.0, llz=-20.0)  # 10 units apart, 2 x 8 of lips
+    z61 = lip_frames(ul[:1], ll[:1], REST, SUBJECT).vertex(61)[0, 2]
+    edge = inside_edge_start(ul[:1], SUBJECT)
+    assert edge == pytest.approx(-18.0)
+    assert z61 == pytest.approx(-10.0 - K.LIP_COMPRESS_MIN * 8.0)  # -16.4: the two differ
+    # 226 placed so that the threshold falls between the two: the thesis's edge decides.
+    text = LowLipsThicknessPolicy(reading=TEXT)
+    assert text.choose(ul[:1], ll[:1], REST, SUBJECT, edge + 20.8)[0] == LOW_LIPS_THICKNESS
+    assert not is_low_lips(z61, edge + 20.8)                      # vertex 61 would not fire
+    results = LowLipsThicknessPolicy(reading=RESULTS)
+    assert results.choose(ul[:1], ll[:1], REST, SUBJECT, edge - 19.2)[0] == LOW_LIPS_THICKNESS
+    assert not is_low_lips(z61, edge - 19.2, reading=RESULTS)
+
+
+#: JW11's scale, p/d = 3.29 Parke units per mm (the audit of versions/lips.py in the project
+#: issue "Verdicts that agree with the judges", section 4).
+JW11_UNITS_PER_MM = 3.29
+
+
+def test_2_1_text_never_fires_for_an_edge_1_6_to_4_mm_below_226():
+    """On a real JW11 recording the inside edge stays 1.6-4.0 mm below 226 in every frame (that
+    issue), yet the thesis reports 2.1 changed JW11: whichever frame starts the task, the text's
+    reading (more than 20 units, 6.1 mm, below) never fires and the results' reading does."""
+    ul, ll = protrusion_trajectory()
+    edge = inside_edge_start(ul[:1], SUBJECT)
+    for below_mm in np.linspace(1.6, 4.0, 25):
+        z226 = edge + below_mm * JW11_UNITS_PER_MM
+        assert LowLipsThicknessPolicy(reading=TEXT).choose(ul[:1], ll[:1], REST, SUBJECT, z226)[0] \
+            == EQUAL_THICKNESS, below_mm
+        assert LowLipsThicknessPolicy(reading=RESULTS).choose(ul[:1], ll[:1], REST, SUBJECT, z226)[0] \
+            == LOW_LIPS_THICKNESS, below_mm
+    assert K.LOW_LIPS_THRESHOLD / JW11_UNITS_PER_MM == pytest.approx(6.1, abs=0.05)
+
+
+def test_2_1_default_reading_is_the_results():
+    assert LowLipsThicknessPolicy().reading is RESULTS
+    assert LowLipsReading(K.LOW_LIPS_READING) is RESULTS
+
+
+def test_2_1_adjusts_thickness_and_blends_287():
+    ul, ll = protrusion_trajectory()
     two0 = lip_frames(ul, ll, REST, SUBJECT)
     two1 = lip_frames(ul, ll, REST, SUBJECT, rule=LOW_LIPS_THICKNESS, blend_inner_corner=True)
     ct = two1.diagnostics["currthick"]

@@ -37,7 +37,9 @@ from cassi.versions.lips_thickness import (
     current_thickness,
     hermite_f1,
     hermite_f2,
+    LowLipsReading,
     is_low_lips,
+    low_lips_margin,
     rounding_t,
     thick_from_lipthick,
 )
@@ -287,6 +289,20 @@ def test_low_lips_criterion():
     assert not is_low_lips(-20.0, 0.0)    # exactly 20: does not exceed the threshold
     assert not is_low_lips(5.0, 0.0)      # above the teeth tip
     assert K.LOW_LIPS_THRESHOLD == 20.0
+
+
+def test_low_lips_criterion_results_reading():
+    """The results' reading: the inside edge lower than 20 units above 226."""
+    res = LowLipsReading.RESULTS
+    assert is_low_lips(5.0, 0.0, reading=res)          # 5 above: adjusted
+    assert is_low_lips(-25.0, 0.0, reading=res)        # below 226 too
+    assert not is_low_lips(20.0, 0.0, reading=res)     # exactly 20 above: not lower than it
+    assert not is_low_lips(25.0, 0.0, reading=res)     # centred high
+    # The margin is signed, Parke units: the threshold height minus the edge.
+    assert low_lips_margin(5.0, 1.0, reading=res) == 16.0
+    assert low_lips_margin(5.0, 1.0, reading="text") == -24.0
+    with pytest.raises(ValueError):
+        low_lips_margin(5.0, 1.0, reading="prose")
 
 
 def test_eq_4_20_4_21_hermite():

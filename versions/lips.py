@@ -48,11 +48,12 @@ from cassi.versions.lips_ellipse import (
 from cassi.versions.lips_thickness import (
     EQUAL_THICKNESS,
     LOW_LIPS_THICKNESS,
+    LowLipsReading,
     ThicknessRule,
     blend_inner_corner_z,
     centreline_z,
     current_thickness,
-    is_low_lips,
+    low_lips_margin,
     rounding_t,
     thick_from_lipthick,
 )
@@ -73,6 +74,7 @@ __all__ = [
     "EqualThicknessPolicy",
     "LowLipsThicknessPolicy",
     "corner_stretch",
+    "inside_edge_start",
     "lip_frames",
     "lip_subject",
 ]
@@ -288,11 +290,7 @@ def lip_frames(
     b_signed = 0.5 * (z67 - z49)
     height = np.abs(b_signed)
     # Step 6: OUTER_ABC_CALC (c' from Eq. 4.13 on 67's x).
-    cp_raw = c_prime(x67, subject.x_rest, subject.x_max, subject.x_min)
-    # Guard before Eq. 4.8: c' is linear in x beyond the subject's sampled extremes, and a
-    # c' < c_min (or > c_max) would make a = sqrt(b^2 + c^2) widen the lips again at full
-    # protrusion; the key values bound roundness (4.2.1: fully rounded c_min, fully stretched c_max).
-    cp = np.clip(cp_raw, K.C_MIN, K.C_MAX)
+    cp_raw, cp = _c_prime(x67, subject)
     track = outer_abc_sequence(height, cp, params=params, state=state)
     # Step 7: limits.
     a, c = limit_abc(track.a, track.c)
@@ -390,6 +388,31 @@ def lip_frames(
     return LipFrames(vertices=LIP_VERTICES, xyz=xyz, diagnostics=diagnostics)
 
 
+def _c_prime(x67, subject: LipSubject) -> tuple[np.ndarray, np.ndarray]:
+    """Eq. 4.13's c' on 67's x, raw and bounded to [c_min, c_max]."""
+    cp_raw = c_prime(x67, subject.x_rest, subject.x_max, subject.x_min)
+    # Guard before Eq. 4.8: c' is linear in x beyond the subject's sampled extremes, and a
+    # c' < c_min (or > c_max) would make a = sqrt(b^2 + c^2) widen the lips again at full
+    # protrusion; the key values bound roundness (4.2.1: fully rounded c_min, fully stretched c_max).
+    return cp_raw, np.clip(cp_raw, K.C_MIN, K.C_MAX)
+
+
+def inside_edge_start(ul0, subject: LipSubject) -> float:
+    """Section 4.3.1's inside edge of the upper lip at the first valid row: z67 - currthick.
+
+    The upper lip is taken as thick as the lower ("as it would have in CASSI 2.0"), before
+    :func:`compress_pressed` (a cassi-farm choice the thesis's comparison does not know).
+
+    Parameters
+    ----------
+    ul0 : float (1, 2) or (2,)
+        The upper lip pellet in Parke (x, z) at the first valid row, units.
+    """
+    ul0 = np.asarray(ul0, dtype=np.float64).reshape(-1, 2)[:1]
+    _, cp = _c_prime(ul0[:, 0], subject)
+    return float(ul0[0, 1] - current_thickness(subject.thick, cp)[0])
+
+
 def corner_stretch(c, vertical) -> np.ndarray:
     """How far beyond a vertex 70 sits (section 4.2.1): 0 at c = 0 or for a vertical ellipse,
     growing with c for a horizontal one (``CORNER_STRETCH_AT_REST * (c / c_rest)^2``)."""
@@ -407,6 +430,10 @@ class ThicknessPolicy:
         """(rule, blend_inner_corner) for this subject and task."""
         return EQUAL_THICKNESS, False
 
+    def criterion(self, ul0, ll0, rest: LipRest, subject: LipSubject, z226: float) -> dict:
+        """Per-task values behind the choice, written as diagnostics in every frame."""
+        return {}
+
 
 class EqualThicknessPolicy(ThicknessPolicy):
     """CASSI 2.0 (section 4.2.3): both lips currthick thick."""
@@ -415,19 +442,28 @@ class EqualThicknessPolicy(ThicknessPolicy):
 class LowLipsThicknessPolicy(ThicknessPolicy):
     """CASSI 2.1 (section 4.3): low-lip subjects get 2/3 / 4/3 of currthick and the 287 blend.
 
-    The criterion (4.3.1): with equal thicknesses (as in 2.0), the upper lip's inside edge,
-    vertex 61, starts more than 20 units below vertex 226. Other subjects are exactly 2.0.
+    The criterion (4.3.1) compares the upper lip's starting inside edge, z67 - currthick with
+    equal thicknesses (:func:`inside_edge_start`), with a threshold 20 units from vertex 226:
+    below it by the text's reading, above it by the results' (:class:`LowLipsReading`).
+    Other subjects are exactly 2.0.
     """
 
     name = "low-lips"
 
-    def __init__(self, threshold: float = K.LOW_LIPS_THRESHOLD):
+    def __init__(self, threshold: float = K.LOW_LIPS_THRESHOLD,
+                 reading: LowLipsReading | str = K.LOW_LIPS_READING):
         self.threshold = threshold
+        self.reading = LowLipsReading(reading)
+
+    def criterion(self, ul0, ll0, rest, subject, z226):
+        z_in = inside_edge_start(ul0, subject)
+        return {"low_lips_inside_edge": z_in - z226,
+                "low_lips_margin": low_lips_margin(z_in, z226, reading=self.reading,
+                                                   threshold=self.threshold),
+                "low_lips_reading": self.reading.value}
 
     def choose(self, ul0, ll0, rest, subject, z226):
-        first = lip_frames(ul0, ll0, rest, subject, rule=EQUAL_THICKNESS)
-        z61 = float(first.vertex(61)[0, 2])
-        if is_low_lips(z61, z226, threshold=self.threshold):
+        if self.criterion(ul0, ll0, rest, subject, z226)["low_lips_margin"] > 0.0:
             return LOW_LIPS_THICKNESS, True
         return EQUAL_THICKNESS, False
 
@@ -568,7 +604,8 @@ class LipMovementStage:
             z226 = float(before[V_TEETH_TIP - 1, 2])
             rule, blend = self.policy.choose(ul[:1], ll[:1], rest, subject, z226)
             plan = {"rest": rest, "subject": subject, "rule": rule, "blend": blend,
-                    "before": before}
+                    "before": before,
+                    "criterion": self.policy.criterion(ul[:1], ll[:1], rest, subject, z226)}
             ctx.state["lips20"] = plan
         return plan
 
@@ -599,6 +636,9 @@ class LipMovementStage:
         positions[:, idx, :] = lips.xyz
         ctx.diagnostics.update(lips.diagnostics)
         ctx.diagnostics["thickness_rule"] = np.full(len(lips.xyz), plan["rule"].name, dtype=object)
+        for key, value in plan["criterion"].items():  # one value per task, in every frame
+            ctx.diagnostics[key] = np.full(len(lips.xyz), value,
+                                           dtype=object if isinstance(value, str) else np.float64)
         # Table 4.1's lip parameters drive steps 1-4 exactly as in 1.0: same diagnostics.
 
         parameters_frame(ctx, {63: ("UL", 0), 64: ("UL", 1), 65: ("LL", 0), 66: ("LL", 1)})

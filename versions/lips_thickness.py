@@ -6,6 +6,7 @@ All functions are elementwise over frames (arrays (F,)); lengths are Parke units
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
 
@@ -17,12 +18,14 @@ __all__ = [
     "ThicknessRule",
     "EQUAL_THICKNESS",
     "LOW_LIPS_THICKNESS",
+    "LowLipsReading",
     "blend_inner_corner_z",
     "centreline_z",
     "current_thickness",
     "hermite_f1",
     "hermite_f2",
     "is_low_lips",
+    "low_lips_margin",
     "rounding_t",
     "thick_from_lipthick",
 ]
@@ -110,17 +113,50 @@ def centreline_z(z67, z49, upper_thick, lower_thick) -> dict[int, np.ndarray]:
     }
 
 
-def is_low_lips(z61_start: float, z226: float, *, threshold: float = K.LOW_LIPS_THRESHOLD) -> bool:
-    """Section 4.3.1: does the upper lip's inside edge start more than 20 units below 226?
+class LowLipsReading(str, Enum):
+    """Which threshold section 4.3.1's comparison uses (the text and the results disagree).
+
+    TEXT: the inside edge starts more than ``threshold`` units *below* vertex 226 (the words).
+    RESULTS: the inside edge starts lower than ``threshold`` units *above* 226 (what fits the
+    subjects the thesis reports changed; see ``lips_constants.LOW_LIPS_READING``).
+    """
+
+    TEXT = "text"
+    RESULTS = "results"
+
+
+def low_lips_margin(z_inside_start: float, z226: float, *, reading: LowLipsReading | str,
+                    threshold: float = K.LOW_LIPS_THRESHOLD) -> float:
+    """Section 4.3.1: how far the upper lip's starting inside edge lies below the threshold
+    height (Parke units, signed): > 0 adjusts the lips, <= 0 leaves them as in 2.0.
+
+    Parameters
+    ----------
+    z_inside_start : float
+        z67 - currthick at the first valid row (the upper lip as thick as the lower, as in 2.0).
+    z226 : float
+        z of vertex 226, the tip of the upper front teeth.
+    reading : LowLipsReading
+        TEXT: threshold height z226 - threshold; RESULTS: z226 + threshold.
+    """
+    reading = LowLipsReading(reading)
+    height = z226 - threshold if reading is LowLipsReading.TEXT else z226 + threshold
+    return float(height - z_inside_start)
+
+
+def is_low_lips(z61_start: float, z226: float, *, threshold: float = K.LOW_LIPS_THRESHOLD,
+                reading: LowLipsReading | str = LowLipsReading.TEXT) -> bool:
+    """Section 4.3.1: does the upper lip's inside edge start beyond the threshold? With the
+    TEXT reading: more than 20 units below 226 (:func:`low_lips_margin` > 0).
 
     Parameters
     ----------
     z61_start : float
-        z of vertex 61 at the first frame, placed with 2.0's equal thicknesses.
+        z of the upper lip's inside edge at the first frame (z67 - currthick, equal lips).
     z226 : float
         z of vertex 226, the tip of the upper front teeth.
     """
-    return bool(z226 - z61_start > threshold)
+    return low_lips_margin(z61_start, z226, reading=reading, threshold=threshold) > 0.0
 
 
 def hermite_f1(t) -> np.ndarray:
