@@ -124,6 +124,23 @@ def _fidelity_plots(run: Run, out: Path) -> list[dict]:
     return figs
 
 
+def _criterion(run: Run, out: Path) -> dict | None:
+    """CASSI 2.1's low-lips decision per task file (rows of view ``criterion``): the margin of
+    the upper lip's starting inside edge below the threshold (> 0: adjusted), mm."""
+    res = run.results
+    rows = res[(res["view"] == "criterion") & (res["frame"] == -1)]
+    if not len(rows):
+        return None
+    table = rows.sort_values(["version", "subject", "task", "rep"]).set_index(
+        ["version", "subject", "task", "rep"])[["value", "detail"]].rename(
+        columns={"value": "margin_mm"})
+    csv, md = _write_table(table, out, "low_lips_criterion")
+    return {"csv": csv, "md": md,
+            "rows": [{"version": v, "subject": s, "task": int(t), "rep": int(r),
+                      "margin": f"{m:+.2f}", "detail": d}
+                     for (v, s, t, r), (m, d) in zip(table.index, table.itertuples(index=False))]}
+
+
 def _comparison(run: Run, previous: Run | None, out: Path) -> dict | None:
     if previous is None:
         return None
@@ -350,7 +367,7 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
     html = env.get_template("index.html.j2").render(
         run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
         summaries=_summaries(run), comparison=_comparison(run, previous, out),
-        tables=_table_sections(run, cr, out), videos=_videos(run, out, None if media_cache is None else Path(media_cache)),
+        tables=_table_sections(run, cr, out), criterion=_criterion(run, out), videos=_videos(run, out, None if media_cache is None else Path(media_cache)),
         rules=AGGREGATION_RULES,
         subjects=subject_links, trend=trend, gate=gate,
         jobs={"counts": run.summary.get("counts", {}), "failed": run.failed,

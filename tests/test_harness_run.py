@@ -62,7 +62,13 @@ def test_geometry_run_then_rerun(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "4 done" in text
     df = pd.read_parquet(out / "results.parquet")
-    assert set(df.view) == {"geometry"} and set(df.version) == {"cassi-1.0", "cassi-2.1"}
+    assert set(df.view) == {"geometry", "criterion"} and set(df.version) == {"cassi-1.0", "cassi-2.1"}
+    # 2.1's low-lips decision: one margin row per task file it animated (the stage keeps the
+    # diagnostics it is read from), none for versions that make no such decision.
+    crit = df[df.view == "criterion"]
+    assert sorted(zip(crit.version, crit.task)) == [("cassi-2.1", 2), ("cassi-2.1", 118)]
+    assert (crit.check == "low_lips_margin").all() and crit.value.notna().all()
+    assert (crit.negatives == 0).all() and crit.table.isna().all()
     assert df.synthetic.all() and (df.frame == -1).any()
     assert {"D"} <= set(df[df.task == 118].table)  # task 118 adds Table D
     ratings = pd.read_parquet(out / "ratings.parquet")

@@ -7,6 +7,7 @@ import pandas as pd
 
 from reports_fixtures import image, results_rows, write_run
 from cassi.harness.cli import main
+from cassi.harness.farm.results import normalize
 from cassi.reports.report import slug, write_report
 
 
@@ -68,3 +69,26 @@ def test_compare_and_command(tmp_path):
     html = (tmp_path / "rep" / "index.html").read_text()
     assert "Changes since old" in html and "▲ better" in html
     assert main(["report", str(tmp_path / "missing"), "--out", str(tmp_path / "r2")]) == 2
+
+
+def test_report_lists_the_2_1_criterion_margin_per_task_file(tmp_path):
+    """The criterion rows (view ``criterion``, written by run_geometry_checks for cassi-2.1) get a
+    section and a table of their own, one line per task file; they change no rating."""
+    res = results_rows({})
+    crit = [dict(subject=s, task=t, rep=1, version="cassi-2.1", view="criterion", frame=-1,
+                 check="low_lips_margin", table=None, component=None, value=m, unit="mm",
+                 threshold=0.0, negatives=0, detail=f"reading results: margin {m:+.2f}",
+                 synthetic=True)
+            for (s, t), m in {("JW11", 19): 3.85, ("JW11", 21): -0.4, ("JW12", 19): 1.25}.items()]
+    plain = write_run(tmp_path / "plain", res)
+    both = write_run(tmp_path / "run", pd.concat([res, normalize(crit)], ignore_index=True))
+    html = write_report(both, tmp_path / "report").read_text()
+    assert "lip criterion (thesis 4.3.1)" in html
+    section = html[html.index('id="low-lips-criterion"'):]
+    assert section.count("<td>cassi-2.1</td>") == 3 and "+3.85" in section and "-0.40" in section
+    table = pd.read_csv(tmp_path / "report" / "tables" / "low_lips_criterion.csv")
+    assert sorted(zip(table["subject"], table["task"], table["margin_mm"])) == [
+        ("JW11", 19, 3.85), ("JW11", 21, -0.4), ("JW12", 19, 1.25)]
+    assert "lip criterion" not in write_report(plain, tmp_path / "r2").read_text()
+    a = pd.read_csv(tmp_path / "report" / "tables" / "table_A_cassi-2.1.csv")
+    assert a.equals(pd.read_csv(tmp_path / "r2" / "tables" / "table_A_cassi-2.1.csv"))

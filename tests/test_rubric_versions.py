@@ -48,7 +48,7 @@ def _with(anim, positions):
 def _run(subject, anim, task, checks=None):
     _, prof, face = subject
     df = R.run_geometry_checks(anim, face, prof, task=task, subject="JW11", checks=checks)
-    return df[df["frame"] == -1].set_index("check")
+    return df[(df["frame"] == -1) & (df["view"] == "geometry")].set_index("check")
 
 
 @pytest.mark.parametrize("version", VERSIONS)
@@ -137,3 +137,31 @@ def test_one_frame_jump_at_the_ellipse_switch_fires(subject, version):
     r = _run(subject, _with(anim, p), 106, ["corner_jump_switch"]).loc["corner_jump_switch"]
     # the jaw's own step in that frame is subtracted: the switch falls while the jaw opens
     assert r["negatives"] == 1 and r["value"] >= max(2.0, before["value"]), r["detail"]
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+def test_the_2_1_criterion_margin_is_a_whole_task_row(subject, version):
+    """cassi-2.1's low-lips decision (thesis 4.3.1) is one row per task file, view criterion,
+    never charged: the margin in mm (the diagnostic in units times mm per unit), signed as
+    the decision (> 0: adjusted); the other versions make no such decision."""
+    _, prof, face = subject
+    anim = _animate(subject, version, 5)
+    df = R.run_geometry_checks(anim, face, prof, task=5, subject="JW11")
+    crit = df[df["view"] == "criterion"]
+    if version != "cassi-2.1":
+        assert crit.empty
+        return
+    assert len(crit) == 1
+    row = crit.iloc[0]
+    assert row["check"] == "low_lips_margin" and row["frame"] == -1 and row["negatives"] == 0
+    assert row["table"] is None or row["table"] != row["table"]
+    mm = G.mm_per_unit(face.vertices, prof.jaw_length_mm)
+    margin = anim.diagnostics["low_lips_margin"].iloc[0]
+    assert row["value"] == pytest.approx(margin * mm)
+    adjusted = anim.diagnostics["thickness_rule"].iloc[0] == "low-lips"
+    assert (row["value"] > 0) == adjusted
+    assert ("adjusted" if adjusted else "as 2.0") in row["detail"]
+    assert "reading results" in row["detail"]
+    # a run that asks for named checks gets only those
+    assert R.run_geometry_checks(anim, face, prof, task=5, subject="JW11",
+                                 checks=["teeth_front_overlap"])["view"].eq("geometry").all()

@@ -31,7 +31,7 @@ from cassi.harness.evaluation.inputs import (read_planned, verify_code, verify_p
 from cassi.harness.farm.jobs import Job, SkipJob, StageContext, StageOutput, npz_bytes
 from cassi.harness.farm.runner import Pipeline
 from cassi.harness.rubric.frames import CHUNK_FRAMES, FileFrames
-from cassi.harness.rubric.measures import DIAGNOSTICS_READ
+from cassi.harness.rubric.measures import CRITERION_DIAGNOSTICS, DIAGNOSTICS_READ
 from cassi.renderer.images import png_bytes
 from cassi.renderer.views import PRESET_NAMES, VIEW_NAMES
 from cassi.data.xrmb.files import parse_txy
@@ -151,7 +151,7 @@ def animate_to_file(version, profile, face, rec, tmp: Path) -> StreamedAnimation
     570-vertex face); of the diagnostics, only the columns the rubric reads are kept. A version
     without ``animate_chunks`` (the protocol only asks for ``animate``) is animated at once and
     its positions written out."""
-    kept = ("frame", "time_us", *DIAGNOSTICS_READ)
+    kept = ("frame", "time_us", *DIAGNOSTICS_READ, *CRITERION_DIAGNOSTICS)
 
     chunks = (version.animate_chunks(profile, face, rec, frames=CHUNK_FRAMES)
               if hasattr(version, "animate_chunks") else iter([version.animate(profile, face, rec)]))

@@ -25,6 +25,9 @@ from cassi.harness.rubric.registry import (CHECKS, END_SHARE, JAW_NEAR_CLOSED_MM
 #: The ``Animation.diagnostics`` columns a measure reads (the geometry stage keeps only these of
 #: a long task: a version may report 50 columns, about 400 bytes a frame).
 DIAGNOSTICS_READ = ("lips_overlap", "ellipse")
+#: CASSI 2.1's per-task criterion values (``cassi.versions.lips.LowLipsThicknessPolicy``), kept
+#: for the whole-task ``criterion`` row of :func:`cassi.harness.rubric.run.run_geometry_checks`.
+CRITERION_DIAGNOSTICS = ("low_lips_margin", "low_lips_inside_edge", "low_lips_reading")
 
 
 class GeometryContext:

@@ -16,14 +16,14 @@ from cassi.common.errors import CassiInputError
 
 from cassi.harness.rubric import geometry as G
 from cassi.harness.rubric.frames import ArrayFrames, Frames
-from cassi.harness.rubric.measures import GeometryContext
+from cassi.harness.rubric.measures import CRITERION_DIAGNOSTICS, GeometryContext
 from cassi.harness.rubric.model import Check, Measurement
 from cassi.harness.rubric.registry import TRACE_STEP, TRACE_TASKS, checks_for, get_check
 from cassi.data.face.model import build_face
 from cassi.versions.mapping import XrmbToParke
 from cassi.harness.rubric.fidelity import FidelityContext, traces
 
-__all__ = ["run_geometry_checks", "run_image_checks"]
+__all__ = ["criterion_rows", "run_geometry_checks", "run_image_checks"]
 
 def _rows(check: Check, m: Measurement, view: str, ids: dict) -> list[dict]:
     neg = m.negatives if m.negatives is not None else check.grade(m.value)
@@ -100,7 +100,30 @@ def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | N
     rows = _measured_rows(checks_for(kind="geometry", task=task), ctx, ids, wanted, frame_no)
     if recording is not None:
         rows.extend(_fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no))
+    if wanted is None:
+        rows.extend(criterion_rows(ctx.diagnostics, ids, mm_per_unit))
     return _frame(rows)
+
+
+def criterion_rows(diagnostics, ids: dict, mm_per_unit: float) -> list[dict]:
+    """CASSI 2.1's low-lips decision (thesis 4.3.1) as one whole-task row, view ``criterion``:
+    the signed margin, mm, by which the upper lip's starting inside edge lies below the
+    threshold (> 0: the lips were adjusted); no table, never charged. Empty for versions that
+    make no such decision."""
+    if diagnostics is None or not all(c in diagnostics for c in CRITERION_DIAGNOSTICS):
+        return []
+    first = {c: np.asarray(diagnostics[c])[:1] for c in CRITERION_DIAGNOSTICS}
+    if not all(len(v) for v in first.values()):
+        return []
+    margin, edge = float(first["low_lips_margin"][0]), float(first["low_lips_inside_edge"][0])
+    reading = str(first["low_lips_reading"][0])
+    at = edge + margin  # the threshold's height above 226, units
+    detail = (f"reading {reading}: inside edge {edge * mm_per_unit:+.2f} mm ({edge:+.1f} units) "
+              f"from 226, threshold {at * mm_per_unit:+.2f} mm ({at:+.1f} units); margin "
+              f"{margin:+.1f} units: {'adjusted' if margin > 0 else 'as 2.0'}")
+    return [dict(ids, view="criterion", frame=-1, check="low_lips_margin", table=None,
+                 component=None, value=margin * mm_per_unit, unit="mm", threshold=0.0,
+                 negatives=0, detail=detail)]
 
 
 def _measured_rows(checks, ctx, ids: dict, wanted, frame_no) -> list[dict]:
