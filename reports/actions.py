@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import errno
 from functools import partial
 from pathlib import Path
@@ -42,7 +43,10 @@ def cmd_nightly(args: argparse.Namespace) -> int:
                     animate_stride=args.animate_stride, video_versions=video or None)
     passed, index = nightly(args.out, corpus=args.corpus, config=cfg, progress=not args.quiet,
                             review=partial(review_night, common_only=args.common_only))
-    print(f"{'PASSED' if passed else 'FAILED'}: {index}")
+    gate = json.loads((Path(args.out) / "runs" / index.parent.name / "gate.json").read_text())
+    word = "BASELINE RECORDED" if passed and gate.get("baseline_recorded") else (
+        "PASSED" if passed else "FAILED")
+    print(f"{word}: {index}")
     return 0 if passed else 1
 
 
