@@ -22,6 +22,8 @@ from cassi.harness.evaluation.frames import COMPARISON_VIEW, VIDEO_VIEWS
 from cassi.harness.rubric import (AGGREGATION_RULES, CHECKS, RATINGS, component_ratings,
                                   file_verdicts, rating_counts, table_c_rule, table_title,
                                   version_comparisons)
+from cassi.harness.rubric.paired import (BOOTSTRAP_N, BOOTSTRAP_SEED, TIE_TOLERANCE,
+                                         paired_comparisons, paired_sentence)
 from cassi.reports.tables import markdown_table
 from cassi.data.corpus.disk import Corpus
 
@@ -301,6 +303,19 @@ def _summaries(run: Run) -> list[dict]:
     return [{"id": slug(t), "title": table_title(t), "sentences": s} for t, s in groups.items()]
 
 
+def _paired(run: Run, out: Path) -> dict:
+    """The paired comparisons per pair of versions, only the measures where the pair differs
+    in at least one file, most significant first (the full table goes to tables/)."""
+    p = paired_comparisons(run.results)
+    csv, md = _write_table(p.set_index(["a", "b", "measure"]), out, "paired_comparisons")
+    shown = p[(p["wins"] + p["losses"]) > 0]
+    pairs = []
+    for (a, b), g in shown.groupby(["a", "b"], sort=False):
+        pairs.append({"a": a, "b": b, "sentences": [paired_sentence(r) for _, r in g.iterrows()]})
+    return {"pairs": pairs, "csv": csv, "md": md, "n_boot": BOOTSTRAP_N, "seed": BOOTSTRAP_SEED,
+            "tie": TIE_TOLERANCE, "same": int(len(p) - len(shown))}
+
+
 def _meta_items(run: Run) -> list[tuple[str, str]]:
     keys = ("started", "finished", "package_version", "git_revision", "variant", "preset", "stride",
             "executor", "corpus_resolved")
@@ -349,7 +364,7 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
                           if (run.root / "gate.md").is_file() else "")
     html = env.get_template("index.html.j2").render(
         run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
-        summaries=_summaries(run), comparison=_comparison(run, previous, out),
+        summaries=_summaries(run), paired=_paired(run, out), comparison=_comparison(run, previous, out),
         tables=_table_sections(run, cr, out), videos=_videos(run, out, None if media_cache is None else Path(media_cache)),
         rules=AGGREGATION_RULES,
         subjects=subject_links, trend=trend, gate=gate,
