@@ -1,9 +1,10 @@
-"""What ``cassi report``, ``nightly``, ``gate`` and ``golden`` do (parsers:
+"""What ``cassi report``, ``agree``, ``nightly``, ``gate`` and ``golden`` do (parsers:
 :mod:`cassi.reports.commands`). ``cassi nightly`` is the harness's night
 (:func:`cassi.harness.evaluation.nightly.nightly`) reviewed by :func:`.nightly.review_night`."""
 from __future__ import annotations
 
 import argparse
+import json
 import errno
 from functools import partial
 from pathlib import Path
@@ -13,7 +14,9 @@ from cassi.harness.evaluation.config import RunConfig
 from cassi.harness.evaluation.nightly import nightly
 from cassi.reports.gates import gate, update_golden
 from cassi.reports.nightly import review_night
-from cassi.reports.report import write_report
+from cassi.reports.agree import agreement, write_agreement
+from cassi.reports.report import evidence_href, write_report
+from cassi.reports.runio import load_run
 
 
 def _writable(out: Path) -> None:
@@ -31,8 +34,25 @@ def _writable(out: Path) -> None:
 
 def cmd_report(args: argparse.Namespace) -> int:
     _writable(args.out)
-    index = write_report(args.run, args.out, compare=args.compare)
+    index = write_report(args.run, args.out, compare=args.compare, ratings=args.ratings)
     print(index)
+    return 0
+
+
+def cmd_agree(args: argparse.Namespace) -> int:
+    run = load_run(args.run)
+    result = agreement(run, args.ratings, evidence_href)
+    out = args.out or args.run
+    _writable(out)
+    paths = write_agreement(result, out)
+    for g in result["groups"]:
+        kappa = "undefined" if g["kappa"] != g["kappa"] else (
+            f"{g['kappa']:.2f} [{g['kappa_low']:.2f}, {g['kappa_high']:.2f}]")
+        print(f"Table {g['table']} {g['version']}: {g['n']} ratings, exact {g['exact']:.2f}, "
+              f"within one {g['within_one']:.2f}, kappa {kappa}")
+    if result["note"]:
+        print(result["note"])
+    print(f"{len(result['disagreements'])} disagreement(s): {paths[2]}")
     return 0
 
 
@@ -42,7 +62,10 @@ def cmd_nightly(args: argparse.Namespace) -> int:
                     animate_stride=args.animate_stride, video_versions=video or None)
     passed, index = nightly(args.out, corpus=args.corpus, config=cfg, progress=not args.quiet,
                             review=partial(review_night, common_only=args.common_only))
-    print(f"{'PASSED' if passed else 'FAILED'}: {index}")
+    gate = json.loads((Path(args.out) / "runs" / index.parent.name / "gate.json").read_text())
+    word = "BASELINE RECORDED" if passed and gate.get("baseline_recorded") else (
+        "PASSED" if passed else "FAILED")
+    print(f"{word}: {index}")
     return 0 if passed else 1
 
 

@@ -13,7 +13,19 @@ def register(sub) -> None:
     p.add_argument("run", type=Path, help="a run directory (cassi run --out)")
     p.add_argument("--compare", type=Path, help="a previous run to compare with")
     p.add_argument("--out", type=Path, required=True, help="report directory")
+    p.add_argument("--ratings", type=Path, help="ratings people gave (CSV, see `cassi agree`): "
+                   "adds the agreement section")
     p.set_defaults(func="cassi.reports.actions:cmd_report")
+
+    p = sub.add_parser("agree", help="compare a run's ratings with ratings people gave",
+                       description="Compare RUN's ratings with FILE.csv (columns subject,task,"
+                       "version,table,component,rating; a blank task: the subject's rating, a "
+                       "blank component: the whole table). Writes agreement.json, agreement.md "
+                       "and agreement.csv (the disagreements) into DIR; exit 2 on a bad line.")
+    p.add_argument("run", type=Path, help="a run directory (cassi run --out)")
+    p.add_argument("--ratings", type=Path, required=True, help="the ratings file (CSV)")
+    p.add_argument("--out", type=Path, help="output directory (default: RUN)")
+    p.set_defaults(func="cassi.reports.actions:cmd_agree")
 
     p = sub.add_parser("nightly", help="run the default evaluation, report, compare, gate",
                        description="One night: dated run + report under DIR, compared with the "

@@ -438,14 +438,22 @@ def _renders_as_golden(run: Run, scratch: Path) -> Path:
 
 
 def write_gate_report(out_dir: Path, passed: bool, results: list[GateResult], *, baseline: str,
-                      notes: list[str] = ()) -> None:
+                      notes: list[str] = (), baseline_recorded: bool = False) -> None:
+    """``gate.json`` and ``gate.md``; ``baseline_recorded``: a first night with nothing to
+    compare with, which says so instead of "0 passed, 0 failed"."""
     counts = {s: sum(r.status == s for r in results) for s in ("pass", "fail", "skip")}
     payload = {"passed": passed, "baseline": baseline, "counts": counts, "notes": list(notes),
-               "gates": [asdict(r) for r in results]}
+               "baseline_recorded": baseline_recorded, "gates": [asdict(r) for r in results]}
     atomic_write_text(out_dir / "gate.json", json.dumps(payload, indent=2, default=str) + "\n")
-    lines = [f"# Gates: {'PASSED' if passed else 'FAILED'}", "",
-             f"Baseline: `{baseline}`. {counts['pass']} passed, {counts['fail']} failed, "
-             f"{counts['skip']} skipped.", "", *[f"**Note.** {n}\n" for n in notes]]
+    if baseline_recorded:
+        lines = ["# Gates: baseline recorded", "",
+                 "The first night: no previous night and no golden images to compare with, so "
+                 "no regression gate ran. This night is the baseline the next one is gated "
+                 "against.", ""]
+    else:
+        lines = [f"# Gates: {'PASSED' if passed else 'FAILED'}", "",
+                 f"Baseline: `{baseline}`. {counts['pass']} passed, {counts['fail']} failed, "
+                 f"{counts['skip']} skipped.", "", *[f"**Note.** {n}\n" for n in notes]]
     for status in ("fail", "skip"):
         rows = [r for r in results if r.status == status]
         if rows:

@@ -47,9 +47,14 @@ def review_night(night: Night, *, common_only: bool = False) -> tuple[bool, Path
             gate_results.append(GateResult("baseline", "all", "all", str(baseline), "fail",
                                            err.reason))
     passed = not any(r.status == "fail" for r in gate_results)
+    first = not baselines and passed  # nothing to compare with: tonight becomes the baseline
     write_gate_report(run_dir, passed, gate_results,
                       baseline=", ".join(map(str, baselines)) or "none (first night, no golden "
-                                                                 "images)")
+                                                                 "images)",
+                      baseline_recorded=first)
+    if first:
+        timer.say("baseline recorded: the first night, nothing to compare with; the next night "
+                  "is gated against this one")
     passed = passed and night.result.ok
 
     history_path = root / "history.csv"

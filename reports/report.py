@@ -16,12 +16,15 @@ import pandas as pd
 
 from cassi.common.atomic import atomic_write_text
 from cassi.reports import compare as cmp
+from cassi.reports.agree import agreement, write_agreement
 from cassi.reports import media, plots
 from cassi.reports.runio import Run, load_run, order_versions
 from cassi.harness.evaluation.frames import COMPARISON_VIEW, VIDEO_VIEWS
 from cassi.harness.rubric import (AGGREGATION_RULES, CHECKS, RATINGS, component_ratings,
                                   file_verdicts, rating_counts, table_c_rule, table_title,
                                   version_comparisons)
+from cassi.harness.rubric.paired import (BOOTSTRAP_N, BOOTSTRAP_SEED, TIE_TOLERANCE,
+                                         paired_comparisons, paired_sentence)
 from cassi.reports.tables import markdown_table
 from cassi.data.corpus.disk import Corpus
 
@@ -55,6 +58,11 @@ def _write_table(df: pd.DataFrame, out: Path, stem: str) -> tuple[str, str]:
 def evidence_anchor(version: str, table: str) -> str:
     """The id of a version's evidence for one table on a subject page."""
     return f"{slug(version)}-table-{slug(table)}"
+
+
+def evidence_href(subject: str, version: str, table: str) -> str:
+    """A version's evidence for one table on a subject's page, relative to the report."""
+    return f"subjects/{slug(subject)}.html#{evidence_anchor(version, table)}"
 
 
 def _table_sections(run: Run, cr: pd.DataFrame, out: Path) -> list[dict]:
@@ -318,6 +326,19 @@ def _summaries(run: Run) -> list[dict]:
     return [{"id": slug(t), "title": table_title(t), "sentences": s} for t, s in groups.items()]
 
 
+def _paired(run: Run, out: Path) -> dict:
+    """The paired comparisons per pair of versions, only the measures where the pair differs
+    in at least one file, most significant first (the full table goes to tables/)."""
+    p = paired_comparisons(run.results)
+    csv, md = _write_table(p.set_index(["a", "b", "measure"]), out, "paired_comparisons")
+    shown = p[(p["wins"] + p["losses"]) > 0]
+    pairs = []
+    for (a, b), g in shown.groupby(["a", "b"], sort=False):
+        pairs.append({"a": a, "b": b, "sentences": [paired_sentence(r) for _, r in g.iterrows()]})
+    return {"pairs": pairs, "csv": csv, "md": md, "n_boot": BOOTSTRAP_N, "seed": BOOTSTRAP_SEED,
+            "tie": TIE_TOLERANCE, "same": int(len(p) - len(shown))}
+
+
 def _meta_items(run: Run) -> list[tuple[str, str]]:
     keys = ("started", "finished", "package_version", "git_revision", "variant", "preset", "stride",
             "executor", "corpus_resolved")
@@ -327,7 +348,8 @@ def _meta_items(run: Run) -> list[tuple[str, str]]:
 def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
                  compare: str | os.PathLike | None = None,
                  history: pd.DataFrame | None = None,
-                 media_cache: str | os.PathLike | None = None) -> Path:
+                 media_cache: str | os.PathLike | None = None,
+                 ratings: str | os.PathLike | None = None) -> Path:
     """Write ``out_dir/index.html`` (+ subject pages, tables, plots, images) for a run.
 
     Parameters
@@ -343,11 +365,18 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
     media_cache : path, optional
         Videos made before from the same renders, sound and code (a nightly store's media):
         linked instead of encoded again.
+    ratings : path, optional
+        Ratings people gave (:mod:`cassi.reports.agree`): the report's agreement section, and
+        agreement.json / .md / .csv beside index.html.
     """
     run = load_run(run_dir)
     previous = load_run(compare) if compare else None
+    # a bad ratings file is refused before anything is written
+    agree = agreement(run, ratings, evidence_href) if ratings is not None else None
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    if agree is not None:
+        write_agreement(agree, out)
     env = _env()
     fv = file_verdicts(run.results)
     cr = component_ratings(run.results)
@@ -366,7 +395,8 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
                           if (run.root / "gate.md").is_file() else "")
     html = env.get_template("index.html.j2").render(
         run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
-        summaries=_summaries(run), comparison=_comparison(run, previous, out),
+        summaries=_summaries(run), paired=_paired(run, out), agreement=agree,
+        comparison=_comparison(run, previous, out),
         tables=_table_sections(run, cr, out), criterion=_criterion(run, out), videos=_videos(run, out, None if media_cache is None else Path(media_cache)),
         rules=AGGREGATION_RULES,
         subjects=subject_links, trend=trend, gate=gate,

@@ -75,7 +75,9 @@ def test_the_code_and_the_rubric_are_part_of_every_job_digest(corpus, tmp_path, 
     run(cfg, progress=False)
     meta = json.loads((tmp_path / "out" / "run.json").read_text())
     assert set(meta["provenance"]) == {"package_version", "code_digest", "versions_code_digest",
-                                       "rubric_digest"}
+                                       "version_digests", "packages", "rubric_digest"}
+    assert set(meta["provenance"]["version_digests"]) == {"cassi-1.0"}
+    assert {"numpy", "mitsuba", "drjit"} <= set(meta["provenance"]["packages"])
     # A threshold changes: the registry digest, hence every job, changes.
     before = provenance.rubric_digest()
     name, check = next(iter(rubric.CHECKS.items()))

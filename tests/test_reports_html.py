@@ -92,3 +92,22 @@ def test_report_lists_the_2_1_criterion_margin_per_task_file(tmp_path):
     assert "lip criterion" not in write_report(plain, tmp_path / "r2").read_text()
     a = pd.read_csv(tmp_path / "report" / "tables" / "table_A_cassi-2.1.csv")
     assert a.equals(pd.read_csv(tmp_path / "r2" / "tables" / "table_A_cassi-2.1.csv"))
+
+
+def test_versions_compared_states_the_paired_comparisons(tmp_path):
+    # 2.0's tongue goes through the teeth in task 19 of both subjects; 1.0 and 2.1 never do
+    run = _run(tmp_path, "run", {("cassi-2.0", s, "tongue_through_teeth"): 1 for s in ("JW11", "JW12")})
+    index = write_report(run, tmp_path / "report")
+    html = index.read_text()
+    section = html[html.index('id="paired"'):html.index("How the tables are counted")]
+    assert "Synthetic corpus:</strong> these comparisons describe the software" in section
+    assert "2000 resamples of the files" in section and "seed 0" in section
+    assert ("cassi-1.0 beats cassi-2.0 on tongue_through_teeth in 2 of 4 files (0 worse, 2 tied), "
+            "median cassi-1.0 − cassi-2.0 -0.5 mm") in section
+    assert "cassi-2.1 beats cassi-2.0 on tongue_through_teeth in 2 of 4 files" in section
+    # measures where a pair never differs are left out of the section, kept in the table
+    assert "lower_lip_below_teeth" not in section
+    table = pd.read_csv(index.parent / "tables" / "paired_comparisons.csv")
+    same = table[(table["a"] == "cassi-2.1") & (table["b"] == "cassi-1.0")]
+    assert set(same["measure"]) == {"tongue_through_teeth", "lower_lip_below_teeth"}
+    assert (same["ties"] == 4).all() and (same["p"] == 1.0).all()

@@ -26,6 +26,12 @@ def test_two_nights_then_a_planted_regression_fails_the_gate(tmp_path):
     assert ok1 and index1 == tmp_path / "reports" / "2026-11-20" / "index.html"
     gate1 = json.loads((tmp_path / "runs" / "2026-11-20" / "gate.json").read_text())
     assert gate1["passed"] and gate1["gates"] == []  # first night: nothing to compare with
+    # ... and it says so, not "0 passed, 0 failed"
+    assert gate1["baseline_recorded"]
+    assert (tmp_path / "runs" / "2026-11-20" / "gate.md").read_text().startswith(
+        "# Gates: baseline recorded")
+    assert "Gates: baseline recorded" in index1.read_text()
+    assert "0 passed" not in index1.read_text()
     assert "Synthetic corpus" in index1.read_text()
 
     ok2, index2 = nightly(tmp_path, review=review_night, config=SMALL, today=day2, progress=False)
@@ -34,6 +40,7 @@ def test_two_nights_then_a_planted_regression_fails_the_gate(tmp_path):
     assert "Changes since 2026-11-20" in html and "trend.png" in html
     gate2 = json.loads((tmp_path / "runs" / "2026-11-21" / "gate.json").read_text())
     assert {g["gate"] for g in gate2["gates"]} == {"metric", "image"}
+    assert not gate2["baseline_recorded"] and "Gates: PASSED" in html
     # Same code, same data, fixed seeds: every image gate passes against the previous night.
     assert all(g["status"] == "pass" for g in gate2["gates"]), gate2
     history = pd.read_csv(tmp_path / "history.csv")

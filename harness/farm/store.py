@@ -106,6 +106,20 @@ class BlobRef:
         return f"objects/{self.sha256[:2]}/{self.sha256}{self.suffix}"
 
 
+def _hashes_to_its_name(base: Path, ref: BlobRef, good: set[str]) -> bool:
+    """Whether the blob under ``base`` exists and hashes to its name; hashed once, then
+    remembered in ``good``."""
+    if ref.relpath in good:
+        return (base / ref.relpath).is_file()
+    try:
+        ok = sha256_file(base / ref.relpath) == ref.sha256
+    except OSError:
+        return False
+    if ok:
+        good.add(ref.relpath)
+    return ok
+
+
 class OutputStore:
     """The outputs of one run directory (see the module docstring for the layout), with an
     optional ``cache`` shared between runs."""
@@ -205,15 +219,7 @@ class OutputStore:
         return ref
 
     def _cache_blob_ok(self, ref: BlobRef) -> bool:
-        if ref.relpath in self._cache_good:
-            return (self.cache / ref.relpath).is_file()
-        try:
-            ok = sha256_file(self.cache / ref.relpath) == ref.sha256
-        except OSError:
-            return False
-        if ok:
-            self._cache_good.add(ref.relpath)
-        return ok
+        return _hashes_to_its_name(self.cache, ref, self._cache_good)
 
     def _link_from_cache(self, ref: BlobRef) -> None:
         """Put the cache's (verified) blob into this run directory: a hard link, or a copy
@@ -222,16 +228,7 @@ class OutputStore:
         self._good.add(ref.relpath)
 
     def _blob_ok(self, ref: BlobRef) -> bool:
-        """Whether the blob exists and hashes to its name (hashed once, then remembered)."""
-        if ref.relpath in self._good:
-            return (self.root / ref.relpath).is_file()
-        try:
-            ok = sha256_file(self.root / ref.relpath) == ref.sha256
-        except OSError:
-            return False
-        if ok:
-            self._good.add(ref.relpath)
-        return ok
+        return _hashes_to_its_name(self.root, ref, self._good)
 
     def get(self, ref: BlobRef) -> bytes:
         data = (self.root / ref.relpath).read_bytes()

@@ -20,7 +20,7 @@ from cassi.harness.rubric.registry import CHECKS, MARKED_SHARE, TABLE_C_FROM_A
 
 __all__ = ["ratings_table", "RATING_COLUMNS", "file_verdicts", "verdicts", "table_c_rule", "component_ratings", "rating_counts",
            "version_totals", "version_summaries", "version_comparisons", "negatives_text", "order_versions",
-           "VERDICT_COLUMNS"]
+           "VERDICT_COLUMNS", "LEVEL_COLUMNS", "level_ratings"]
 
 VERDICT_COLUMNS = ["version", "table", "own_table", "subject", "component", "check", "negatives",
                    "raw_negatives", "files", "fired_files", "tasks", "value", "unit", "threshold",
@@ -222,6 +222,38 @@ def component_ratings(results: pd.DataFrame) -> pd.DataFrame:
         rows.append((version, table, TABLES.get(table, ("", ""))[0], subject, component, n,
                      rate(n), text, adjust, reason))
     return pd.DataFrame(rows, columns=cols)
+
+
+#: Columns of :func:`level_ratings`: ``file`` "" for a subject's rating, ``component`` "" for a
+#: whole table.
+LEVEL_COLUMNS = ["version", "table", "subject", "file", "component", "negatives", "rating"]
+
+
+def level_ratings(results: pd.DataFrame) -> pd.DataFrame:
+    """Ratings at every level a person may rate: :data:`LEVEL_COLUMNS`.
+
+    - a subject's component: :func:`component_ratings` (``file`` "");
+    - one task file's component: that file's charged negatives (:func:`file_verdicts`), a check
+      counted once in the file (its most over views), summed over the component's checks;
+      Table C's comparison with the previous version is per subject, so it does not apply here;
+    - a whole table (``component`` ""): the sum of its components' negatives at that level.
+
+    Every level is rated with the one scale (:func:`~.model.rate`).
+    """
+    cr = component_ratings(results)
+    if cr.empty:
+        return pd.DataFrame(columns=LEVEL_COLUMNS)
+    subject = cr[["version", "table", "subject", "component", "negatives"]].assign(file="")
+    fv = file_verdicts(results)
+    per_file = (fv.groupby(["version", "table", "subject", "file", "component", "check"], sort=True)
+                ["negatives"].max().groupby(level=[0, 1, 2, 3, 4]).sum().reset_index())
+    parts = pd.concat([subject, per_file], ignore_index=True)
+    whole = parts.groupby(["version", "table", "subject", "file"], sort=True)["negatives"].sum() \
+        .reset_index().assign(component="")
+    out = pd.concat([parts, whole], ignore_index=True)
+    out["negatives"] = out["negatives"].astype(int)
+    out["rating"] = [rate(n) for n in out["negatives"]]
+    return out[LEVEL_COLUMNS].reset_index(drop=True)
 
 
 #: Columns of a run's ratings files (``ratings.parquet`` / ``.csv``): :func:`component_ratings`'s
