@@ -198,6 +198,23 @@ def test_the_tongue_stays_behind_the_teeth_or_passes_between_them(protrusion):
     assert (pos[out, N.T1 - 1, 0] > pos[out, N.UPPER_INCISOR_TIP - 1, 0]).sum() > 50
 
 
+def test_the_look_ahead_keeps_task_118_out_of_the_teeth_and_palate(protrusion):
+    """JW11 task 118 with the way out capped by the time until the jaw's gap shuts: no tongue
+    point through the teeth (the rubric's measure samples the edges) or the palate in any
+    frame, and in every frame where the gap is shut the tongue is not released in front."""
+    anim, face, profile = protrusion
+    pos = anim.positions.astype(np.float64)
+    parts = G.mouth_parts(face)
+    depth = G.tongue_teeth_penetration(pos, parts, rest=face.vertices)
+    mm = G.mm_per_unit(face.vertices, profile.jaw_length_mm)
+    assert max(depth["upper"].max(), depth["lower"].max()) * mm < 0.05
+    assert G.tongue_palate_penetration(pos, parts).max() == 0.0
+    gap = pos[:, N.UPPER_INCISOR_TIP - 1, 2] - pos[:, N.LOWER_INCISOR_TIP - 1, 2]
+    shut = gap <= 2.0 * K.COLLISION_MARGIN_MM / mm
+    assert shut.any()
+    assert anim.diagnostics["tongue_release_mm"].to_numpy()[shut].max() == 0.0
+
+
 def test_no_edge_cuts_the_teeth_while_t2_is_near_them(corpus, version):
     """JW16 task 118: the tongue far out while T2 is only a few mm behind where it passes the
     teeth; the station between T1 and T2 must be placed there in full, or the edge to T2

@@ -16,7 +16,7 @@ from cassi.data.face.model import FaceModel
 from cassi.versions import constants as cassi10_constants
 from cassi.versions.cassi10 import NoseClearanceStage, parameters_frame, place_tongue_tip
 from cassi.versions.cassi21 import Cassi21
-from cassi.versions.protocol import Stage, TaskContext
+from cassi.versions.protocol import PELLET_INDEX, Stage, TaskContext, held_pellets
 
 from cassi30 import constants as K
 from cassi30.collision import FrontTeeth, PalateHeights, soft_above, soft_below
@@ -31,6 +31,10 @@ _PELLETS = ("T1", "T2", "T3", "T4")
 #: the (frames x points x quads) temporaries of a 1,024-frame block stay in the CPU's cache,
 #: where those of a whole 20,000-frame task (hundreds of MB) ran at memory speed.
 BLOCK_FRAMES = 1024
+#: How far ahead the tongue looks for the jaw's gap shutting: 24 frames at XRMB's 146 Hz
+#: (164 ms) is longer than its way out takes to withdraw at TONGUE_SPEED_MM_S (the 12 mm turn
+#: and ~20 mm in front of the teeth in task 118: 80 ms).
+LOOKAHEAD_FRAMES = 24
 
 
 def _pharynx(ctx: TaskContext) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -74,6 +78,32 @@ def _gap(teeth: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
             teeth[:, N.UPPER_INCISOR_TIP - 1, 2] - margin)
 
 
+def _jaw_heights(ctx: TaskContext) -> tuple[np.ndarray, np.ndarray]:
+    """The lower incisor pellet's (MNI) Parke z and time (s) on every row of the recording,
+    held where invalid: what the frames after a chunk will do to the jaw's gap, read from the
+    data (so every chunk sees the same future, and chunks equal the whole task)."""
+    rec = ctx.rec
+    first = int(ctx.rows[0]) if len(ctx.rows) else 0
+    xy, _ = held_pellets(rec.xy_mm, rec.valid, first)
+    z = ctx.mapping.to_parke(xy[:, PELLET_INDEX["MNI"]])[:, 1]
+    t = np.asarray(rec.time_us, np.float64)[first:first + len(z)] * 1e-6
+    return np.concatenate([np.full(first, z[0] if len(z) else 0.0), z]), \
+        np.concatenate([np.full(first, t[0] if len(t) else 0.0), t])
+
+
+def _time_to_shut(jaw: tuple[np.ndarray, np.ndarray], rows: np.ndarray, gap: np.ndarray,
+                  time_s: np.ndarray) -> np.ndarray:
+    """Seconds until the jaw's gap (F,) next shuts within the look-ahead, predicted from the
+    lower incisor pellet's rise (the lower teeth move with it; the upper ones are fixed): +inf
+    where it stays open that long, 0 where it is shut."""
+    z, t = jaw
+    k = np.arange(LOOKAHEAD_FRAMES + 1)
+    idx = np.minimum(rows[:, None] + k, len(z) - 1)
+    shut = gap[:, None] - (z[idx] - z[rows][:, None]) <= 0.0          # (F, K+1)
+    dt = t[idx] - time_s[:, None]
+    return np.where(shut, dt, np.inf).min(axis=1)
+
+
 class ThickTongueStage:
     """The tongue of CASSI 3.0 (see the module docstring); replaces CASSI 1.0's tongue stage."""
 
@@ -101,12 +131,14 @@ class ThickTongueStage:
                                     front(ctx.start, lower, min_nx=K.FRONT_TEETH_MIN_NX)),
                 "pharynx": (pz, px, wall),
                 "thickness": station_thickness_mm() * scale,
+                "jaw_z": _jaw_heights(ctx),
             }
             ctx.state["tongue30"] = plan
         return plan
 
     def tongue(self, ctx: TaskContext, pellets: np.ndarray, teeth: np.ndarray,
-               time_s: np.ndarray, carried: dict) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+               time_s: np.ndarray, carried: dict, rows: np.ndarray
+               ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """The tongue's vertices for each frame.
 
         Parameters
@@ -119,6 +151,8 @@ class ThickTongueStage:
             The frames' times, seconds.
         carried : dict
             What the frames before these leave for them (:func:`slew`).
+        rows : int (F,)
+            The frames' rows of the recording (their place in ``plan["jaw_z"]``).
 
         Returns
         -------
@@ -146,7 +180,11 @@ class ThickTongueStage:
         # teeth. One quantity, so the front is at the gap's height before it passes the teeth
         # and stays there until it is back behind them.
         turn = K.TURN_MM * scale
-        way = slew(gap_open * (turn * approach + allowance), time_s,
+        # Never farther out than the tongue can withdraw before the gap next shuts (the jaw
+        # closing on a protruded tongue would otherwise snap it behind the teeth in a frame).
+        speed = K.TONGUE_SPEED_MM_S * scale
+        ahead = _time_to_shut(plan["jaw_z"], rows, hi - lo, time_s)
+        way = slew(np.minimum(gap_open * (turn * approach + allowance), speed * ahead), time_s,
                    K.TONGUE_SPEED_MM_S * scale, carried, "way out")
         toward, release = np.minimum(way / turn, 1.0), np.maximum(way - turn, 0.0)
         passing = self._pass_between_teeth(st, toward, incisors, margin, lo, hi,
@@ -242,7 +280,7 @@ class ThickTongueStage:
         plan = self._setup(ctx)
         first = np.stack([ctx.pellet(p)[:1] for p in _PELLETS], axis=1)      # (1, 4, 2)
         t0 = np.asarray(ctx.rec.time_us, np.float64)[ctx.rows[:1]] * 1e-6
-        v, _ = self.tongue(ctx, first, ctx.start[None], t0, {})
+        v, _ = self.tongue(ctx, first, ctx.start[None], t0, {}, ctx.rows[:1])
         ctx.start[plan["rows"]] = v.reshape(-1, 3)
 
     def animate(self, ctx: TaskContext, positions: np.ndarray) -> None:
@@ -253,7 +291,8 @@ class ThickTongueStage:
         diags = []
         for a in range(0, len(positions), BLOCK_FRAMES):
             b = a + BLOCK_FRAMES
-            v, diag = self.tongue(ctx, pellets[a:b], positions[a:b], time_s[a:b], carried)
+            v, diag = self.tongue(ctx, pellets[a:b], positions[a:b], time_s[a:b], carried,
+                                  ctx.rows[a:b])
             positions[a:b, plan["rows"]] = v.reshape(v.shape[0], -1, 3)
             diags.append(diag)
         ctx.diagnostics.update({k: np.concatenate([d[k] for d in diags])
