@@ -8,6 +8,7 @@ import json
 import shutil
 from pathlib import Path
 
+import pandas as pd
 import pytest
 
 from cassi.data.synth.corpus import make_corpus
@@ -200,3 +201,23 @@ def test_an_identical_render_passes_without_being_decoded(tmp_path, monkeypatch)
     c = write_run(tmp_path / "c", results_rows({}), images={KEY: image(2)})
     with pytest.raises(AssertionError, match="decoded"):
         gate(c, golden)
+
+
+def test_renders_named_by_the_same_digest_pass_without_being_read(corpus, tmp_path, monkeypatch):
+    """Night against night: both renders are store blobs named by their SHA-256, so equal
+    names are equal bytes; the gate neither decodes nor hashes them."""
+    cfg = RunConfig(out=tmp_path / "a", corpus=corpus, subjects=("JW45",), tasks=(2,),
+                    versions=("cassi-1.0",), views=("front",), stride=0, extremes=1, workers=1)
+    run(cfg, progress=False)
+    run(cfg.replace(out=tmp_path / "b"), progress=False)
+    paths = pd.read_parquet(tmp_path / "a" / "renders.parquet")["path"]
+    assert len(paths) and all(len(Path(p).stem) == 64 for p in paths)  # content-addressed
+
+    def no_reading(*_):
+        raise AssertionError("a render named by its digest was read")
+
+    monkeypatch.setattr(gates, "read_rgb8", no_reading)
+    monkeypatch.setattr(gates, "sha256_file", no_reading)
+    passed, results = gate(tmp_path / "a", tmp_path / "b")
+    image_gates = [r for r in results if r.gate == "image"]
+    assert passed and image_gates and {r.status for r in image_gates} == {"pass"}

@@ -294,8 +294,9 @@ class OutputStore:
         for ref in outputs.values():
             if not self._blob_ok(ref):
                 self._link_from_cache(ref)
-        atomic_write_text(self.manifest_path(key), json.dumps(
-            {**doc, "key": key}, indent=1, sort_keys=True))
+        # Not fsynced: the store's own manifest is; one lost in a crash is linked again.
+        atomic_write_bytes(self.manifest_path(key), json.dumps(
+            {**doc, "key": key}, indent=1, sort_keys=True).encode(), durable=False)
         self.reused.add(key)
         return {**doc, "key": key, "outputs": outputs}
 
