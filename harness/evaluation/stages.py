@@ -240,9 +240,12 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
         mask = np.asarray(res.mask)
         if mask.max(initial=0) > 255:
             raise ValueError("more than 255 parts: masks are stored as uint8")
+        # Deflated: a front frame's mask and depth are 329 KB raw, 55 KB deflated (3 ms), and
+        # were 4.4 of a night's 5.0 GB.
         files[f"masks-{f:06d}"] = (npz_bytes(mask=mask.astype(np.uint8),
                                              depth=np.asarray(res.depth, np.float32),
-                                             part_names=np.asarray(res.part_names, dtype=str)),
+                                             part_names=np.asarray(res.part_names, dtype=str),
+                                             compressed=True),
                                    ".npz")
     return StageOutput(files=files, meta={"render_s": round(seconds, 3)},
                        log=[f"rendered {len(job.frames)} frame(s) of {job.view} "

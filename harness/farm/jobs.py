@@ -210,12 +210,13 @@ def rows_to_bytes(rows: pd.DataFrame) -> bytes:
     return R.to_parquet_bytes(rows)
 
 
-def npz_bytes(**arrays) -> bytes:
-    """Deterministic ``.npz`` bytes (no timestamps: ``np.savez`` writes fixed zip dates)."""
+def npz_bytes(*, compressed: bool = False, **arrays) -> bytes:
+    """Deterministic ``.npz`` bytes (no timestamps: ``np.savez`` writes fixed zip dates);
+    ``compressed``: deflated, for arrays that are mostly background (part masks, depth)."""
     import numpy as np  # noqa: PLC0415
 
     buf = io.BytesIO()
-    np.savez(buf, **arrays)
+    (np.savez_compressed if compressed else np.savez)(buf, **arrays)
     return buf.getvalue()
 
 
