@@ -99,7 +99,8 @@ def test_outputs_travel_back_from_a_node_that_cannot_see_them(two_nodes, tmp_pat
     assert summary["counts"]["done"] == 3 and summary["counts"]["failed"] == 0  # geometry, render, image
     renders = pd.read_parquet(out / "renders.parquet")
     assert len(renders) and all((out / p).is_file() for p in renders["path"])
-    assert set(pd.read_parquet(out / "results.parquet")["view"]) == {"geometry", "front"}
+    # geometry and image checks, and cassi-2.1's lip criterion margin (view "criterion")
+    assert set(pd.read_parquet(out / "results.parquet")["view"]) == {"geometry", "front", "criterion"}
 
 
 def test_a_worker_that_cannot_see_the_corpus_says_so(two_nodes, tmp_path):
