@@ -16,7 +16,7 @@ from cassi.versions.mapping import XrmbToParke
 
 JAW_MM = 100.0
 F = 300
-FIDELITY = [c.name for c in R.checks_for(kind="fidelity")]
+FIDELITY = [c.name for c in R.checks_for(kind="fidelity", table="F")]
 
 
 @pytest.fixture(scope="module")

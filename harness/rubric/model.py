@@ -29,10 +29,12 @@ TABLES = {
     "D": ("5.8", "Maximum lip protrusion, task 118"),
     "E": ("5.9", "Jaw wagging, task 106"),
     "F": ("", "Fidelity to the recording (cassi-farm's addition, not in the thesis)"),
+    "G": ("", "Shape between the pellets (cassi-farm's addition, not in the thesis)"),
 }
 #: What each table judges, for the "versions compared" sentences.
 TABLE_TOPICS = {"A": "teeth, lips and tongue", "B": "face shape", "C": "lip placement",
-                "D": "maximum lip protrusion", "E": "jaw wagging", "F": "fidelity to the recording"}
+                "D": "maximum lip protrusion", "E": "jaw wagging", "F": "fidelity to the recording",
+                "G": "the lip shape between the pellets"}
 
 #: Versions in the order the thesis compares them (Table C: "compared with the previous version").
 VERSION_ORDER = ("parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1")
@@ -80,7 +82,7 @@ class Check:
     name : str
         Unique registry key (the ``check`` column).
     table : str
-        ``A`` .. ``F`` (:data:`TABLES`); ``thesis_table`` the thesis's table number ("" for F).
+        ``A`` .. ``G`` (:data:`TABLES`); ``thesis_table`` the thesis's table number ("" for F, G).
     component : str
         teeth, lips, tongue, palate, jaw, face ...
     view : str

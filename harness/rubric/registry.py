@@ -16,7 +16,8 @@ comes from the thesis or from looking at renders, as its reason says.
 Tables (``Check.table``): ``A`` teeth/lips/tongue per subject (thesis Table 5.3), ``B`` face
 shape at initialization (5.4), ``C`` lip placement across versions (5.5, summary 5.6), ``D``
 maximum lip protrusion, task 118 (5.8), ``E`` jaw wagging, task 106 (5.9), ``F`` fidelity to
-the recording (not the thesis's).
+the recording at the pellet sites and ``G`` the lip shape between the pellets (neither is the
+thesis's; G is charged apart from F because a face on the pellets can still be the wrong shape).
 """
 from __future__ import annotations
 
@@ -100,6 +101,29 @@ FIDELITY_MIN_RANGE_MM = 2.0
 #: three samples per syllable at 5 syllables a second) keeps the results table small.
 TRACE_TASKS = (106,)
 TRACE_STEP = 10
+
+#: Table G: the model's lips "touch" when their inner edges (61 over 58) are at most this far
+#: apart: lips_never_touch's threshold (Parke's neutral 1.35 mm reads as lips lightly touching
+#: on the front render).
+LIPS_TOUCH_MM = 1.5
+#: Table G, lip contact: the recording's lips touch where the UL-LL pellet distance is within
+#: CLOSURE_BAND_MM of its narrowest in the file, and are apart where it is OPEN_BAND_MM or more
+#: beyond it. The pellets sit on the vermilion borders, so the distance at contact is the two
+#: lips' thickness, which differs per speaker and is pressed thinner in a closure: Westbury &
+#: Hashi (1997, "Lip-pellet positions during vowels and labial consonants", J. Phonetics 25,
+#: 405-419) estimate the midline lip separation from the inter-pellet distance in just this way,
+#: as the distance beyond the closed-lip distance "as long as lip-body deformation is taken into
+#: account". Their per-speaker figures were not found here, so the bands are this rubric's own:
+#: 1.5 mm is LIPS_TOUCH_MM (what reads as touching on the render) and 4 mm lips_never_touch's
+#: "large separation"; frames between the two bands are not judged. The narrowest frame of a
+#: file without a bilabial closure is taken as closed: a limit of a per-file rule.
+CLOSURE_BAND_MM = LIPS_TOUCH_MM
+OPEN_BAND_MM = 4.0
+#: Table G, mouth width at rest: adult mouth width (cheilion-cheilion) 55.9 +- 3.3 mm (men) and
+#: 52.0 +- 4.0 mm (women) (Maxillofacial Plastic and Reconstructive Surgery 2019, 41:20,
+#: doi 10.1186/s40902-019-0191-7, Table 9: anthropometric norms, horizontal measurements). The
+#: band is the women's mean - 2 SD to the men's mean + 2 SD.
+MOUTH_WIDTH_RANGE_MM = (52.0 - 2 * 4.0, 55.9 + 2 * 3.3)
 
 # ----------------------------------------------------------------------------------------------
 # The aggregation rules (applied by cassi.harness.rubric.tables, tested branch by branch)
@@ -923,6 +947,64 @@ _ALL: list[Check] = [
           text="the jaw opens much less (or much more) than the speaker's",
           kind="fidelity",
           measure="fidelity:m_jaw_opening_range"),
+    # ---------------- Table G: the shape between the pellets (cassi-farm's addition) ----------------
+    Check(name="shape_lip_contact",
+          table="G",
+          component="lips",
+          view="front",
+          unit="J",
+          frames="frames the recording shows closed or open (UL-LL pellet distance)",
+          description="Youden's J of lip contact: share of the recording's closed frames (UL-LL within "
+                      "1.5 mm of its narrowest) where the model's inner edges 61-58 touch (<= 1.5 mm), plus "
+                      "share of its open frames (>= 4 mm beyond) where they are apart, minus 1",
+          thresholds=(0.5, 0.25),
+          negatives=(1, 2),
+          direction="lower",
+          reason="bands derived from the render, no published figure found: J below 0.5 means at least "
+                 "a quarter of the closures (a /p b m/ closure lasts 50-150 ms, 7-22 frames) are seen "
+                 "open or the openings shut; below 0.25 is little better than a face that never changes "
+                 "its contact, which scores 0 (two negatives). Closure bands: CLOSURE_BAND_MM / OPEN_BAND_MM "
+                 "(Westbury & Hashi 1997's inter-pellet separation)",
+          text="the lips do not meet where the speaker's lips meet, or meet where they part",
+          kind="fidelity",
+          measure="shape:m_lip_contact"),
+    Check(name="shape_mouth_width",
+          table="G",
+          component="lips",
+          view="front",
+          unit="mm",
+          frames="first frame",
+          description="how far the mouth width at rest (corner to corner, 2 |y(70)|, in the subject's mm "
+                      "by the 4.1.1 scale) lies outside the adult range 44.0-62.5 mm",
+          thresholds=(2.0, 10.0),
+          negatives=(1, 2),
+          direction="higher",
+          reason="range: MOUTH_WIDTH_RANGE_MM (published adult cheilion-cheilion widths, mean +- 2 SD). "
+                 "2 mm beyond it is past the pixel (1.3 mm at the preview front view) and the rounding "
+                 "of the outline; 10 mm, a fifth of a mouth, is a plainly wrong face (two negatives)",
+          text="the mouth is too wide or too narrow for a face",
+          kind="fidelity",
+          measure="shape:m_mouth_width"),
+    Check(name="shape_rounding",
+          table="G",
+          component="lips",
+          view="front",
+          unit="mm/mm",
+          frames="the recording's greatest protrusion",
+          description="mouth width lost since the first frame (2 |y(70)|) per mm of lip protrusion the "
+                      "recording gains (mean x of UL and LL), at the recording's most protruded frame",
+          thresholds=(0.5, 0.1),
+          negatives=(1, 2),
+          direction="lower",
+          reason="Abry & Boe ('Laws' for lips, Speech Communication 5, 1986, 97-104) relate lip width, "
+                 "height and protrusion: protruded (rounded) lips are narrower. Their slope was not found "
+                 "here; the band is derived from the render: a 6 mm protrusion that narrows the mouth by "
+                 "less than 3 mm (about one pixel a side at the preview front view) shows no rounding "
+                 "from the front; below 0.1 the corners do not move at all (two negatives)",
+          text="the lips protrude without rounding",
+          kind="fidelity",
+          measure="shape:m_rounding",
+          tasks=(118,)),
 ]
 
 #: The registry: check name -> :class:`Check`, in rubric order.

@@ -22,6 +22,7 @@ from cassi.harness.rubric.registry import TRACE_STEP, TRACE_TASKS, checks_for, g
 from cassi.data.face.model import build_face
 from cassi.versions.mapping import XrmbToParke
 from cassi.harness.rubric.fidelity import FidelityContext, traces
+from cassi.harness.rubric.shape import ShapeContext
 
 __all__ = ["criterion_rows", "run_geometry_checks", "run_image_checks"]
 
@@ -145,8 +146,14 @@ def _fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no) -> lis
     if face is None or jaw is None:
         raise CassiInputError("fidelity checks need the face and the subject's jaw length "
                               "(profile.jaw_length_mm) to map the model back to the recording")
-    ctx = FidelityContext.of(anim, recording, XrmbToParke.from_face(face.vertices, jaw))
-    rows = _measured_rows(checks_for(kind="fidelity"), ctx, ids, wanted, frame_no)
+    mapping = XrmbToParke.from_face(face.vertices, jaw)
+    ctx = FidelityContext.of(anim, recording, mapping)
+    rows = _measured_rows(checks_for(kind="fidelity", table="F"), ctx, ids, wanted, frame_no)
+    shape = [c for c in checks_for(kind="fidelity", table="G", task=ids["task"])
+             if wanted is None or c.name in wanted]
+    if shape:  # Table G: the lips' shape between the pellets, against the same recording
+        sctx = ShapeContext.of(anim, recording, mapping, G.mouth_parts(face))
+        rows.extend(_measured_rows(shape, sctx, ids, wanted, frame_no))
     if ids["task"] in TRACE_TASKS and wanted is None:
         rows.extend(dict(ids, negatives=0, **r) for r in traces(ctx, step=TRACE_STEP))
     return rows
