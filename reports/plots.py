@@ -59,7 +59,8 @@ def fidelity_errors(rows: pd.DataFrame, path: str | os.PathLike, *, versions: li
                     synthetic: bool) -> Path:
     """Table F: per articulator, a box per version of the virtual pellets' RMSE (mm) over the
     task files (whole-task rows of the fidelity error checks), with the check's thresholds."""
-    checks = [c for c in CHECKS.values() if c.kind == "fidelity" and c.unit == "mm"]
+    checks = [c for c in CHECKS.values()
+              if c.kind == "fidelity" and c.unit == "mm" and c.table == "F"]
     fig, axes = plt.subplots(1, len(checks), figsize=(3.2 * len(checks), 3.2), squeeze=False)
     for ax, c in zip(axes[0], checks):
         sub = rows[rows["check"] == c.name]

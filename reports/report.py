@@ -111,7 +111,8 @@ def _fidelity_plots(run: Run, out: Path) -> list[dict]:
     figs = []
     res = run.results
     err = res[(res["frame"] == -1) & res["check"].isin(
-        [c.name for c in CHECKS.values() if c.kind == "fidelity" and c.unit == "mm"])]
+        [c.name for c in CHECKS.values()
+         if c.kind == "fidelity" and c.unit == "mm" and c.table == "F"])]
     if len(err):
         path = plots.fidelity_errors(err, out / "plots" / "fidelity_errors.png",
                                      versions=order_versions(err["version"].unique()),
