@@ -66,7 +66,7 @@ def test_agree_on_a_good_file(run, tmp_path, capsys):
     ("JW11,,cassi-2.0,A,lips,SPLENDID", "unknown rating 'SPLENDID'"),
     ("JW99,,cassi-2.0,A,lips,GOOD", "unknown subject 'JW99'"),
     ("JW11,,cassi-9.9,A,lips,GOOD", "unknown version 'cassi-9.9'"),
-    ("JW11,,cassi-2.0,G,lips,GOOD", "unknown table 'G'"),
+    ("JW11,,cassi-2.0,H,lips,GOOD", "unknown table 'H'"),
     ("JW11,,cassi-2.0,B,,GOOD", "the run has no Table B for JW11, cassi-2.0"),
     ("JW11,118,cassi-2.0,A,lips,GOOD", "no task file 118"),
     ("JW11,,cassi-2.0,A,nose,GOOD", "unknown component 'nose'"),
