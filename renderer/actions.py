@@ -1,4 +1,4 @@
-"""What ``cassi render`` and ``cassi animate`` do (parsers: :mod:`cassi.renderer.commands`),
+"""What ``cassi render``, ``cassi animate`` and ``cassi export`` do (parsers: :mod:`cassi.renderer.commands`),
 with the positions provider the harness named there."""
 from __future__ import annotations
 
@@ -10,8 +10,10 @@ import numpy as np
 from cassi.common.errors import CassiInputError
 from cassi.common.lazy import resolve
 from cassi.data.face.topology import render_topology
+from cassi.data.xrmb.files import NOMINAL_PERIOD_US
 from cassi.renderer.animate import animate_positions
 from cassi.renderer.commands import NEUTRAL
+from cassi.renderer.gltf import write_glb
 from cassi.renderer.images import write_exr, write_mask_png, write_png, write_sidecar
 from cassi.renderer.render import FaceRenderer
 
@@ -68,4 +70,30 @@ def cmd_animate(args) -> int:
                                 preset=args.preset, variant=args.variant, fps=args.fps)
     print(summary["path"])
     log.info("animation: %s", summary)
+    return 0
+
+
+def cmd_export(args) -> int:
+    provider = resolve(args.positions_provider)
+    out = Path(args.out)
+    if out.suffix.lower() != ".glb":
+        raise CassiInputError("--out must end in .glb (binary glTF 2.0)", path=out)
+    if out.is_dir():
+        raise CassiInputError("--out is a directory", path=out)
+    if args.stride < 1:
+        raise CassiInputError(f"--stride must be at least 1, not {args.stride}")
+    face, frames, positions = provider(args.corpus, args.subject, args.task, args.rep, args.version)
+    if args.version == NEUTRAL:
+        frames, positions = frames[:1], positions[:1]  # a still face: no animation
+    frames, positions = frames[::args.stride], positions[::args.stride]
+    if not len(frames):
+        raise CassiInputError("the task has no animated frame")
+    summary = write_glb(out, render_topology(face), face.vertices, positions,
+                        frames * (NOMINAL_PERIOD_US * 1e-6), quantize=args.positions == "int16",
+                        name=f"{args.subject} task {args.task} rep {args.rep} {args.version}")
+    print(out)
+    log.info("glTF: %d frame(s), %d vertices (%d moving), %d bytes, %d bytes of deltas per "
+             "frame, %.0f bytes per frame in all", summary.frames, summary.vertices,
+             summary.moving_vertices, summary.bytes, summary.target_bytes_per_frame,
+             summary.bytes_per_frame)
     return 0

@@ -1,4 +1,4 @@
-"""The ``cassi render`` and ``cassi animate`` command lines, given where positions come from.
+"""The ``cassi render``, ``cassi animate`` and ``cassi export`` command lines, given where positions come from.
 
 The renderer takes vertex positions only: it may import ``cassi.data`` but not the versions or
 the harness. The harness registers these commands (:mod:`cassi.harness.render_commands`) with a
@@ -26,7 +26,7 @@ NEUTRAL = "neutral"
 PositionsProvider = Callable[..., tuple[object, np.ndarray, np.ndarray]]
 
 
-def _common(p: argparse.ArgumentParser) -> None:
+def _task(p: argparse.ArgumentParser) -> None:
     p.add_argument("--corpus", default=None,
                    help="corpus directory (see cassi corpus; default: the embedded synthetic one)")
     p.add_argument("--subject", required=True, help="subject name, e.g. JW45")
@@ -35,6 +35,10 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--version", required=True,
                    help=f"'{NEUTRAL}' (the subject's neutral face) or a registered version "
                         "(cassi versions)")
+
+
+def _common(p: argparse.ArgumentParser) -> None:
+    _task(p)
     p.add_argument("--preset", default="preview", choices=PRESET_NAMES, help="quality preset")
     p.add_argument("--variant", default=None,
                    help="Mitsuba variant (cuda_ad_rgb, llvm_ad_rgb, scalar_rgb; default: "
@@ -42,7 +46,7 @@ def _common(p: argparse.ArgumentParser) -> None:
 
 
 def register(sub, *, positions_provider: PositionsProvider | str) -> None:
-    """Add ``render`` and ``animate`` to the ``cassi`` subcommands, animating through
+    """Add ``render``, ``animate`` and ``export`` to the ``cassi`` subcommands, animating through
     ``positions_provider`` (or the ``"module:function"`` that names it)."""
     provider = positions_provider
 
@@ -67,3 +71,17 @@ def register(sub, *, positions_provider: PositionsProvider | str) -> None:
     a.add_argument("--fps", type=float, default=None, help="frames per second (default: real time)")
     a.add_argument("--out", required=True, help="output .mp4 or .gif")
     a.set_defaults(func="cassi.renderer.actions:cmd_animate", positions_provider=provider)
+
+    e = sub.add_parser("export", help="write a task's animated face as glTF 2.0 (.glb)",
+                       description="Write the mirrored face of a task as binary glTF 2.0: one "
+                                   "mesh, a primitive and material per part, one morph target "
+                                   "per kept frame keyed at the recording's times (6866 us x "
+                                   "STRIDE). Opens in Blender (File > Import > glTF 2.0) and "
+                                   "any glTF viewer.")
+    _task(e)
+    e.add_argument("--format", default="gltf", choices=("gltf",), help="output format (gltf)")
+    e.add_argument("--stride", type=int, default=1, help="keep every Nth frame (default 1)")
+    e.add_argument("--positions", default="int16", choices=("int16", "float32"),
+                   help="int16: quantised (KHR_mesh_quantization, the default); float32: exact")
+    e.add_argument("--out", required=True, help="output .glb")
+    e.set_defaults(func="cassi.renderer.actions:cmd_export", positions_provider=provider)

@@ -1,0 +1,299 @@
+"""The animated face as one binary glTF 2.0 file (.glb), for Blender and any glTF viewer.
+
+Layout:
+
+- one vertex array: the mirrored render topology merged as in
+  :meth:`cassi.data.face.topology.RenderTopology.mesh` (same vertex order), the neutral face;
+- mesh 0 holds the parts that move, one primitive per part with a material of the part's
+  colour (:func:`cassi.renderer.views.material_for`), and one morph target per kept frame: the
+  position deltas from the neutral face, sparse (only the vertices that move in some frame, so
+  one index list serves every target); mesh 1 holds the parts that never move (no targets);
+- one animation: a weights channel on mesh 0's node, key k at the recording time of frame k,
+  weight 1 on target k and 0 on the others (a sparse accessor, so it grows linearly with the
+  frames), LINEAR interpolation (between keys, the positions interpolate linearly);
+- axes: glTF is +Y up and looks at the face from +Z: glTF (x, y, z) = Parke (y, z, x) (a cyclic
+  permutation, so triangle orientation is kept), in metres (MM_PER_UNIT).
+
+``quantize=True`` stores positions and deltas as int16 (KHR_mesh_quantization, declared in
+extensionsUsed and extensionsRequired) on one grid whose step and origin sit in the root node's
+scale and translation; a frame then decodes to within half a step of its float positions.
+No normals are written: viewers compute them from the animated positions.
+"""
+from __future__ import annotations
+
+import json
+import os
+import struct
+from dataclasses import dataclass
+
+import numpy as np
+
+from cassi.common.atomic import atomic_write_bytes
+from cassi.data.face.numbering import MM_PER_UNIT
+from cassi.data.face.topology import RenderTopology
+from cassi.renderer.views import material_for
+
+__all__ = ["GlbSummary", "glb_bytes", "write_glb", "merged_gather", "AXES", "METRES_PER_UNIT",
+           "QUANTIZATION"]
+
+#: glTF axis i is Parke axis AXES[i].
+AXES = (1, 2, 0)
+METRES_PER_UNIT = MM_PER_UNIT / 1000.0
+QUANTIZATION = "KHR_mesh_quantization"
+#: Largest quantised magnitude used (int16 holds 32767; the rest is room for rounding).
+_QMAX = 32000
+
+_FLOAT, _SHORT, _USHORT, _UINT = 5126, 5122, 5123, 5125
+_ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
+_GLB_MAGIC, _JSON_CHUNK, _BIN_CHUNK = 0x46546C67, 0x4E4F534A, 0x004E4942
+
+
+@dataclass(frozen=True)
+class GlbSummary:
+    """What a .glb holds and how big it is."""
+
+    frames: int
+    vertices: int          # merged render vertices
+    moving_vertices: int   # vertices a morph target stores (sparse)
+    quantized: bool
+    step: float            # quantisation step, Parke units (0.0 for float32)
+    bytes: int             # the whole file
+    target_bytes_per_frame: int   # one morph target's stored deltas (BIN only)
+
+    @property
+    def bytes_per_frame(self) -> float:
+        """The whole file over its frames (JSON, keys and the still mesh included)."""
+        return self.bytes / self.frames
+
+
+def merged_gather(topology: RenderTopology) -> tuple[np.ndarray, np.ndarray]:
+    """Face row (int64) and y sign (float64) of each merged vertex, in the order
+    :meth:`RenderTopology.mesh` gives them (first use, parts in order)."""
+    seen: dict[tuple[int, float], int] = {}
+    for part in topology.parts.values():
+        for g, s in zip(part.gather.tolist(), part.sign.tolist()):
+            seen.setdefault((g, s), len(seen))
+    keys = list(seen)
+    return (np.asarray([k[0] for k in keys], np.int64),
+            np.asarray([k[1] for k in keys], np.float64))
+
+
+def _gltf_positions(positions: np.ndarray, gather: np.ndarray, sign: np.ndarray) -> np.ndarray:
+    """Face positions (..., V, 3) -> merged, mirrored vertices (..., W, 3) on glTF axes, Parke
+    units, float64."""
+    p = np.asarray(positions, np.float64)[..., gather, :]
+    p[..., 1] *= sign
+    return p[..., list(AXES)]
+
+
+class _Bin:
+    """The BIN chunk, built as bufferViews, each 4-byte aligned."""
+
+    def __init__(self):
+        self.chunks: list[bytes] = []
+        self.size = 0
+        self.views: list[dict] = []
+
+    def view(self, data: bytes, *, target: int | None = None, stride: int | None = None) -> int:
+        view = {"buffer": 0, "byteOffset": self.size, "byteLength": len(data)}
+        if target is not None:
+            view["target"] = target
+        if stride is not None:
+            view["byteStride"] = stride
+        self.chunks.append(data)
+        pad = -len(data) % 4
+        self.chunks.append(b"\0" * pad)
+        self.size += len(data) + pad
+        self.views.append(view)
+        return len(self.views) - 1
+
+    def data(self) -> bytes:
+        return b"".join(self.chunks)
+
+
+def _vec3_rows(values: np.ndarray, dtype) -> bytes:
+    """(N, 3) as vertex-attribute rows: int16 rows are padded to 8 bytes (glTF aligns every
+    vertex-attribute element to 4 bytes)."""
+    v = np.ascontiguousarray(values, dtype)
+    if v.dtype.itemsize == 2:
+        v = np.concatenate([v, np.zeros((len(v), 1), v.dtype)], axis=1)
+    return v.tobytes()
+
+
+def _minmax(values: np.ndarray, quantized: bool) -> tuple[list, list]:
+    conv = int if quantized else float
+    return ([conv(x) for x in values.min(axis=0)], [conv(x) for x in values.max(axis=0)])
+
+
+def glb_bytes(topology: RenderTopology, neutral: np.ndarray, positions: np.ndarray,
+              times_s: np.ndarray, *, quantize: bool = True,
+              name: str = "CASSI face") -> tuple[bytes, GlbSummary]:
+    """The .glb of ``positions`` float (F, V, 3) Parke units (face numbering) keyed at
+    ``times_s`` (F,) seconds, as morph targets over ``neutral`` (V, 3)."""
+    # float32 like the positions, so that a vertex that does not move has a delta of exactly 0
+    neutral = np.asarray(neutral, np.float32)
+    positions = np.asarray(positions, np.float32)
+    times =  np.asarray(times_s, np.float64)
+    V = topology.vertex_count
+    if topology.half:
+        raise ValueError("export the whole (mirrored) head, not the half topology")
+    if positions.ndim != 3 or positions.shape[1:] != (V, 3) or not len(positions):
+        raise ValueError(f"positions must be (F >= 1, {V}, 3), not {positions.shape}")
+    if times.shape != (len(positions),) or np.any(np.diff(times) <= 0):
+        raise ValueError("times_s must be one strictly increasing time per frame")
+    if not (np.all(np.isfinite(positions)) and np.all(np.isfinite(neutral))):
+        raise ValueError("positions must be finite")
+    F = len(positions)
+    if F * F >= 2 ** 32:
+        raise ValueError(f"{F} frames is too many for one weights accessor; use a stride")
+
+    gather, sign = merged_gather(topology)
+    W = len(gather)
+    base = _gltf_positions(neutral, gather, sign)            # (W, 3)
+    frames = _gltf_positions(positions, gather, sign)        # (F, W, 3)
+    if quantize:
+        lo = np.minimum(base.min(axis=0), frames.min(axis=(0, 1)))
+        hi = np.maximum(base.max(axis=0), frames.max(axis=(0, 1)))
+        origin = (lo + hi) / 2
+        # one grid for positions and deltas: both must fit in int16
+        reach = max(float(np.max(hi - lo)) / 2, float(np.abs(frames - base).max()), 1e-9)
+        step = reach / _QMAX
+        q_base = np.rint((base - origin) / step)
+        stored_base = q_base.astype(np.int16)
+        deltas = (np.rint((frames - origin) / step) - q_base).astype(np.int16)
+        ctype, vdtype = _SHORT, np.int16
+    else:
+        origin, step = np.zeros(3), 0.0
+        stored_base = (base * METRES_PER_UNIT).astype(np.float32)
+        deltas = (frames * METRES_PER_UNIT - base * METRES_PER_UNIT).astype(np.float32)
+        ctype, vdtype = _FLOAT, np.float32
+    moving = np.flatnonzero(np.any(deltas != 0, axis=(0, 2)))
+
+    _, tris, part_of = topology.mesh(neutral)
+    part_names = list(topology.parts)
+    moving_set = np.zeros(W, bool)
+    moving_set[moving] = True
+    animated = [i for i in range(len(part_names)) if moving_set[tris[part_of == i]].any()]
+    still = [i for i in range(len(part_names)) if i not in animated]
+
+    buf = _Bin()
+    accessors: list[dict] = []
+
+    def accessor(**kw) -> int:
+        accessors.append(kw)
+        return len(accessors) - 1
+
+    pos_view = buf.view(_vec3_rows(stored_base, vdtype), target=_ARRAY_BUFFER,
+                        stride=8 if quantize else 12)
+    lo_b, hi_b = _minmax(stored_base, quantize)
+    pos_acc = accessor(bufferView=pos_view, componentType=ctype, count=W, type="VEC3",
+                       min=lo_b, max=hi_b)
+
+    index_dtype, index_ctype = (np.uint16, _USHORT) if W < 65535 else (np.uint32, _UINT)
+    index_view = buf.view(np.concatenate(
+        [tris[part_of == i].ravel() for i in range(len(part_names))]).astype(index_dtype).tobytes(),
+        target=_ELEMENT_ARRAY_BUFFER)
+    index_acc, offset = [], 0
+    for i in range(len(part_names)):
+        n = int((part_of == i).sum()) * 3
+        index_acc.append(accessor(bufferView=index_view, byteOffset=offset,
+                                  componentType=index_ctype, count=n, type="SCALAR"))
+        offset += n * np.dtype(index_dtype).itemsize
+
+    targets: list[dict] = []
+    if len(moving):
+        sp_dtype, sp_ctype = (np.uint16, _USHORT) if W <= 65535 else (np.uint32, _UINT)
+        sp_view = buf.view(moving.astype(sp_dtype).tobytes())
+        per_frame = len(moving) * 3 * np.dtype(vdtype).itemsize
+        val_view = buf.view(np.ascontiguousarray(deltas[:, moving], vdtype).tobytes())
+        for k in range(F):
+            d = deltas[k, moving]
+            lo_d, hi_d = _minmax(np.vstack([d, np.zeros((1, 3), vdtype)]) if len(moving) < W
+                                 else d, quantize)
+            targets.append({"POSITION": accessor(
+                componentType=ctype, count=W, type="VEC3", min=lo_d, max=hi_d,
+                sparse={"count": int(len(moving)),
+                        "indices": {"bufferView": sp_view, "componentType": sp_ctype},
+                        "values": {"bufferView": val_view, "byteOffset": k * per_frame}})})
+    else:
+        per_frame = 0
+
+    materials = []
+    for pname in part_names:
+        m = material_for(pname)
+        materials.append({"name": pname, "doubleSided": True, "pbrMetallicRoughness": {
+            "baseColorFactor": [*map(float, m.rgb), 1.0], "metallicFactor": 0.0,
+            "roughnessFactor": float(min(1.0, max(m.alpha, 0.05) ** 0.5))}})
+
+    def primitive(i: int, with_targets: bool) -> dict:
+        prim = {"attributes": {"POSITION": pos_acc}, "indices": index_acc[i], "material": i,
+                "mode": 4}
+        if with_targets:
+            prim["targets"] = targets
+        return prim
+
+    meshes, nodes, children = [], [], []
+    if animated:
+        mesh = {"name": "animated parts", "primitives": [primitive(i, bool(targets))
+                                                         for i in animated]}
+        if targets:
+            mesh["weights"] = [0.0] * F
+            mesh["extras"] = {"targetNames": [f"frame {k}" for k in range(F)]}
+        meshes.append(mesh)
+    if still:
+        meshes.append({"name": "still parts", "primitives": [primitive(i, False) for i in still]})
+    for mi, mesh in enumerate(meshes):
+        nodes.append({"name": mesh["name"], "mesh": mi})
+        children.append(mi)
+    root = {"name": name, "children": children}
+    if quantize:
+        root["translation"] = [float(x * METRES_PER_UNIT) for x in origin]
+        root["scale"] = [float(step * METRES_PER_UNIT)] * 3
+    nodes.append(root)
+
+    gltf: dict = {"asset": {"version": "2.0", "generator": "cassi-farm cassi export"},
+                  "scene": 0, "scenes": [{"name": name, "nodes": [len(nodes) - 1]}],
+                  "nodes": nodes, "meshes": meshes, "materials": materials}
+    if targets:
+        t = (times - times[0]).astype(np.float32)
+        t_acc = accessor(bufferView=buf.view(t.tobytes()), componentType=_FLOAT, count=F,
+                         type="SCALAR", min=[float(t[0])], max=[float(t[-1])])
+        diag = np.arange(F, dtype=np.uint64) * (F + 1)   # key k: weight 1 on target k
+        w_acc = accessor(componentType=_FLOAT, count=F * F, type="SCALAR", sparse={
+            "count": F,
+            "indices": {"bufferView": buf.view(diag.astype(np.uint32).tobytes()),
+                        "componentType": _UINT},
+            "values": {"bufferView": buf.view(np.ones(F, np.float32).tobytes())}})
+        gltf["animations"] = [{"name": "task", "samplers": [
+            {"input": t_acc, "output": w_acc, "interpolation": "LINEAR"}],
+            "channels": [{"sampler": 0, "target": {"node": 0, "path": "weights"}}]}]
+    gltf["accessors"] = accessors
+    gltf["bufferViews"] = buf.views
+    gltf["buffers"] = [{"byteLength": buf.size}]
+    if quantize:
+        gltf["extensionsUsed"] = [QUANTIZATION]
+        gltf["extensionsRequired"] = [QUANTIZATION]
+
+    text = json.dumps(gltf, separators=(",", ":")).encode()
+    data = _glb(text, buf.data())
+    return data, GlbSummary(frames=F, vertices=W, moving_vertices=int(len(moving)),
+                            quantized=quantize, step=float(step), bytes=len(data),
+                            target_bytes_per_frame=int(per_frame))
+
+
+def _glb(text: bytes, binary: bytes) -> bytes:
+    text += b" " * (-len(text) % 4)       # the JSON chunk pads with spaces, BIN with zeros
+    binary += b"\0" * (-len(binary) % 4)
+    total = 12 + 8 + len(text) + 8 + len(binary)
+    return b"".join([struct.pack("<III", _GLB_MAGIC, 2, total),
+                     struct.pack("<II", len(text), _JSON_CHUNK), text,
+                     struct.pack("<II", len(binary), _BIN_CHUNK), binary])
+
+
+def write_glb(path: str | os.PathLike, topology: RenderTopology, neutral: np.ndarray,
+              positions: np.ndarray, times_s: np.ndarray, *, quantize: bool = True,
+              name: str = "CASSI face") -> GlbSummary:
+    """Write :func:`glb_bytes` to ``path`` atomically."""
+    data, summary = glb_bytes(topology, neutral, positions, times_s, quantize=quantize, name=name)
+    atomic_write_bytes(path, data)
+    return summary
