@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import hashlib
 import json
+import multiprocessing
 import os
 import re
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import jinja2
@@ -273,6 +275,28 @@ def _audio_for(run: Run):
     return find
 
 
+#: Processes that encode a report's videos at once (each video is one ffmpeg stream, the
+#: report's longest part: 57 task files' four-view and comparison videos took most of 155 s).
+REPORT_WORKERS = max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+                     else (os.cpu_count() or 1))
+
+
+def _encode(specs, *, stride: int, media_cache: Path | None) -> list[dict | None]:
+    """:func:`media.task_video` of every spec, in order; on :data:`REPORT_WORKERS` processes
+    when there are several videos (the farm's workers are done by the time a report is made)."""
+    calls = [dict(renders=g, dest=dest, stride=stride, audio=audio, cache=media_cache,
+                  columns=columns) for _, _, dest, g, audio, columns in specs]
+    if REPORT_WORKERS < 2 or len(calls) < 2:
+        return [media.task_video(**c) for c in calls]
+    ctx = multiprocessing.get_context("spawn")  # as the farm: no forked threads of the parent
+    with ProcessPoolExecutor(min(REPORT_WORKERS, len(calls)), mp_context=ctx) as pool:
+        return list(pool.map(_task_video, calls))
+
+
+def _task_video(kwargs: dict) -> dict | None:
+    return media.task_video(**kwargs)
+
+
 def _videos(run: Run, out: Path, media_cache: Path | None = None) -> list[dict]:
     """From the renders on the run's ``animate_stride`` grid: a four-view video per task file
     and version that was rendered in every view, and the versions side by side wherever
@@ -281,13 +305,10 @@ def _videos(run: Run, out: Path, media_cache: Path | None = None) -> list[dict]:
     if not len(run.renders) or stride < 1:
         return []
     audio_for = _audio_for(run)
-    videos = []
+    specs = []  # (kind, label, dest, renders, audio, columns), encoded together below
 
-    def add(kind, label, result, dest):
-        if result is not None:
-            videos.append({"kind": kind, "label": label, "href": dest.relative_to(out).as_posix(),
-                           "fps": result["fps"], "frames": result["frames"],
-                           "seconds": result["seconds"], "audio": result["audio"]})
+    def add(kind, label, g, dest, audio, columns):
+        specs.append((kind, label, dest, g, audio, columns))
 
     for (subject, task, rep), g in run.renders.groupby(["subject", "task", "rep"]):
         task, rep = int(task), int(rep)
@@ -307,15 +328,20 @@ def _videos(run: Run, out: Path, media_cache: Path | None = None) -> list[dict]:
             if on_grid[version] != set(all_views):
                 continue  # rendered for the comparisons only
             dest = out / "videos" / f"{stem}_{slug(version)}.mp4"
-            add("task", f"{name}, {version}",
-                media.task_video(g, dest, stride=stride, audio=audio, cache=media_cache,
-                                 columns=[(version, v) for v in all_views]), dest)
+            add("task", f"{name}, {version}", g, dest, audio,
+                [(version, v) for v in all_views])
         compared = [v for v in versions if COMPARISON_VIEW in on_grid[v]]
         if len(compared) > 1:
             dest = out / "animations" / f"{stem}_{COMPARISON_VIEW}.mp4"
-            add("comparison", f"{name}, {COMPARISON_VIEW} view ({', '.join(compared)})",
-                media.task_video(g, dest, stride=stride, audio=audio, cache=media_cache,
-                                 columns=[(v, COMPARISON_VIEW) for v in compared]), dest)
+            add("comparison", f"{name}, {COMPARISON_VIEW} view ({', '.join(compared)})", g,
+                dest, audio, [(v, COMPARISON_VIEW) for v in compared])
+    results = _encode(specs, stride=stride, media_cache=media_cache)
+    videos = []
+    for (kind, label, dest, *_), result in zip(specs, results):
+        if result is not None:
+            videos.append({"kind": kind, "label": label, "href": dest.relative_to(out).as_posix(),
+                           "fps": result["fps"], "frames": result["frames"],
+                           "seconds": result["seconds"], "audio": result["audio"]})
     return videos
 
 
