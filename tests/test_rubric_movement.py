@@ -56,7 +56,7 @@ def test_registered_in_c_and_e_with_table_f_s_ranges():
     assert (c.table, c.component, o.table, o.component) == ("C", "lips", "C", "lips")
     assert (j.table, j.component, j.tasks) == ("E", "jaw", (106,))
     assert c.charged_with == "lips_never_touch"   # within C: Table A's row judged again there
-    assert o.thresholds == j.thresholds == (0.5, 0.1)
+    assert o.thresholds == j.thresholds == (0.5, 0.1) and c.thresholds == (0.75, 0.25)
 
 
 def test_a_still_face_is_not_excellent_in_c_or_e(face):
@@ -90,16 +90,31 @@ def test_a_face_that_follows_the_recording_earns_neither(face):
     assert cell(out, "E", "jaw")["rating"] == "EXCELLENT"
 
 
+def test_lips_that_miss_half_the_closures_earn_one_negative(face):
+    rec = recording()
+    pos = lips_that_follow(face, rec)
+    a = np.linalg.norm(rec.xy_mm[:, 0] - rec.xy_mm[:, 1], axis=1)
+    closed = np.flatnonzero(a <= a.min() + R.registry.CLOSURE_BAND_MM)
+    missed = closed[: len(closed) // 2]                       # the lower lip 3 mm down there
+    units = 3.0 * float(XrmbToParke.from_face(face.vertices, JAW_MM).scale)
+    for r in LOWER:
+        pos[missed, r - 1, 2] -= units
+    r = whole(judge(face, pos, rec))
+    assert r.loc["lips_do_not_close", "value"] == pytest.approx(0.5, abs=0.02)
+    assert r.loc["lips_do_not_close", "negatives"] == 1
+    assert r.loc["lips_never_touch", "negatives"] == 0         # they do touch: C's own charge
+
+
 def test_lips_held_apart_are_charged_once_in_c(face):
     rec = recording()
     out = judge(face, still(face, drop_mm=5.0), rec)
     r = whole(out)
     assert r.loc["lips_never_touch", "negatives"] == 2          # 4 mm or more: "large separation"
-    assert r.loc["lips_do_not_close", "negatives"] == 1         # its own verdict ...
+    assert r.loc["lips_do_not_close", "negatives"] == 2         # its own verdict ...
     v = R.verdicts(out).set_index(["table", "check"])
     # ... not charged again in C, where Table A's lips_never_touch charges the same fault
     assert v.loc[("C", "lips_do_not_close"), "negatives"] == 0
-    assert v.loc[("C", "lips_do_not_close"), "raw_negatives"] == 1
+    assert v.loc[("C", "lips_do_not_close"), "raw_negatives"] == 2
     assert "lips_never_touch" in v.loc[("C", "lips_do_not_close"), "note"]
     c = cell(out, "C", "lips")
     assert c["negatives"] == 2 + 2                               # never touch + do not open
