@@ -108,6 +108,18 @@ def _contact(ctx: ShapeContext):
     return closed, opened, gap <= LIPS_TOUCH_MM, lo
 
 
+def _shown(gap, closed, opened, touch) -> int:
+    """The frame shown: a closed frame left open (the widest), else an open frame shut (the
+    tightest), else the first closed frame."""
+    missed_closed = np.flatnonzero(closed & ~touch)
+    missed_open = np.flatnonzero(opened & touch)
+    if missed_closed.size:
+        return int(missed_closed[np.argmax(gap[missed_closed])])
+    if missed_open.size:
+        return int(missed_open[np.argmin(gap[missed_open])])
+    return int(np.flatnonzero(closed)[0])
+
+
 def m_lip_contact(ctx: ShapeContext) -> Measurement:
     """Youden's J of the model's lip contact against the recording's: the share of the
     recording's closed frames where the model's lips touch, plus the share of its open frames
@@ -118,36 +130,26 @@ def m_lip_contact(ctx: ShapeContext) -> Measurement:
     if isinstance(c, Measurement):
         return c
     closed, opened, touch, lo = c
-    gap = ctx.gap
     hit_closed = float(np.mean(touch[closed]))
     hit_open = float(np.mean(~touch[opened]))
     j = hit_closed + hit_open - 1.0
-    # frame shown: a closed frame left open (the widest), else an open frame shut (the tightest)
-    missed_closed = np.flatnonzero(closed & ~touch)
-    missed_open = np.flatnonzero(opened & touch)
-    if missed_closed.size:
-        f = int(missed_closed[np.argmax(gap[missed_closed])])
-    elif missed_open.size:
-        f = int(missed_open[np.argmin(gap[missed_open])])
-    else:
-        f = int(np.flatnonzero(closed)[0])
+    f = _shown(ctx.gap, closed, opened, touch)
     return Measurement(j, f, f"recording closed in {closed.sum()} frames (UL-LL within "
                              f"{CLOSURE_BAND_MM} mm of its narrowest {lo:.1f} mm): model lips touch "
                              f"(61-58 gap <= {LIPS_TOUCH_MM} mm) in {hit_closed:.0%}; open in "
                              f"{opened.sum()} frames: model lips apart in {hit_open:.0%}; J = {j:.2f}",
-                       frame_value=float(gap[f]))
+                       frame_value=float(ctx.gap[f]))
 
 
 def m_lip_closure(ctx: ShapeContext) -> Measurement:
     """The closing half of :func:`m_lip_contact`: the share of the recording's closed frames
-    where the model's lips touch (frame shown: the widest of those left open)."""
+    where the model's lips touch."""
     c = _contact(ctx)
     if isinstance(c, Measurement):
         return c
-    closed, _, touch, lo = c
+    closed, opened, touch, lo = c
     share = float(np.mean(touch[closed]))
-    missed = np.flatnonzero(closed & ~touch)
-    f = int(missed[np.argmax(ctx.gap[missed])]) if missed.size else int(np.flatnonzero(closed)[0])
+    f = _shown(ctx.gap, closed, opened, touch)  # m_lip_contact's frame: no new frame to render
     return Measurement(share, f, f"recording closed in {closed.sum()} frames (UL-LL within "
                                  f"{CLOSURE_BAND_MM} mm of its narrowest {lo:.1f} mm): model lips "
                                  f"touch in {share:.0%}", frame_value=float(ctx.gap[f]))
