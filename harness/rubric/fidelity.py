@@ -1,7 +1,7 @@
 """Table F, fidelity to the recording (cassi-farm's addition, not the thesis's).
 
 The thesis's judges saw speech moving; a face that stands still commits none of Tables A-E's
-faults. Here the model's pellet sites -- 67 (UL), 49 (LL), 289-292 (T1-T4), 258 (MNI) and the
+geometric faults (Tables C and E judge its movement with the ranges below: ``tract_reach``). Here the model's pellet sites -- 67 (UL), 49 (LL), 289-292 (T1-T4), 258 (MNI) and the
 midpoint of 281 and 286 (MNM) -- are mapped back into the XRMB frame in millimetres with the
 thesis's own mapping (:class:`cassi.versions.mapping.XrmbToParke`, section 4.1.1) and compared,
 frame by frame, with the pellets the version animated.
@@ -26,7 +26,8 @@ from cassi.harness.rubric.registry import FIDELITY_MIN_RANGE_MM
 
 __all__ = ["ARTICULATORS", "TRACT_VARIABLES", "FidelityContext", "virtual_pellets",
            "tract_variables", "traces", "m_lips_error", "m_tongue_error", "m_jaw_error", "m_lip_aperture",
-           "m_lip_aperture_range", "m_lip_protrusion", "m_jaw_opening", "m_jaw_opening_range"]
+           "m_lip_aperture_range", "m_lip_protrusion", "m_jaw_opening", "m_jaw_opening_range",
+           "m_lip_aperture_reach", "m_jaw_opening_reach"]
 
 #: Pellets in the order of ``cassi.data.xrmb.files.PELLETS``.
 PELLETS = ("UL", "LL", "T1", "T2", "T3", "T4", "MNI", "MNM")
@@ -175,20 +176,44 @@ def tract_correlation(ctx: FidelityContext, name: str) -> Measurement:
                        frame_value=r)
 
 
-def tract_range(ctx: FidelityContext, name: str) -> Measurement:
-    """Range agreement min(q, 1/q), q = model range / data range (5th-95th percentile)."""
+def _reach(ctx: FidelityContext, name: str):
+    """(q, model range, data range, frame of the recording's extreme): q = model range / data
+    range (5th-95th percentile); None where the recording gives nothing to follow."""
     m, d, ok = _both(ctx, name)
     if ok.sum() < 3 or _spread(d[ok]) < FIDELITY_MIN_RANGE_MM:
-        return Measurement(float("nan"), -1, f"the recording's {name.replace('_', ' ')} moves less "
-                                             f"than {FIDELITY_MIN_RANGE_MM} mm: nothing to follow")
+        return None
     dm, dd = _spread(m[ok]), _spread(d[ok])
-    q = dm / dd
+    f = int(np.flatnonzero(ok)[np.argmax(np.abs(d[ok] - np.median(d[ok])))])
+    return dm / dd, dm, dd, f
+
+
+def _still(name: str) -> Measurement:
+    return Measurement(float("nan"), -1, f"the recording's {name.replace('_', ' ')} moves less "
+                                         f"than {FIDELITY_MIN_RANGE_MM} mm: nothing to follow")
+
+
+def tract_range(ctx: FidelityContext, name: str) -> Measurement:
+    """Range agreement min(q, 1/q), q = model range / data range (5th-95th percentile)."""
+    r = _reach(ctx, name)
+    if r is None:
+        return _still(name)
+    q, dm, dd, f = r
     agree = min(q, 1.0 / q) if q > 0 else 0.0
-    idx = np.flatnonzero(ok)
-    f = int(idx[np.argmax(np.abs(d[ok] - np.median(d[ok])))])
     return Measurement(agree, f, f"{name.replace('_', ' ')} range: model {dm:.1f} mm, recording "
                                  f"{dd:.1f} mm (ratio {q:.2f}); frame shown: the recording's extreme",
                        frame_value=agree)
+
+
+def tract_reach(ctx: FidelityContext, name: str) -> Measurement:
+    """q itself, one-sided (the under-opening side of :func:`tract_range`, the same range):
+    how much of the recording's opening the model shows; 0 for a face that does not move."""
+    r = _reach(ctx, name)
+    if r is None:
+        return _still(name)
+    q, dm, dd, f = r
+    return Measurement(q, f, f"{name.replace('_', ' ')}: the model opens {dm:.1f} mm of the "
+                             f"recording's {dd:.1f} mm ({q:.0%}); frame shown: the recording's extreme",
+                       frame_value=q)
 
 
 def m_lips_error(ctx):
@@ -221,3 +246,11 @@ def m_jaw_opening(ctx):
 
 def m_jaw_opening_range(ctx):
     return tract_range(ctx, "jaw_opening")
+
+
+def m_lip_aperture_reach(ctx):
+    return tract_reach(ctx, "lip_aperture")
+
+
+def m_jaw_opening_reach(ctx):
+    return tract_reach(ctx, "jaw_opening")

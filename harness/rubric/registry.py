@@ -125,6 +125,14 @@ OPEN_BAND_MM = 4.0
 #: band is the women's mean - 2 SD to the men's mean + 2 SD.
 MOUTH_WIDTH_RANGE_MM = (52.0 - 2 * 4.0, 55.9 + 2 * 3.3)
 
+#: Movement judged in Tables C and E (from Table F's ranges): the model's share of the
+#: recording's opening (model range / recording range). Below HALF_REACH the lips or jaw read as
+#: "do not open" (the under-articulated side of fidelity_*_range's band); below STILL_REACH a
+#: 10-15 mm opening shows as about 1 mm, under a pixel at the preview front view (1.3 mm): the
+#: face is seen standing still (two negatives).
+HALF_REACH = 0.5
+STILL_REACH = 0.1
+
 # ----------------------------------------------------------------------------------------------
 # The aggregation rules (applied by cassi.harness.rubric.tables, tested branch by branch)
 # ----------------------------------------------------------------------------------------------
@@ -148,7 +156,7 @@ AGGREGATION_RULES = (
     "A check counts once per subject and version: the most negatives any of the subject's task "
     "files earned (the thesis judged each subject from its files together).",
     "One fault, one charge: a check declared as charged with another earns nothing where that "
-    "one fires for the same subject and version (lips separated at the start are not charged "
+    "one fires for the same subject, version and table (lips separated at the start are not charged "
     "again when the lips never touch).",
     "Table C = the lip checks of Table A judged per version + Table C's own checks.",
     "Table C, compared with the previous version on the same task files, where the ratings would "
@@ -553,6 +561,42 @@ _ALL: list[Check] = [
           text="the lower lip too large (bottom teeth rarely seen)",
           kind="image",
           measure="image:m_lower_teeth_seen"),
+    Check(name="lips_do_not_close",
+          table="C",
+          component="lips",
+          view="front",
+          unit="fraction",
+          frames="frames the recording shows closed (UL-LL pellet distance)",
+          description="share of the recording's closed frames where the model's inner lip edges 61-58 "
+                      "touch (the closing half of shape_lip_contact)",
+          thresholds=(0.75, 0.25),
+          negatives=(1, 2),
+          direction="lower",
+          reason="shape_lip_contact's band on its closing half alone: below 0.75 a quarter of the "
+                 "speaker's closures (/p b m/, 7-22 frames each) are seen open on the front view; below "
+                 "0.25 three in four, the lips read as never closing (two, as lips_never_touch). "
+                 "Charged with lips_never_touch: lips that never touch are the same fault, charged once "
+                 "in C",
+          text="the lips do not close where the speaker closes them",
+          kind="fidelity",
+          measure="shape:m_lip_closure",
+          charged_with="lips_never_touch"),
+    Check(name="lips_do_not_open",
+          table="C",
+          component="lips",
+          view="front",
+          unit="ratio",
+          frames="all frames with valid pellets",
+          description="the model's lip aperture range over the recording's (5th-95th percentile; the range "
+                      "fidelity_lip_aperture_range compares)",
+          thresholds=(HALF_REACH, STILL_REACH),
+          negatives=(1, 2),
+          direction="lower",
+          reason="HALF_REACH: lips opening less than half as far as the speaker's read as not opening; "
+                 "STILL_REACH: the opening is under a pixel, a still mouth (two negatives)",
+          text="the lips do not open",
+          kind="fidelity",
+          measure="fidelity:m_lip_aperture_reach"),
     # ---------------- Table D (thesis 5.8), task 118 ----------------
     Check(name="no_lip_rounding",
           table="D",
@@ -822,6 +866,23 @@ _ALL: list[Check] = [
           text="the lip corners jitter, or a large frame jump at the ellipse switch",
           kind="geometry",
           measure="measures:m_corner_jump",
+          tasks=(106,)),
+    Check(name="jaw_does_not_open",
+          table="E",
+          component="jaw",
+          view="side",
+          unit="ratio",
+          frames="all frames with valid pellets",
+          description="the model's jaw opening range (-MNI y) over the recording's (5th-95th percentile; "
+                      "the range fidelity_jaw_opening_range compares)",
+          thresholds=(HALF_REACH, STILL_REACH),
+          negatives=(1, 2),
+          direction="lower",
+          reason="task 106 wags the jaw through its range: a jaw opening less than half the recorded "
+                 "range reads as not opening; STILL_REACH: under a pixel, a still jaw (two negatives)",
+          text="the jaw does not open",
+          kind="fidelity",
+          measure="fidelity:m_jaw_opening_reach",
           tasks=(106,)),
     # ---------------- Table F: fidelity to the recording (cassi-farm's addition) ----------------
     Check(name="fidelity_lips_error",

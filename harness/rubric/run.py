@@ -148,10 +148,13 @@ def _fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no) -> lis
                               "(profile.jaw_length_mm) to map the model back to the recording")
     mapping = XrmbToParke.from_face(face.vertices, jaw)
     ctx = FidelityContext.of(anim, recording, mapping)
-    rows = _measured_rows(checks_for(kind="fidelity", table="F"), ctx, ids, wanted, frame_no)
-    shape = [c for c in checks_for(kind="fidelity", table="G", task=ids["task"])
-             if wanted is None or c.name in wanted]
-    if shape:  # Table G: the lips' shape between the pellets, against the same recording
+    # every table's fidelity checks (F, G, and C/E's movement), each on its measure's context
+    todo = [c for c in checks_for(kind="fidelity", task=ids["task"])
+            if wanted is None or c.name in wanted]
+    rows = _measured_rows([c for c in todo if c.measure.startswith("fidelity:")], ctx, ids,
+                          wanted, frame_no)
+    shape = [c for c in todo if c.measure.startswith("shape:")]
+    if shape:  # the lips' shape between the pellets, against the same recording
         sctx = ShapeContext.of(anim, recording, mapping, G.mouth_parts(face))
         rows.extend(_measured_rows(shape, sctx, ids, wanted, frame_no))
     if ids["task"] in TRACE_TASKS and wanted is None:

@@ -33,7 +33,7 @@ from cassi.harness.rubric.model import Measurement
 from cassi.harness.rubric.registry import (CLOSURE_BAND_MM, FIDELITY_MIN_RANGE_MM, LIPS_TOUCH_MM,
                                            MIN_FRAMES, MOUTH_WIDTH_RANGE_MM, OPEN_BAND_MM)
 
-__all__ = ["ShapeContext", "m_lip_contact", "m_mouth_width", "m_rounding"]
+__all__ = ["ShapeContext", "m_lip_contact", "m_lip_closure", "m_mouth_width", "m_rounding"]
 
 
 @dataclass
@@ -89,12 +89,9 @@ class ShapeContext:
                    data_protrusion=data_prot)
 
 
-def m_lip_contact(ctx: ShapeContext) -> Measurement:
-    """Youden's J of the model's lip contact against the recording's: the share of the
-    recording's closed frames where the model's lips touch, plus the share of its open frames
-    where they are apart, minus 1. 1 = contact everywhere the speaker's lips touch and nowhere
-    else; 0 = no more agreement than a face that never changes (always closed or always open);
-    negative = the opposite of the recording."""
+def _contact(ctx: ShapeContext):
+    """(closed, opened, touch, narrowest) boolean frames of the recording's closures and
+    openings and of the model's contact, or a Measurement saying why nothing is judged."""
     a, gap = ctx.aperture, ctx.gap
     ok = np.isfinite(a)
     if ok.sum() < 2 * MIN_FRAMES:
@@ -108,24 +105,54 @@ def m_lip_contact(ctx: ShapeContext) -> Measurement:
                            f"{CLOSURE_BAND_MM} mm of its narrowest, {closed.sum()} frames) and "
                            f"open ({OPEN_BAND_MM} mm beyond it, {opened.sum()} frames) for "
                            f"{MIN_FRAMES} frames: nothing to follow")
-    touch = gap <= LIPS_TOUCH_MM
-    hit_closed = float(np.mean(touch[closed]))
-    hit_open = float(np.mean(~touch[opened]))
-    j = hit_closed + hit_open - 1.0
-    # frame shown: a closed frame left open (the widest), else an open frame shut (the tightest)
+    return closed, opened, gap <= LIPS_TOUCH_MM, lo
+
+
+def _shown(gap, closed, opened, touch) -> int:
+    """The frame shown: a closed frame left open (the widest), else an open frame shut (the
+    tightest), else the first closed frame."""
     missed_closed = np.flatnonzero(closed & ~touch)
     missed_open = np.flatnonzero(opened & touch)
     if missed_closed.size:
-        f = int(missed_closed[np.argmax(gap[missed_closed])])
-    elif missed_open.size:
-        f = int(missed_open[np.argmin(gap[missed_open])])
-    else:
-        f = int(np.flatnonzero(closed)[0])
+        return int(missed_closed[np.argmax(gap[missed_closed])])
+    if missed_open.size:
+        return int(missed_open[np.argmin(gap[missed_open])])
+    return int(np.flatnonzero(closed)[0])
+
+
+def m_lip_contact(ctx: ShapeContext) -> Measurement:
+    """Youden's J of the model's lip contact against the recording's: the share of the
+    recording's closed frames where the model's lips touch, plus the share of its open frames
+    where they are apart, minus 1. 1 = contact everywhere the speaker's lips touch and nowhere
+    else; 0 = no more agreement than a face that never changes (always closed or always open);
+    negative = the opposite of the recording."""
+    c = _contact(ctx)
+    if isinstance(c, Measurement):
+        return c
+    closed, opened, touch, lo = c
+    hit_closed = float(np.mean(touch[closed]))
+    hit_open = float(np.mean(~touch[opened]))
+    j = hit_closed + hit_open - 1.0
+    f = _shown(ctx.gap, closed, opened, touch)
     return Measurement(j, f, f"recording closed in {closed.sum()} frames (UL-LL within "
                              f"{CLOSURE_BAND_MM} mm of its narrowest {lo:.1f} mm): model lips touch "
                              f"(61-58 gap <= {LIPS_TOUCH_MM} mm) in {hit_closed:.0%}; open in "
                              f"{opened.sum()} frames: model lips apart in {hit_open:.0%}; J = {j:.2f}",
-                       frame_value=float(gap[f]))
+                       frame_value=float(ctx.gap[f]))
+
+
+def m_lip_closure(ctx: ShapeContext) -> Measurement:
+    """The closing half of :func:`m_lip_contact`: the share of the recording's closed frames
+    where the model's lips touch."""
+    c = _contact(ctx)
+    if isinstance(c, Measurement):
+        return c
+    closed, opened, touch, lo = c
+    share = float(np.mean(touch[closed]))
+    f = _shown(ctx.gap, closed, opened, touch)  # m_lip_contact's frame: no new frame to render
+    return Measurement(share, f, f"recording closed in {closed.sum()} frames (UL-LL within "
+                                 f"{CLOSURE_BAND_MM} mm of its narrowest {lo:.1f} mm): model lips "
+                                 f"touch in {share:.0%}", frame_value=float(ctx.gap[f]))
 
 
 def m_mouth_width(ctx: ShapeContext) -> Measurement:

@@ -61,12 +61,12 @@ def file_verdicts(results: pd.DataFrame) -> pd.DataFrame:
     lip_a["table"] = "C"
     df = pd.concat([df, lip_a], ignore_index=True)
     df["note"] = ""
-    # one fault, one charge, within the file
-    fired = set(zip(df.loc[df["raw_negatives"] > 0, "version"], df.loc[df["raw_negatives"] > 0, "subject"],
-                    df.loc[df["raw_negatives"] > 0, "file"], df.loc[df["raw_negatives"] > 0, "check"]))
-    for i, r in df[df["raw_negatives"] > 0].iterrows():
+    # one fault, one charge, within the file and the table (as _charge_once across files)
+    hit = df[df["raw_negatives"] > 0]
+    fired = set(zip(hit["version"], hit["table"], hit["subject"], hit["file"], hit["check"]))
+    for i, r in hit.iterrows():
         c = CHECKS.get(r["check"])
-        if c is not None and c.charged_with and (r["version"], r["subject"], r["file"],
+        if c is not None and c.charged_with and (r["version"], r["table"], r["subject"], r["file"],
                                                  c.charged_with) in fired:
             df.at[i, "negatives"] = 0
             df.at[i, "note"] = f"not charged again: {c.charged_with} charges the same fault"
