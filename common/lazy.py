@@ -8,10 +8,14 @@ from typing import Any
 
 
 def resolve(target: Any) -> Any:
-    """``"package.module:attr"`` -> that object (anything else is returned as it is)."""
+    """``"package.module:attr"`` (``attr`` may be dotted) -> that object; anything else is
+    returned as it is. The version registry's lazy entries resolve the same way."""
     if not isinstance(target, str):
         return target
     module, sep, attr = target.partition(":")
-    if not sep or not attr:
-        raise ValueError(f"not a 'module:attr' target: {target!r}")
-    return getattr(importlib.import_module(module), attr)
+    if not sep or not module or not attr:
+        raise ValueError(f"lazy target must read 'module:attr', got {target!r}")
+    obj: Any = importlib.import_module(module)
+    for part in attr.split("."):
+        obj = getattr(obj, part)
+    return obj

@@ -13,26 +13,16 @@ where ``MyVersion`` is a class (instantiated without arguments) or an object wit
 from __future__ import annotations
 
 import difflib
-import importlib
 import threading
 from importlib.metadata import entry_points
 from typing import Any, Generic, Iterator, TypeVar
 
 from cassi.common.errors import CassiInputError
+from cassi.common.lazy import resolve
 
 __all__ = ["Registry", "VERSIONS", "get_version", "available_versions", "register_version"]
 
 T = TypeVar("T")
-
-
-def _load(target: str) -> Any:
-    module, sep, attr = target.partition(":")
-    if not sep or not module or not attr:
-        raise ValueError(f"lazy target must read 'module:attr', got {target!r}")
-    obj: Any = importlib.import_module(module)
-    for part in attr.split("."):
-        obj = getattr(obj, part)
-    return obj
 
 
 class Registry(Generic[T]):
@@ -137,7 +127,7 @@ class Registry(Generic[T]):
             if name in self._lazy:
                 target = self._lazy[name]
                 try:
-                    obj = _load(target)
+                    obj = resolve(target)
                 except (ImportError, AttributeError, ValueError) as err:
                     raise CassiInputError(
                         f"{self.kind} {name!r} is registered as {target!r}, which cannot be "
