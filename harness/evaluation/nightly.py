@@ -32,7 +32,7 @@ from cassi.common.errors import CassiInputError
 from cassi.harness.evaluation.config import KEEP_NIGHTS, RunConfig
 from cassi.harness.evaluation.run import run as run_farm
 from cassi.harness.farm.runner import RunResult
-from cassi.harness.farm.store import Collected, collect_garbage, store_lock
+from cassi.harness.farm.store import collect_garbage, store_lock
 from cassi.harness.farm.tableset import SET_FILE as TABLE_SET
 from cassi.harness.farm.tableset import SUMMARY_FILE, TableSetError, verify_table_set
 
@@ -92,8 +92,7 @@ def gc(out_dir: str | os.PathLike, *, keep: int = KEEP_NIGHTS) -> dict:
             for d in (runs_dir / name, root / "reports" / name):
                 if d.is_dir():
                     shutil.rmtree(d)
-        freed = (collect_garbage(root / STORE_DIR) if (root / STORE_DIR).is_dir()
-                 else Collected(0, 0, 0))
+        freed = collect_garbage(root / STORE_DIR)  # the lock made the directory: never missing
     return {"nights_removed": old, "nights_kept": nights[-keep:], "blobs_removed": freed.blobs,
             "manifests_removed": freed.manifests, "bytes_freed": freed.bytes}
 
