@@ -184,7 +184,7 @@ def _geometry_output(job: Job, ctx: StageContext, rec, anim: StreamedAnimation,
     meta = {"render_frames": pick, "n_frames": int(frames.size)}
     if by_view:
         meta["render_frames_by_view"] = by_view
-    keep = sorted(set(pick).union(*meta.get("render_frames_by_view", {}).values()))
+    keep = sorted(set(pick).union(*by_view.values()))
     idx = np.searchsorted(frames, keep)
     keyframes = npz_bytes(frames=np.asarray(keep, np.int64), positions=anim.positions.take(idx))
     log = [f"frames {frames[0]}..{frames[-1]} ({frames.size}); render {len(pick)}: {pick}"]
