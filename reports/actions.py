@@ -56,10 +56,19 @@ def cmd_agree(args: argparse.Namespace) -> int:
     return 0
 
 
+def video_versions_arg(text: str) -> tuple[str, ...] | None:
+    """``--video-versions``: 'none' (or nothing) -> (), 'all' -> None (every version), else the
+    comma-separated names (checked with the run's other names before any work)."""
+    names = tuple(v.strip() for v in text.split(",") if v.strip())
+    if names in ((), ("none",)):
+        return ()
+    return None if names == ("all",) else names
+
+
 def cmd_nightly(args: argparse.Namespace) -> int:
-    video = tuple(v.strip() for v in args.video_versions.split(",") if v.strip())
     cfg = RunConfig(workers=args.workers, stride=args.stride, extremes=args.extremes,
-                    animate_stride=args.animate_stride, video_versions=video or None)
+                    animate_stride=args.animate_stride,
+                    video_versions=video_versions_arg(args.video_versions))
     passed, index = nightly(args.out, corpus=args.corpus, config=cfg, progress=not args.quiet,
                             review=partial(review_night, common_only=args.common_only))
     gate = json.loads((Path(args.out) / "runs" / index.parent.name / "gate.json").read_text())

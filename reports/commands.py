@@ -42,10 +42,13 @@ def register(sub) -> None:
     p.add_argument("--animate-stride", type=int, default=NIGHTLY_ANIMATE_STRIDE,
                    help="row stride of every task file's four-view video, all views "
                         f"(default {NIGHTLY_ANIMATE_STRIDE}; 0: no videos)")
-    p.add_argument("--video-versions", dest="video_versions", default=",".join(NIGHTLY_VIDEO_VERSIONS),
-                   help="versions with a four-view video of every task file, comma-separated "
-                        f"(default {','.join(NIGHTLY_VIDEO_VERSIONS)}; the others: the front view, "
-                        "which the image checks judge, for the comparisons)")
+    p.add_argument("--video-versions", dest="video_versions",
+                   default=",".join(NIGHTLY_VIDEO_VERSIONS) or "none",
+                   help="versions also rendered in the side, half and top views on the video "
+                        "grid, for a four-view video of every task file: comma-separated names, "
+                        "'all' or 'none' (default none: every version gets the front view, which "
+                        "the image checks judge, and the versions' side-by-side video; the "
+                        "viewer draws the other views; cassi-2.1 gives the former nights' set)")
     p.add_argument("--common-only", action="store_true", dest="common_only",
                    help="when the previous night covered other task files, versions or views, "
                         "gate only what both nights share (default: such a night fails its gate)")

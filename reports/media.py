@@ -102,6 +102,26 @@ def _video_key(frames: list[int], paths: pd.Series, columns, stride: int, subjec
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
 
 
+def _grid(renders: pd.DataFrame, columns, stride: int):
+    """(frames on the video grid, paths by (version, view, frame)) of ``columns``' renders."""
+    wanted = renders[[(v, w) in set(columns) for v, w in zip(renders["version"], renders["view"])]]
+    return video_frames(wanted, stride=stride), wanted.set_index(["version", "view", "frame"])["path"]
+
+
+def cached_video(renders: pd.DataFrame, *, stride: int, columns: list[tuple[str, str]],
+                 audio: Path | None = None, cache: Path | None = None) -> Path | None:
+    """The file in ``cache`` that :func:`task_video` would link for these arguments, or None
+    when there is none (nothing cached, no cache, or too few grid frames for a video)."""
+    if cache is None:
+        return None
+    frames, paths = _grid(renders, columns, stride)
+    if len(frames) < 2:
+        return None
+    subject, task = renders["subject"].iloc[0], int(renders["task"].iloc[0])
+    path = cache / f"{_video_key(frames, paths, columns, stride, subject, task, audio)}.mp4"
+    return path if path.is_file() else None
+
+
 def task_video(renders: pd.DataFrame, dest: Path, *, stride: int, columns: list[tuple[str, str]],
                audio: Path | None = None, cache: Path | None = None) -> dict | None:
     """A video of one task file: per frame, one labelled panel per (version, view) of
@@ -114,12 +134,10 @@ def task_video(renders: pd.DataFrame, dest: Path, *, stride: int, columns: list[
     panel. With ``cache`` (a directory shared between reports, e.g. a nightly store's media),
     a video made of the same renders, sound and code before is linked, not encoded again.
     """
-    wanted = renders[[(v, w) in set(columns) for v, w in zip(renders["version"], renders["view"])]]
-    frames = video_frames(wanted, stride=stride)
+    frames, paths = _grid(renders, columns, stride)
     if len(frames) < 2:
         return None
-    subject, task = wanted["subject"].iloc[0], int(wanted["task"].iloc[0])
-    paths = wanted.set_index(["version", "view", "frame"])["path"]
+    subject, task = renders["subject"].iloc[0], int(renders["task"].iloc[0])
     fps = 1e6 / (ROW_US * stride)
 
     def composed():

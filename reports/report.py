@@ -281,29 +281,76 @@ REPORT_WORKERS = max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaf
                      else (os.cpu_count() or 1))
 
 
-def _encode(specs, *, stride: int, media_cache: Path | None) -> list[dict | None]:
-    """:func:`media.task_video` of every spec, in order; on :data:`REPORT_WORKERS` processes
-    when there are several videos (the farm's workers are done by the time a report is made)."""
-    calls = [dict(renders=g, dest=dest, stride=stride, audio=audio, cache=media_cache,
-                  columns=columns) for _, _, dest, g, audio, columns in specs]
-    if REPORT_WORKERS < 2 or len(calls) < 2:
-        return [media.task_video(**c) for c in calls]
-    ctx = multiprocessing.get_context("spawn")  # as the farm: no forked threads of the parent
-    with ProcessPoolExecutor(min(REPORT_WORKERS, len(calls)), mp_context=ctx) as pool:
-        return list(pool.map(_task_video, calls))
+class _Encoding:
+    """A report's videos, started before its pages and tables so that encoding overlaps them:
+    a video the media cache holds is linked at once (no process is started for it, and none at
+    all when every video is cached, as on a night after an unchanged one); the others encode on
+    :data:`REPORT_WORKERS` processes when there are several (the farm's workers are done by the
+    time a report is made), else here when :meth:`results` is asked."""
+
+    def __init__(self, specs, out: Path, *, stride: int, media_cache: Path | None):
+        self._specs, self._out = specs, out
+        self._calls = [dict(renders=g, dest=dest, stride=stride, audio=audio, cache=media_cache,
+                            columns=columns) for _, _, dest, g, audio, columns in specs]
+        self._done: dict[int, dict | None] = {}
+        todo = []
+        for i, c in enumerate(self._calls):
+            if media.cached_video(c["renders"], stride=stride, columns=c["columns"],
+                                  audio=c["audio"], cache=media_cache) is not None:
+                self._done[i] = media.task_video(**c)
+            else:
+                todo.append(i)
+        self._pool, self._futures = None, {}
+        if REPORT_WORKERS >= 2 and len(todo) >= 2:
+            ctx = multiprocessing.get_context("spawn")  # as the farm: no forked threads of the parent
+            self._pool = ProcessPoolExecutor(min(REPORT_WORKERS, len(todo)), mp_context=ctx)
+            self._futures = {i: self._pool.submit(_task_video, self._calls[i]) for i in todo}
+        self._todo = [i for i in todo if i not in self._futures]
+
+    @property
+    def started_processes(self) -> bool:
+        return self._pool is not None
+
+    def videos(self) -> list[dict]:
+        """The report's description of every video made (waits for the encoding)."""
+        videos = []
+        for (kind, label, dest, *_), result in zip(self._specs, self.results()):
+            if result is not None:
+                videos.append({"kind": kind, "label": label,
+                               "href": dest.relative_to(self._out).as_posix(),
+                               "fps": result["fps"], "frames": result["frames"],
+                               "seconds": result["seconds"], "audio": result["audio"]})
+        return videos
+
+    def close(self) -> None:
+        """Stop encoding (the report failed): no worker outlives it."""
+        if self._pool is not None:
+            self._pool.shutdown(cancel_futures=True)
+
+    def results(self) -> list[dict | None]:
+        """:func:`media.task_video` of every spec, in order."""
+        try:
+            for i in self._todo:
+                self._done[i] = media.task_video(**self._calls[i])
+            for i, fut in self._futures.items():
+                self._done[i] = fut.result()
+        finally:
+            self.close()
+        return [self._done[i] for i in range(len(self._calls))]
 
 
 def _task_video(kwargs: dict) -> dict | None:
     return media.task_video(**kwargs)
 
 
-def _videos(run: Run, out: Path, media_cache: Path | None = None) -> list[dict]:
+def _start_videos(run: Run, out: Path, media_cache: Path | None = None):
     """From the renders on the run's ``animate_stride`` grid: a four-view video per task file
     and version that was rendered in every view, and the versions side by side wherever
-    several versions were rendered in the comparison view."""
+    several versions were rendered in the comparison view, encoding while the caller goes on
+    (:class:`_Encoding`)."""
     stride = int(run.meta.get("animate_stride") or 0)
     if not len(run.renders) or stride < 1:
-        return []
+        return _Encoding([], out, stride=stride, media_cache=None)
     audio_for = _audio_for(run)
     specs = []  # (kind, label, dest, renders, audio, columns), encoded together below
 
@@ -335,14 +382,7 @@ def _videos(run: Run, out: Path, media_cache: Path | None = None) -> list[dict]:
             dest = out / "animations" / f"{stem}_{COMPARISON_VIEW}.mp4"
             add("comparison", f"{name}, {COMPARISON_VIEW} view ({', '.join(compared)})", g,
                 dest, audio, [(v, COMPARISON_VIEW) for v in compared])
-    results = _encode(specs, stride=stride, media_cache=media_cache)
-    videos = []
-    for (kind, label, dest, *_), result in zip(specs, results):
-        if result is not None:
-            videos.append({"kind": kind, "label": label, "href": dest.relative_to(out).as_posix(),
-                           "fps": result["fps"], "frames": result["frames"],
-                           "seconds": result["seconds"], "audio": result["audio"]})
-    return videos
+    return _Encoding(specs, out, stride=stride, media_cache=media_cache)
 
 
 def _summaries(run: Run) -> list[dict]:
@@ -370,6 +410,36 @@ def _meta_items(run: Run) -> list[tuple[str, str]]:
     keys = ("started", "finished", "package_version", "git_revision", "variant", "preset", "stride",
             "executor", "corpus_resolved")
     return [(k, str(run.meta[k])) for k in keys if run.meta.get(k) not in (None, "")]
+
+
+def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
+                encoding: "_Encoding") -> str:
+    """Subject pages, tables and plots, then index.html's text (the videos awaited last)."""
+    fv = file_verdicts(run.results)
+    cr = component_ratings(run.results)
+    rule = table_c_rule(run.results, fv=fv)
+    subjects = sorted(fv["subject"].dropna().unique())
+    subject_links = [{"name": s, "href": _subject_page(run, s, fv, cr, rule, out, env)}
+                     for s in subjects]
+    trend = None
+    if history is not None and history["night"].nunique() > 1:
+        trend = plots.metric_trend(history, out / "plots" / "trend.png",
+                                   synthetic=run.synthetic).relative_to(out).as_posix()
+    gate_path = run.root / "gate.json"
+    gate = json.loads(gate_path.read_text()) if gate_path.is_file() else None
+    if gate is not None:
+        atomic_write_text(out / "gate.md", (run.root / "gate.md").read_text()
+                          if (run.root / "gate.md").is_file() else "")
+    return env.get_template("index.html.j2").render(
+        run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
+        summaries=_summaries(run), paired=_paired(run, out), agreement=agree,
+        comparison=_comparison(run, previous, out),
+        tables=_table_sections(run, cr, out), criterion=_criterion(run, out),
+        videos=encoding.videos(),
+        rules=AGGREGATION_RULES,
+        subjects=subject_links, trend=trend, gate=gate,
+        jobs={"counts": run.summary.get("counts", {}), "failed": run.failed,
+              "skipped": run.skipped} if run.summary else None)
 
 
 def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
@@ -405,30 +475,13 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
     if agree is not None:
         write_agreement(agree, out)
     env = _env()
-    fv = file_verdicts(run.results)
-    cr = component_ratings(run.results)
-    rule = table_c_rule(run.results, fv=fv)
-    subjects = sorted(fv["subject"].dropna().unique())
-    subject_links = [{"name": s, "href": _subject_page(run, s, fv, cr, rule, out, env)}
-                     for s in subjects]
-    trend = None
-    if history is not None and history["night"].nunique() > 1:
-        trend = plots.metric_trend(history, out / "plots" / "trend.png",
-                                   synthetic=run.synthetic).relative_to(out).as_posix()
-    gate_path = run.root / "gate.json"
-    gate = json.loads(gate_path.read_text()) if gate_path.is_file() else None
-    if gate is not None:
-        atomic_write_text(out / "gate.md", (run.root / "gate.md").read_text()
-                          if (run.root / "gate.md").is_file() else "")
-    html = env.get_template("index.html.j2").render(
-        run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
-        summaries=_summaries(run), paired=_paired(run, out), agreement=agree,
-        comparison=_comparison(run, previous, out),
-        tables=_table_sections(run, cr, out), criterion=_criterion(run, out), videos=_videos(run, out, None if media_cache is None else Path(media_cache)),
-        rules=AGGREGATION_RULES,
-        subjects=subject_links, trend=trend, gate=gate,
-        jobs={"counts": run.summary.get("counts", {}), "failed": run.failed,
-              "skipped": run.skipped} if run.summary else None)
+    # first, so that the videos encode while the pages and tables below are written
+    encoding = _start_videos(run, out, None if media_cache is None else Path(media_cache))
+    try:
+        html = _index_html(run, previous, out, env, agree, history, encoding)
+    except BaseException:
+        encoding.close()
+        raise
     index = out / "index.html"
     atomic_write_text(index, html)
     return index

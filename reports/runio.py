@@ -91,14 +91,17 @@ def _read_renders(root: Path) -> pd.DataFrame:
     if missing:
         raise CassiInputError(f"render index lacks columns {missing}", path=path)
     df = df[list(RENDER_COLUMNS)].copy()
-    df["path"] = [str(_inside(root, p)) for p in df["path"]]
+    real = root.resolve()  # once: a night's index holds 20,000-30,000 paths
+    df["path"] = [str(_inside(root, p, real)) for p in df["path"]]
     return df.reset_index(drop=True)
 
 
-def _inside(root: Path, rel: str) -> Path:
-    """Resolve a path the run recorded, refusing anything outside the run directory."""
+def _inside(root: Path, rel: str, real: Path | None = None) -> Path:
+    """Resolve a path the run recorded, refusing anything outside the run directory
+    (``real``: ``root`` resolved)."""
+    real = root.resolve() if real is None else real
     path = (root / rel).resolve()
-    if os.path.commonpath([path, root.resolve()]) != str(root.resolve()):
+    if os.path.commonpath([path, real]) != str(real):
         raise CassiInputError(f"render path {rel!r} escapes the run directory", path=root)
     return path
 

@@ -55,18 +55,22 @@ def usable_cores() -> int:
 DEFAULT_EXTREMES = 4
 
 #: What a night renders (all four views, raycast preview): the first frame and the two frames
-#: the checks point at most strongly per task file and version; every NIGHTLY_ANIMATE_STRIDE-th
-#: row of every task file in all four views for the video versions' four-view videos (real
-#: time: 145.6 / stride frames per second), and in the front view for the other versions (the
-#: view the image checks judge, on the same frames for every version; the side-by-side
-#: comparisons). README says how the night's time was estimated from measured per-frame costs.
+#: the checks point at per task file and version, in every view (the subject pages' four views
+#: of a fault, the gates, the goldens); every NIGHTLY_ANIMATE_STRIDE-th row of every task file
+#: in the front view for every version (the frames the image checks judge, with their masks,
+#: the same for every version, and the versions' side-by-side video; real time: 145.6 / stride
+#: frames per second). No version gets the other views on that grid by default (the browser
+#: viewer draws any view of any version from geometry); ``--video-versions`` asks for them
+#: (frames.py says why; README gives the night's size and time either way).
 NIGHTLY_STRIDE = 0
 NIGHTLY_EXTREMES = 2
 NIGHTLY_ANIMATE_STRIDE = 24
 #: Nights ``cassi gc`` keeps by default: a month of nightly runs.
 KEEP_NIGHTS = 30
-#: The thesis's final version gets a four-view video of every task file.
-NIGHTLY_VIDEO_VERSIONS = ("cassi-2.1",)
+#: Versions rendered in every view on the video grid for a four-view video of every task file:
+#: none by default (cassi-2.1's were 10,968 of a night's 31,081 renders, 0.28 of its 1.87 GB
+#: and half its report's encoding); ``cassi nightly --video-versions cassi-2.1`` brings them back.
+NIGHTLY_VIDEO_VERSIONS: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -3,6 +3,20 @@
 One home for every rule that picks frames, read by the geometry stage (what it keeps and asks
 to render), the run's render budget (said before any work starts), the render stage (which
 views keep masks) and the report (which views a task's video shows).
+
+What a night keeps, and why (measured on the default nightly, README "Disk"):
+
+- every view: the first frame and the check frames of every task file and version: the
+  subject pages' four views of a fault, and with every render the gates' comparisons with the
+  previous night and the goldens;
+- the front view on the ``animate_stride`` grid for every version: the frames the image checks
+  judge (their masks, the only masks kept) on the same frames for every version, and the
+  versions side by side in one front-view video per task file;
+- the side, half and top views on that grid only for the ``video_versions`` (a four-view
+  video each): none by default, since the browser viewer draws any view of any version from
+  geometry. cassi-2.1's four-view grid was 10,968 of 31,081 renders and half the report's
+  video encoding; ``--video-versions cassi-2.1`` restores it. Final-quality (path-traced)
+  videos are not made: a 512² frame costs 5-15 s against a preview's 15 ms.
 """
 from __future__ import annotations
 

@@ -24,7 +24,7 @@ from cassi.harness.farm.store import OutputStore
 from cassi.harness.farm.workers import worker_env
 from cassi.harness.evaluation.caches import get_corpus, get_profile
 from cassi.harness.evaluation.frames import render_budget
-from cassi.harness.evaluation.stages import cassi_pipeline, catalog
+from cassi.harness.evaluation.stages import MASKS_FORMAT, cassi_pipeline, catalog
 from cassi.renderer.variant import choose_variant
 
 
@@ -126,6 +126,14 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
                     provenance, workers, progress)
 
 
+def run_options(cfg: C.RunConfig) -> tuple[tuple[str, object], ...]:
+    """The stages' run options (:meth:`StageContext.option`), part of every job's digest: the
+    frame policy's settings and the stored masks' format (a store of another format
+    recomputes)."""
+    return (("extremes", cfg.extremes), ("animate_stride", cfg.animate_stride),
+            ("video_versions", cfg.video_versions), ("masks_format", MASKS_FORMAT))
+
+
 def _run(cfg, executor, corpus, tasks, versions, views, variant, synthetic, pipeline, provenance,
          workers, progress) -> RunResult:
     """The part of :func:`run` that writes ``cfg.out``, once the executor is up."""
@@ -134,9 +142,7 @@ def _run(cfg, executor, corpus, tasks, versions, views, variant, synthetic, pipe
     ctx = StageContext(out_dir=store.root.resolve(), corpus=corpus.root.resolve(),
                        stride=cfg.stride, chunk_size=cfg.chunk, preset=cfg.preset,
                        variant=variant, synthetic=synthetic,
-                       options=(("extremes", cfg.extremes),
-                                ("animate_stride", cfg.animate_stride),
-                                ("video_versions", cfg.video_versions)),
+                       options=run_options(cfg),
                        provenance=json.dumps(shared_provenance(provenance), sort_keys=True),
                        version_provenance=tuple(sorted(provenance["version_digests"].items())),
                        ship=cfg.executor == "ray",

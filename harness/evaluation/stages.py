@@ -31,6 +31,7 @@ from cassi.harness.evaluation.inputs import (read_planned, verify_code, verify_p
 from cassi.harness.farm.jobs import Job, SkipJob, StageContext, StageOutput, npz_bytes
 from cassi.harness.farm.runner import Pipeline
 from cassi.harness.rubric.frames import CHUNK_FRAMES, FileFrames
+from cassi.harness.rubric.image import depth_read
 from cassi.harness.rubric.measures import CRITERION_DIAGNOSTICS, DIAGNOSTICS_READ
 from cassi.renderer.images import png_bytes
 from cassi.renderer.views import PRESET_NAMES, VIEW_NAMES
@@ -207,13 +208,40 @@ class StoredFrame:
         self.mask, self.depth, self.part_names = mask, depth, part_names
 
 
+#: The ``masks-<frame>`` blob's format, a run option and so part of every job's digest: a store
+#: written in another format recomputes instead of being read as this one. 1: mask and the
+#: whole depth image (53 of a front frame's 55 KB deflated). 2: depth only where the image
+#: measures read it (:func:`cassi.harness.rubric.image.depth_read`: teeth and tongue), exact
+#: float32 there and inf elsewhere, as for background (about 2 KB a frame).
+MASKS_FORMAT = 2
+
+
+def masks_blob(mask: np.ndarray, depth: np.ndarray, part_names) -> bytes:
+    """A frame's ``masks-<frame>`` blob: npz, deflated, ``mask`` uint8 (H, W) part ids,
+    ``depth`` float32 (H, W) Parke units where :func:`depth_read` (inf elsewhere),
+    ``part_names``. The image measures read the same values as from the full depth image."""
+    mask = np.asarray(mask)
+    if mask.max(initial=0) > 255:
+        raise ValueError("more than 255 parts: masks are stored as uint8")
+    kept = np.where(depth_read(mask, part_names), np.asarray(depth, np.float32),
+                    np.float32(np.inf))
+    return npz_bytes(mask=mask.astype(np.uint8), depth=kept,
+                     part_names=np.asarray(part_names, dtype=str), compressed=True)
+
+
+def read_masks_blob(data: bytes) -> StoredFrame:
+    """A ``masks-<frame>`` blob (:func:`masks_blob`) as the image checks read it."""
+    d = np.load(io.BytesIO(data))
+    return StoredFrame(d["mask"].astype(np.int32), d["depth"],
+                       tuple(str(n) for n in d["part_names"]))
+
+
 def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> StageOutput:
     """Render ``job.frames`` of ``job.view``.
 
     Outputs: one PNG per frame (``render-<frame>``) and, in the views the task's image checks
-    judge, ``masks-<frame>`` (npz: ``mask`` uint8 (H, W) part ids, ``depth`` float32 (H, W)
-    Parke units, ``part_names``). Nothing else reads masks, and a night's masks of every view
-    were 6.9 GB written and hashed.
+    judge, ``masks-<frame>`` (:func:`masks_blob`). Nothing else reads masks, and a night's
+    masks of every view were 6.9 GB written and hashed.
     """
     judged = job.view in image_views(job.task)
 
@@ -237,16 +265,7 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
         files[f"render-{f:06d}"] = (_png_bytes(res.srgb8(), {**res.metadata(), **meta}), ".png")
         if not judged:
             continue
-        mask = np.asarray(res.mask)
-        if mask.max(initial=0) > 255:
-            raise ValueError("more than 255 parts: masks are stored as uint8")
-        # Deflated: a front frame's mask and depth are 329 KB raw, 55 KB deflated (3 ms), and
-        # were 4.4 of a night's 5.0 GB.
-        files[f"masks-{f:06d}"] = (npz_bytes(mask=mask.astype(np.uint8),
-                                             depth=np.asarray(res.depth, np.float32),
-                                             part_names=np.asarray(res.part_names, dtype=str),
-                                             compressed=True),
-                                   ".npz")
+        files[f"masks-{f:06d}"] = (masks_blob(res.mask, res.depth, res.part_names), ".npz")
     return StageOutput(files=files, meta={"render_s": round(seconds, 3)},
                        log=[f"rendered {len(job.frames)} frame(s) of {job.view} "
                             f"({ctx.preset}, {renderer.variant}) in {seconds:.2f} s"])
@@ -257,9 +276,7 @@ def image_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> Sta
 
     def frames():  # one frame's masks at a time: the checks keep a few numbers per frame
         for f in job.frames:
-            d = np.load(io.BytesIO(inputs[f"masks-{f:06d}"]))
-            yield int(f), StoredFrame(d["mask"].astype(np.int32), d["depth"],
-                                      tuple(str(n) for n in d["part_names"]))
+            yield int(f), read_masks_blob(inputs[f"masks-{f:06d}"])
 
     verify_code(ctx, job.version)
     rows = rubric.run_image_checks({job.view: frames()}, task=job.task, subject=job.subject,

@@ -27,7 +27,7 @@ from cassi.harness.rubric.model import Measurement
 from cassi.harness.rubric.registry import (CENTERING_OPEN_SHARE, LOWER_TEETH_MIN_PIXELS, OPEN_MIN_HEIGHT,
                        OPEN_MIN_PIXELS, TEETH_MIN_PIXELS, TONGUE_MIN_PIXELS, WIDE_OPEN_SHARE)
 
-__all__ = ["FrameMasks", "FrameStats", "ImageContext", "mouth_opening", "teeth_split",
+__all__ = ["FrameMasks", "FrameStats", "ImageContext", "depth_read", "mouth_opening", "teeth_split",
            "opening_extent",
            "m_centered_high", "m_centered_low", "m_centering_offset", "m_tongue_visible", "m_tongue_in_front",
            "m_lower_teeth_seen", "m_opening_extent"]
@@ -57,14 +57,32 @@ class FrameMasks:
             return np.isin(mask, ids) if ids else np.zeros(mask.shape, bool)
 
         lips = parts(lambda n: n.startswith("lip"))
-        teeth = parts(lambda n: "teeth" in n or "tooth" in n)
-        upper = parts(lambda n: ("teeth" in n or "tooth" in n) and "upper" in n)
-        lower = parts(lambda n: ("teeth" in n or "tooth" in n) and "lower" in n)
+        teeth = parts(_is_teeth)
+        upper = parts(lambda n: _is_teeth(n) and "upper" in n)
+        lower = parts(lambda n: _is_teeth(n) and "lower" in n)
         split = not (upper.any() or lower.any())
         if split:
             upper, lower = teeth_split(teeth, mouth_opening(lips), depth)
-        tongue = parts(lambda n: n.startswith("tongue"))
+        tongue = parts(_is_tongue)
         return cls(int(frame), lips, upper, lower, teeth, tongue, depth, split)
+
+
+def _is_teeth(name: str) -> bool:
+    return "teeth" in name or "tooth" in name
+
+
+def _is_tongue(name: str) -> bool:
+    return name.startswith("tongue")
+
+
+def depth_read(mask: np.ndarray, part_names) -> np.ndarray:
+    """The pixels whose depth the image measures read, bool (H, W): the teeth's (the incisal
+    line of touching teeth, :func:`_depth_cut`; the front teeth's depth) and the tongue's
+    (:func:`_tongue_in_front`). Depth anywhere else changes no measure, so the render stage
+    stores it only here."""
+    names = [str(n).lower() for n in part_names]
+    ids = [i for i, n in enumerate(names) if _is_teeth(n) or _is_tongue(n)]
+    return np.isin(np.asarray(mask), ids)
 
 
 def mouth_opening(lips: np.ndarray) -> np.ndarray:

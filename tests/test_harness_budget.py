@@ -1,0 +1,64 @@
+"""A night's budget: the mask blob keeps depth only where the image measures read it (the
+measures are unchanged), its format is in every job's digest, and the nightly's frame policy."""
+from __future__ import annotations
+
+import numpy as np
+
+from cassi.harness.evaluation import run as run_mod
+from cassi.harness.evaluation.config import NIGHTLY_VIDEO_VERSIONS, RunConfig
+from cassi.harness.evaluation.frames import video_views
+from cassi.harness.evaluation.stages import masks_blob, read_masks_blob
+from cassi.harness.farm.jobs import Job, StageContext
+from cassi.harness.rubric.image import FrameMasks, FrameStats
+from cassi.reports.actions import video_versions_arg
+
+NAMES = ("background", "skin", "lips", "teeth_upper", "tongue", "teeth_lower")
+
+
+def _frame():
+    mask = np.zeros((64, 64), np.uint8)
+    mask[10:50, 5:60] = 1
+    mask[20:40, 15:50] = 2
+    mask[26:34, 20:45] = 0   # the opening (background behind it here)
+    mask[26:29, 22:43] = 3
+    mask[31:34, 22:43] = 5
+    mask[29:31, 25:40] = 4
+    rng = np.random.default_rng(0)
+    depth = np.where(mask > 0, 100 + rng.random(mask.shape) * 5, np.inf).astype(np.float32)
+    depth[29:31, 25:40] = 90.0  # tongue in front of the teeth
+    return mask, depth
+
+
+def test_mask_blob_keeps_depth_exactly_where_read_and_measures_are_unchanged():
+    mask, depth = _frame()
+    stored = read_masks_blob(masks_blob(mask, depth, NAMES))
+    assert np.array_equal(stored.mask, mask)
+    read = np.isin(mask, [3, 4, 5])
+    assert np.array_equal(stored.depth[read], depth[read])
+    assert np.all(np.isinf(stored.depth[~read]))
+
+    class Full:
+        pass
+    full = Full()
+    full.mask, full.depth, full.part_names = mask.astype(np.int32), depth, NAMES
+    assert FrameStats.of(FrameMasks.of(0, stored)) == FrameStats.of(FrameMasks.of(0, full))
+    assert FrameStats.of(FrameMasks.of(0, stored)).tongue_in_front > 0
+
+
+def test_masks_format_changes_every_job_digest(monkeypatch):
+    cfg = RunConfig()
+    job = Job(stage="render", subject="JW11", task=19, rep=1, version="cassi-2.1", view="front")
+    before = job.digest(StageContext(out_dir=".", options=run_mod.run_options(cfg)).salt())
+    monkeypatch.setattr(run_mod, "MASKS_FORMAT", run_mod.MASKS_FORMAT + 1)
+    after = job.digest(StageContext(out_dir=".", options=run_mod.run_options(cfg)).salt())
+    assert before != after
+
+
+def test_nightly_frame_policy_front_grid_for_every_version_and_no_four_view_grid():
+    assert NIGHTLY_VIDEO_VERSIONS == ()
+    for version in ("cassi-1.0", "cassi-2.1"):
+        assert video_views(19, version, NIGHTLY_VIDEO_VERSIONS) == ("front",)
+    assert video_views(19, "cassi-2.1", ("cassi-2.1",)) == ("front", "side", "half", "top")
+    assert video_versions_arg("none") == () and video_versions_arg("") == ()
+    assert video_versions_arg("all") is None
+    assert video_versions_arg("cassi-2.1, cassi-3.0") == ("cassi-2.1", "cassi-3.0")
