@@ -47,8 +47,8 @@ def register(sub) -> None:
                    help="versions also rendered in the side, half and top views on the video "
                         "grid, for a four-view video of every task file: comma-separated names, "
                         "'all' or 'none' (default none: every version gets the front view, which "
-                        "the image checks judge, and the versions' side-by-side video; the "
-                        "viewer draws the other views; cassi-2.1 gives the former nights' set)")
+                        "the image checks judge, and the versions' side-by-side video; `cassi "
+                        "export --format gltf` gives the other views; cassi-2.1 gives the former nights' set)")
     p.add_argument("--common-only", action="store_true", dest="common_only",
                    help="when the previous night covered other task files, versions or views, "
                         "gate only what both nights share (default: such a night fails its gate)")

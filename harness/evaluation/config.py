@@ -59,8 +59,8 @@ DEFAULT_EXTREMES = 4
 #: of a fault, the gates, the goldens); every NIGHTLY_ANIMATE_STRIDE-th row of every task file
 #: in the front view for every version (the frames the image checks judge, with their masks,
 #: the same for every version, and the versions' side-by-side video; real time: 145.6 / stride
-#: frames per second). No version gets the other views on that grid by default (the browser
-#: viewer draws any view of any version from geometry); ``--video-versions`` asks for them
+#: frames per second). No version gets the other views on that grid by default (`cassi export
+#: --format gltf` gives any view of any version from geometry); ``--video-versions`` asks for them
 #: (frames.py says why; README gives the night's size and time either way).
 NIGHTLY_STRIDE = 0
 NIGHTLY_EXTREMES = 2

@@ -13,8 +13,8 @@ What a night keeps, and why (measured on the default nightly, README "Disk"):
   judge (their masks, the only masks kept) on the same frames for every version, and the
   versions side by side in one front-view video per task file;
 - the side, half and top views on that grid only for the ``video_versions`` (a four-view
-  video each): none by default, since the browser viewer draws any view of any version from
-  geometry. cassi-2.1's four-view grid was 10,968 of 31,081 renders and half the report's
+  video each): none by default, since `cassi export --format gltf` gives any view of any version
+  from geometry (Blender, any glTF viewer). cassi-2.1's four-view grid was 10,968 of 31,081 renders and half the report's
   video encoding; ``--video-versions cassi-2.1`` restores it. Final-quality (path-traced)
   videos are not made: a 512² frame costs 5-15 s against a preview's 15 ms.
 """
