@@ -3,7 +3,8 @@
 Layout:
 
 - one vertex array: the mirrored render topology merged as in
-  :meth:`cassi.data.face.topology.RenderTopology.mesh` (same vertex order), the neutral face;
+  :meth:`cassi.data.face.topology.RenderTopology.mesh` (same vertex order:
+  :meth:`~cassi.data.face.topology.RenderTopology.merged_gather`), the neutral face;
 - mesh 0 holds the parts that move, one primitive per part with a material of the part's
   colour (:func:`cassi.renderer.views.material_for`), and one morph target per kept frame: the
   position deltas from the neutral face, sparse (only the vertices that move in some frame, so
@@ -33,7 +34,7 @@ from cassi.data.face.numbering import MM_PER_UNIT
 from cassi.data.face.topology import RenderTopology
 from cassi.renderer.views import material_for
 
-__all__ = ["GlbSummary", "glb_bytes", "write_glb", "merged_gather", "AXES", "METRES_PER_UNIT",
+__all__ = ["GlbSummary", "glb_bytes", "write_glb", "AXES", "METRES_PER_UNIT",
            "QUANTIZATION"]
 
 #: glTF axis i is Parke axis AXES[i].
@@ -64,18 +65,6 @@ class GlbSummary:
     def bytes_per_frame(self) -> float:
         """The whole file over its frames (JSON, keys and the still mesh included)."""
         return self.bytes / self.frames
-
-
-def merged_gather(topology: RenderTopology) -> tuple[np.ndarray, np.ndarray]:
-    """Face row (int64) and y sign (float64) of each merged vertex, in the order
-    :meth:`RenderTopology.mesh` gives them (first use, parts in order)."""
-    seen: dict[tuple[int, float], int] = {}
-    for part in topology.parts.values():
-        for g, s in zip(part.gather.tolist(), part.sign.tolist()):
-            seen.setdefault((g, s), len(seen))
-    keys = list(seen)
-    return (np.asarray([k[0] for k in keys], np.int64),
-            np.asarray([k[1] for k in keys], np.float64))
 
 
 def _gltf_positions(positions: np.ndarray, gather: np.ndarray, sign: np.ndarray) -> np.ndarray:
@@ -147,7 +136,7 @@ def glb_bytes(topology: RenderTopology, neutral: np.ndarray, positions: np.ndarr
     if F * F >= 2 ** 32:
         raise ValueError(f"{F} frames is too many for one weights accessor; use a stride")
 
-    gather, sign = merged_gather(topology)
+    gather, sign = topology.merged_gather()
     W = len(gather)
     base = _gltf_positions(neutral, gather, sign)            # (W, 3)
     frames = _gltf_positions(positions, gather, sign)        # (F, W, 3)

@@ -28,6 +28,7 @@ from cassi.harness.rubric import (AGGREGATION_RULES, CHECKS, RATINGS, component_
 from cassi.harness.rubric.paired import (BOOTSTRAP_N, BOOTSTRAP_SEED, TIE_TOLERANCE,
                                          paired_comparisons, paired_sentence)
 from cassi.reports.tables import markdown_table
+from cassi.reports.viewer import mask_overlay, viewer_href, write_viewers
 from cassi.data.corpus.disk import Corpus
 
 #: How many fired checks per version and task file show the four views of their frame on a
@@ -67,7 +68,11 @@ def evidence_href(subject: str, version: str, table: str) -> str:
     return f"subjects/{slug(subject)}.html#{evidence_anchor(version, table)}"
 
 
-def _table_sections(run: Run, cr: pd.DataFrame, out: Path) -> list[dict]:
+def _table_sections(run: Run, cr: pd.DataFrame, out: Path,
+                    faults: dict | None = None) -> list[dict]:
+    """The thesis tables; ``faults`` maps (subject, version, table, component) to the viewer
+    at the frame of the cell's first fault (:func:`_first_faults`)."""
+    faults = faults or {}
     sections = []
     for table in sorted(cr["table"].unique()):
         tid = slug(table)
@@ -97,7 +102,8 @@ def _table_sections(run: Run, cr: pd.DataFrame, out: Path) -> list[dict]:
                         "rating": lookup.at[key, "rating"], "text": lookup.at[key, "text"],
                         "reason": lookup.at[key, "reason"],
                         "level": RATINGS.index(lookup.at[key, "rating"]),
-                        "href": f"{page}#{evidence_anchor(version, table)}"})
+                        "href": f"{page}#{evidence_anchor(version, table)}",
+                        "viewer": faults.get((subject, version, table, c))})
             rows.append({"subject": subject, "href": page, "cells": cells})
         grid = {"versions": versions, "components": components, "rows": rows, "files": files}
         sections.append({"id": tid, "table": table, "title": table_title(table),
@@ -174,6 +180,69 @@ def _evidence_frames(results: pd.DataFrame) -> dict[tuple, int]:
             for r in ev.itertuples(index=False)}
 
 
+def _fault_order(fv: pd.DataFrame) -> pd.DataFrame:
+    """The checks that earned negatives, the worst first (as the subject pages list them)."""
+    hit = fv[fv["raw_negatives"] > 0]
+    return hit.sort_values(["negatives", "raw_negatives", "task", "rep", "check"],
+                           ascending=[False, False, True, True, True], kind="mergesort")
+
+
+def _first_faults(run: Run, fv: pd.DataFrame, viewers: dict) -> dict[tuple, str]:
+    """(subject, version, table, component) -> the task viewer at the first frame of the
+    cell's worst fault, its event highlighted (relative to the report)."""
+    evidence = _evidence_frames(run.results)
+    out: dict[tuple, str] = {}
+    for r in _fault_order(fv).itertuples(index=False):
+        key = (r.subject, r.version, r.table, r.component)
+        file = (r.subject, int(r.task), int(r.rep))
+        frame = evidence.get((*file, r.version, r.check))
+        if key in out or frame is None or file not in viewers:
+            continue
+        out[key] = viewer_href(slug(r.subject), *file[1:], frame=frame, a=r.version,
+                               check=r.check)
+    return out
+
+
+def _viewer_images(run: Run, out: Path):
+    """``(subject, task, rep, version) -> renders`` for the viewer: every rendered frame and
+    view of the task file (hard-linked beside the report), hrefs relative to the viewer page;
+    at the frames an image check points at, the masks it read (:func:`mask_overlay`)."""
+    rend = run.renders
+    groups = {k: g for k, g in rend.groupby(["subject", "task", "rep", "version"])} if len(rend) \
+        else {}
+    att = run.attachments
+    masks = {(a.subject, int(a.task), int(a.rep), a.version, a.view, int(a.name[6:])): a.path
+             for a in att[att["name"].str.startswith("masks-")].itertuples(index=False)} \
+        if len(att) else {}
+    res = run.results
+    judged = res[(res["frame"] >= 0) & res["table"].notna()
+                 & ~res["view"].isin(["geometry", "trace"])]
+    evidence = {(r.subject, int(r.task), int(r.rep), r.version, r.view, int(r.frame))
+                for r in judged.itertuples(index=False)}
+
+    def images(subject, task, rep, version) -> list[dict]:
+        g = groups.get((subject, task, rep, version))
+        if g is None:
+            return []
+        found = []
+        for v in g.sort_values(["frame", "view"]).itertuples(index=False):
+            dest = out / "images" / slug(subject) / slug(version) / \
+                f"{int(task):03d}_{int(rep)}_{int(v.frame):05d}_{slug(v.view)}.png"
+            if not dest.is_file():
+                media.link_image(v.path, dest)
+            item = {"frame": int(v.frame), "view": str(v.view),
+                    "href": os.path.relpath(dest, out / "viewer" / slug(subject))}
+            key = (subject, int(task), int(rep), version, v.view, int(v.frame))
+            if key in evidence and key in masks:
+                over = dest.with_name(dest.stem + "_mask.png")
+                if not over.is_file():
+                    mask_overlay(Path(masks[key]).read_bytes(), int(v.frame), over)
+                item["mask"] = os.path.relpath(over, out / "viewer" / slug(subject))
+            found.append(item)
+        return found
+    return images
+
+
 def _nearest_rendered(renders: pd.DataFrame, frame: int) -> int | None:
     have = sorted(set(int(f) for f in renders["frame"]))
     return min(have, key=lambda h: abs(h - frame)) if have else None
@@ -203,7 +272,7 @@ def _fmt(x) -> str:
 
 
 def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
-                  rule: pd.DataFrame, out: Path, env) -> str:
+                  rule: pd.DataFrame, out: Path, env, viewers: dict | None = None) -> str:
     """Per version and table: the checks that earned negatives first (value, threshold and its
     side, the thesis's words, the four views of the frame pointed at), silent checks folded."""
     evidence = _evidence_frames(run.results[run.results["subject"] == subject])
@@ -224,11 +293,15 @@ def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
                         "text": c.text if c else r.check, "value": _fmt(r.value),
                         "unit": r.unit or "", "threshold": _fmt(r.threshold),
                         "side": c.side if c else "", "negatives": int(r.negatives),
-                        "note": r.note, "frame": None, "images": []}
+                        "note": r.note, "frame": None, "images": [], "viewer": None}
                 if r.raw_negatives > 0:
                     frame = evidence.get((subject, int(r.task), int(r.rep), version, r.check))
                     if frame is not None:
                         item["frame"] = frame
+                        if (subject, int(r.task), int(r.rep)) in (viewers or {}):
+                            item["viewer"] = viewer_href(slug(subject), int(r.task), int(r.rep),
+                                                         frame=frame, a=version, check=r.check,
+                                                         base="../")
                         if sheets < MAX_SHEETS_PER_VERSION:
                             near, item["images"] = _views_at(run, rend, subject, int(r.task),
                                                              int(r.rep), version, frame, out)
@@ -419,7 +492,11 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
     cr = component_ratings(run.results)
     rule = table_c_rule(run.results, fv=fv)
     subjects = sorted(fv["subject"].dropna().unique())
-    subject_links = [{"name": s, "href": _subject_page(run, s, fv, cr, rule, out, env)}
+    viewers = write_viewers(run, out, env, slug=slug, audio_for=_audio_for(run),
+                            images=_viewer_images(run, out))
+    subject_links = [{"name": s, "href": _subject_page(run, s, fv, cr, rule, out, env, viewers),
+                      "viewers": [{"task": k[1], "rep": k[2], "href": v}
+                                  for k, v in sorted(viewers.items()) if k[0] == s]}
                      for s in subjects]
     trend = None
     if history is not None and history["night"].nunique() > 1:
@@ -434,7 +511,8 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
         run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
         summaries=_summaries(run), paired=_paired(run, out), agreement=agree,
         comparison=_comparison(run, previous, out),
-        tables=_table_sections(run, cr, out), criterion=_criterion(run, out),
+        tables=_table_sections(run, cr, out, _first_faults(run, fv, viewers)),
+        criterion=_criterion(run, out),
         videos=encoding.videos(),
         rules=AGGREGATION_RULES,
         subjects=subject_links, trend=trend, gate=gate,

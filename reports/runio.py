@@ -13,7 +13,7 @@ import pandas as pd
 
 from cassi.common.errors import CassiInputError
 from cassi.harness.farm.results import read_results
-from cassi.harness.farm.runner import RENDER_COLUMNS  # the render index the farm writes
+from cassi.harness.farm.runner import ATTACHMENT_COLUMNS, RENDER_COLUMNS  # indexes the farm writes
 from cassi.harness.farm.tableset import SUMMARY_FILE, verify_table_set
 from cassi.harness.rubric.tables import order_versions as rubric_order
 
@@ -36,6 +36,9 @@ class Run:
     summary : dict
         The run's ``summary.json``: job counts by state, and the reason of every skipped and
         failed job.
+    attachments : DataFrame
+        ATTACHMENT_COLUMNS (the task viewer data: name ``viewer``); ``path`` is absolute.
+        Empty for runs written before the index.
     """
 
     root: Path
@@ -44,6 +47,8 @@ class Run:
     meta: dict = field(default_factory=dict)
     renders: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=RENDER_COLUMNS))
     summary: dict = field(default_factory=dict)
+    attachments: pd.DataFrame = field(
+        default_factory=lambda: pd.DataFrame(columns=ATTACHMENT_COLUMNS))
 
     @property
     def failed(self) -> dict[str, str]:
@@ -84,13 +89,19 @@ def _read_json(path: Path) -> dict:
         raise CassiInputError(f"unreadable run metadata: {err}", path=path) from err
 
 
-def _read_renders(root: Path) -> pd.DataFrame:
-    path = root / "renders.parquet"
+def _read_index(root: Path, name: str, columns) -> pd.DataFrame:
+    """A path index of the run (renders, attachments), paths checked and made absolute; an
+    index the run did not write (older runs had no attachments) is empty."""
+    path = root / f"{name}.parquet"
+    if not path.is_file() and name != "renders":
+        return pd.DataFrame(columns=list(columns))
     df = pd.read_parquet(path)
-    missing = [c for c in RENDER_COLUMNS if c not in df]
+    missing = [c for c in columns if c not in df]
+    if missing and len(df):
+        raise CassiInputError(f"{name} index lacks columns {missing}", path=path)
     if missing:
-        raise CassiInputError(f"render index lacks columns {missing}", path=path)
-    df = df[list(RENDER_COLUMNS)].copy()
+        return pd.DataFrame(columns=list(columns))
+    df = df[list(columns)].copy()
     real = root.resolve()  # once: a night's index holds 20,000-30,000 paths
     df["path"] = [str(_inside(root, p, real)) for p in df["path"]]
     return df.reset_index(drop=True)
@@ -102,7 +113,7 @@ def _inside(root: Path, rel: str, real: Path | None = None) -> Path:
     real = root.resolve() if real is None else real
     path = (root / rel).resolve()
     if os.path.commonpath([path, real]) != str(real):
-        raise CassiInputError(f"render path {rel!r} escapes the run directory", path=root)
+        raise CassiInputError(f"indexed path {rel!r} escapes the run directory", path=root)
     return path
 
 
@@ -122,5 +133,7 @@ def load_run(path: str | os.PathLike) -> Run:
     verify_table_set(root)  # one complete set of tables, or a clear refusal
     return Run(root=root, results=read_results(root / "results.parquet"),
                ratings=pd.read_parquet(root / "ratings.parquet"),
-               meta=_read_json(root / "run.json"), renders=_read_renders(root),
-               summary=_read_json(root / SUMMARY_FILE))
+               meta=_read_json(root / "run.json"),
+               renders=_read_index(root, "renders", RENDER_COLUMNS),
+               summary=_read_json(root / SUMMARY_FILE),
+               attachments=_read_index(root, "attachments", ATTACHMENT_COLUMNS))

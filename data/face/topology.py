@@ -88,6 +88,18 @@ class RenderTopology:
             out[name] = v
         return out
 
+    def merged_gather(self) -> tuple[np.ndarray, np.ndarray]:
+        """Face row (int64) and y sign (float64) of each merged vertex, in the order
+        :meth:`mesh` gives them (first use, parts in order): what the glTF export and the
+        report's viewer send instead of the merged vertices themselves."""
+        seen: dict[tuple[int, float], int] = {}
+        for part in self.parts.values():
+            for g, s in zip(part.gather.tolist(), part.sign.tolist()):
+                seen.setdefault((g, s), len(seen))
+        keys = list(seen)
+        return (np.asarray([k[0] for k in keys], np.int64),
+                np.asarray([k[1] for k in keys], np.float64))
+
     def mesh(self, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """All parts as one mesh: vertices float64 (W, 3), triangles (T, 3) and the part index
         of each triangle (for tests and previews). Vertices shared between parts are merged

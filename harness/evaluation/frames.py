@@ -13,10 +13,13 @@ What a night keeps, and why (measured on the default nightly, README "Disk"):
   judge (their masks, the only masks kept) on the same frames for every version, and the
   versions side by side in one front-view video per task file;
 - the side, half and top views on that grid only for the ``video_versions`` (a four-view
-  video each): none by default, since `cassi export --format gltf` gives any view of any version
-  from geometry (Blender, any glTF viewer). cassi-2.1's four-view grid was 10,968 of 31,081 renders and half the report's
-  video encoding; ``--video-versions cassi-2.1`` restores it. Final-quality (path-traced)
-  videos are not made: a 512² frame costs 5-15 s against a preview's 15 ms.
+  video each): none by default, since the report's task viewer (and `cassi export --format
+  gltf`) shows any view of any version from geometry. cassi-2.1's four-view grid was 10,968
+  of 31,081 renders and half the report's video encoding; ``--video-versions cassi-2.1``
+  restores it. Final-quality (path-traced) videos are not made: a 512² frame costs 5-15 s
+  against a preview's 15 ms;
+- the viewer's geometry (:func:`viewer_frames`): every :data:`VIEWER_STRIDE`-th row and every
+  check's frame, quantised (:mod:`cassi.harness.evaluation.viewerdata`).
 """
 from __future__ import annotations
 
@@ -107,6 +110,26 @@ def frames_to_render(frames: np.ndarray, rows: pd.DataFrame, *, task: int, versi
         by_view = {view: sorted(set(pick) | grid)
                    for view in video_views(task, version, video_versions)}
     return pick, by_view
+
+
+#: The report's task viewer keeps every VIEWER_STRIDE-th recording row (145.6 / 4 = 36 Hz,
+#: above a video's 30 frames a second: a bilabial closure of 50-100 ms spans 2-3 kept frames).
+VIEWER_STRIDE = 4
+
+
+def viewer_frames(frames: np.ndarray, rows: pd.DataFrame | None, *,
+                  stride: int = VIEWER_STRIDE) -> list[int]:
+    """The recording rows the task viewer keeps: every ``stride``-th animated row, the last,
+    and every frame a check points at (its evidence rows), so that a negative opens the viewer
+    on the very frame that earned it."""
+    frames = np.asarray(frames, np.int64)
+    keep = set(frames[::max(1, stride)].tolist()) | {int(frames[-1])}
+    if rows is not None and len(rows) and "frame" in rows:
+        ev = rows[rows["frame"] >= 0]
+        if "view" in ev:
+            ev = ev[ev["view"] != "trace"]
+        keep |= set(int(f) for f in ev["frame"]) & set(frames.tolist())
+    return sorted(keep)
 
 
 def render_budget(rows_of, tasks, versions, views, *, stride: int, extremes: int,

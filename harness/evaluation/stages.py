@@ -25,7 +25,9 @@ from cassi.harness.evaluation.caches import (get_corpus, get_face, get_neutral, 
                                              get_renderer, get_version_face)
 from cassi.harness.evaluation.config import Catalog
 from cassi.harness.evaluation.evalset import task_catalog
-from cassi.harness.evaluation.frames import DEFAULT_EXTREMES, frames_to_render, image_views
+from cassi.harness.evaluation.frames import (DEFAULT_EXTREMES, frames_to_render, image_views,
+                                             viewer_frames)
+from cassi.harness.evaluation.viewerdata import viewer_blob
 from cassi.harness.evaluation.inputs import (read_planned, verify_code, verify_profile,
                                              verify_subject_files)
 from cassi.harness.farm.jobs import Job, SkipJob, StageContext, StageOutput, npz_bytes
@@ -109,7 +111,8 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
     """Animate every frame, run the geometric checks, choose and keep the frames to render.
 
     Outputs: ``rows`` (the checks' rows, view ``"geometry"``), ``keyframes`` (npz: ``frames``
-    int64 (K,) recording rows, ``positions`` float32 (K, V, 3) Parke units) and
+    int64 (K,) recording rows, ``positions`` float32 (K, V, 3) Parke units), ``viewer`` (the
+    report's task viewer data, :mod:`cassi.harness.evaluation.viewerdata`) and
     ``meta["render_frames"]``.
     """
     corpus = get_corpus(ctx.corpus)
@@ -131,7 +134,9 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
         face = get_version_face(corpus, job.subject, profile, version)  # what it animated
         rows = rubric.run_geometry_checks(anim, face, profile, task=job.task, subject=job.subject,
                                           rep=job.rep, neutral=get_neutral(), recording=rec)
-        return _geometry_output(job, ctx, rec, anim, pd.DataFrame(rows))
+        out = _geometry_output(job, ctx, rec, anim, pd.DataFrame(rows))
+        out.files["viewer"] = (_viewer_output(rec, anim, face, profile, out.rows), ".npz")
+        return out
 
 
 @dataclass(frozen=True)
@@ -194,6 +199,16 @@ def _geometry_output(job: Job, ctx: StageContext, rec, anim: StreamedAnimation,
                    f"{len(keep) - len(pick)} more")
     log += [f"recording warning: {w}" for w in getattr(rec, "warnings", ())]
     return StageOutput(rows=rows, files={"keyframes": (keyframes, ".npz")}, meta=meta, log=log)
+
+
+def _viewer_output(rec, anim: StreamedAnimation, face, profile, rows: pd.DataFrame) -> bytes:
+    """The report's task viewer data (:mod:`.viewerdata`) at :func:`viewer_frames`."""
+    keep = viewer_frames(anim.frames, rows)
+    idx = np.searchsorted(anim.frames, keep)
+    xy = np.asarray(rec.xy_mm)[keep]
+    return viewer_blob(face, anim.positions.take(idx), np.asarray(keep, np.int64),
+                       np.asarray(anim.time_us)[idx], xy, np.asarray(rec.valid, bool)[keep],
+                       profile.jaw_length_mm)
 
 
 def _png_bytes(srgb: np.ndarray, metadata: dict | None = None) -> bytes:
@@ -288,7 +303,8 @@ def image_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> Sta
 def cassi_pipeline(*, render: bool = True) -> Pipeline:
     """The real pipeline; ``render=False`` for geometry-only runs."""
     return Pipeline(geometry=geometry_stage, render=render_stage if render else None,
-                    image=image_stage if render else None, ratings=rubric.ratings_table)
+                    image=image_stage if render else None, ratings=rubric.ratings_table,
+                    attachments=("viewer", "masks-*"))
 
 
 def catalog(corpus):

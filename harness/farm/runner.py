@@ -23,11 +23,14 @@ from cassi.harness.farm.store import OutputStore
 from cassi.harness.farm.tableset import write_table_set
 
 __all__ = ["Pipeline", "RunResult", "Scheduler", "TaskSpec", "OutputWriteError", "run_batch",
-           "collect", "RENDER_COLUMNS", "RENDER_PREFIX"]
+           "collect", "RENDER_COLUMNS", "RENDER_PREFIX", "ATTACHMENT_COLUMNS"]
 
 #: Outputs named ``render-<frame>`` are images; they are listed in ``renders.parquet``.
 RENDER_PREFIX = "render-"
 RENDER_COLUMNS = ("subject", "task", "rep", "version", "view", "frame", "path")
+#: The index of the outputs a pipeline names as attachments (``attachments.parquet``): files a
+#: job keeps for the readers of a run (the report's task viewer data), found without manifests.
+ATTACHMENT_COLUMNS = ("subject", "task", "rep", "version", "view", "name", "path")
 STAGES = ("geometry", "render", "image")
 
 
@@ -47,12 +50,16 @@ class Pipeline:
         are the outputs of all the view's render chunks), or None.
     ratings : the run's results table -> its ratings table (the one aggregation the run's
         ``ratings`` files and every report share), or None for a run without ratings.
+    attachments : output names (of any stage) the run lists in ``attachments.parquet``.
     """
 
     geometry: StageFn
     render: StageFn | None = None
     image: StageFn | None = None
     ratings: Callable[[pd.DataFrame], pd.DataFrame] | None = None
+    #: Output names listed in the run's attachments index (:data:`ATTACHMENT_COLUMNS`); a name
+    #: ending in ``*`` is a prefix.
+    attachments: tuple[str, ...] = ()
 
     def stage(self, name: str) -> StageFn:
         return {"geometry": self.geometry, "render": self.render, "image": self.image}[name]
@@ -188,9 +195,17 @@ class Scheduler:
                 self._schedule(image)
 
 
-def collect(scheduler: Scheduler) -> tuple[list[pd.DataFrame], list[dict]]:
-    """The stored rows of every finished job, and the render index entries."""
-    frames, renders = [], []
+def _attached(name: str, attachments) -> bool:
+    """Whether output ``name`` is one of ``attachments`` (an entry ending in ``*`` is a
+    prefix: ``masks-*``)."""
+    return any(name == a or (a.endswith("*") and name.startswith(a[:-1])) for a in attachments)
+
+
+def collect(scheduler: Scheduler, attachments=()) -> tuple[list[pd.DataFrame], list[dict],
+                                                         list[dict]]:
+    """The stored rows of every finished job, the render index and the attachment index
+    entries (the outputs named in ``attachments``)."""
+    frames, renders, attached = [], [], []
     for key in sorted(scheduler.records):
         manifest = scheduler.manifest(key)
         if manifest is None:
@@ -204,7 +219,11 @@ def collect(scheduler: Scheduler) -> tuple[list[pd.DataFrame], list[dict]]:
                 renders.append({"subject": job.subject, "task": job.task, "rep": job.rep,
                                 "version": job.version, "view": job.view,
                                 "frame": int(name[len(RENDER_PREFIX):]), "path": ref.relpath})
-    return frames, renders
+            elif _attached(name, attachments):
+                attached.append({"subject": job.subject, "task": job.task, "rep": job.rep,
+                                 "version": job.version, "view": job.view, "name": name,
+                                 "path": ref.relpath})
+    return frames, renders, attached
 
 
 def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterable[str],
@@ -214,7 +233,7 @@ def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterabl
     then write the run's tables as one set.
 
     The caller prepares ``ctx.out_dir`` (:meth:`OutputStore.prepare`) and holds its lock.
-    Writes ``results``, ``ratings`` and ``renders`` (``.parquet`` + ``.csv``),
+    Writes ``results``, ``ratings``, ``renders`` and ``attachments`` (``.parquet`` + ``.csv``),
     ``summary.json`` and ``tables.json`` there.
     """
     t0 = time.perf_counter()
@@ -223,7 +242,7 @@ def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterabl
                            images=pipeline.image is not None)
     scheduler = Scheduler(plan, pipeline, ctx, executor, progress=progress)
     records = scheduler.run()
-    frames, renders = collect(scheduler)
+    frames, renders, attached = collect(scheduler, pipeline.attachments)
     table = R.combine(frames)
     rated = pipeline.ratings(table) if pipeline.ratings is not None else R.empty_ratings()
     summary = Summary(records, time.perf_counter() - t0,
@@ -233,7 +252,8 @@ def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterabl
         ["subject", "task", "rep", "version", "view", "frame"], kind="mergesort")
     try:
         write_table_set(scheduler.store.root,
-                        {"results": table, "ratings": rated, "renders": render_index},
+                        {"results": table, "ratings": rated, "renders": render_index,
+                         "attachments": pd.DataFrame(attached, columns=list(ATTACHMENT_COLUMNS))},
                         {**summary.to_dict(), **(extra_meta or {})})
     except OSError as err:
         # A full disk or a directory gone read-only: every finished job's outputs are intact

@@ -1,7 +1,8 @@
 """A run's tables, written and read as one set.
 
-``results``, ``ratings`` and ``renders`` (Parquet + CSV each) and ``summary.json`` belong
-together: ratings are derived from the results, the render index from the same jobs. They are
+``results``, ``ratings``, ``renders`` and ``attachments`` (Parquet + CSV each) and
+``summary.json`` belong together: ratings are derived from the results, the render and
+attachment indexes from the same jobs. They are
 written aside, renamed into place, and only then is ``tables.json`` written, naming the SHA-256
 of every file of the set. A reader checks every file against it, so a set interrupted between
 two renames (a crash, a full disk) is refused instead of read as a mix of old and new.
@@ -27,7 +28,9 @@ from cassi.harness.farm.store import sha256_bytes, sha256_file
 
 SET_FILE = "tables.json"
 #: The tables of a run, each written as ``NAME.parquet`` and ``NAME.csv``.
-TABLE_NAMES = ("results", "ratings", "renders")
+TABLE_NAMES = ("results", "ratings", "renders", "attachments")
+#: Tables a caller may leave out (written empty): runs before the attachment index had none.
+OPTIONAL_TABLES = ("attachments",)
 SUMMARY_FILE = "summary.json"
 CONFIG_FILE = "run.json"
 #: Keys the run writes into its config file after the tables (they are not the configuration).
@@ -41,7 +44,7 @@ class TableSetError(CassiInputError):
 def _encode(tables: Mapping[str, pd.DataFrame], summary: Mapping) -> dict[str, bytes]:
     files: dict[str, bytes] = {}
     for name in TABLE_NAMES:
-        df = tables[name]
+        df = tables[name] if name in tables or name not in OPTIONAL_TABLES else pd.DataFrame()
         buf = io.BytesIO()
         df.to_parquet(buf, index=False, engine="pyarrow")
         files[f"{name}.parquet"] = buf.getvalue()
@@ -75,7 +78,8 @@ def config_digest(root: str | os.PathLike) -> str | None:
 
 def write_table_set(root: str | os.PathLike, tables: Mapping[str, pd.DataFrame],
                     summary: Mapping) -> Path:
-    """Write ``tables`` (every name of :data:`TABLE_NAMES`) and ``summary`` into ``root`` as
+    """Write ``tables`` (every name of :data:`TABLE_NAMES`, :data:`OPTIONAL_TABLES` may be
+    left out) and ``summary`` into ``root`` as
     one set; returns the path of ``tables.json``.
 
     Raises

@@ -1,7 +1,8 @@
 """Table F, fidelity to the recording (cassi-farm's addition, not the thesis's).
 
 The thesis's judges saw speech moving; a face that stands still commits none of Tables A-E's
-geometric faults (Tables C and E judge its movement with the ranges below: ``tract_reach``). Here the model's pellet sites -- 67 (UL), 49 (LL), 289-292 (T1-T4), 258 (MNI) and the
+geometric faults (Tables C and E judge its movement with the ranges below: ``tract_reach``).
+Here the model's pellet sites -- 67 (UL), 49 (LL), 289-292 (T1-T4), 258 (MNI) and the
 midpoint of 281 and 286 (MNM) -- are mapped back into the XRMB frame in millimetres with the
 thesis's own mapping (:class:`cassi.versions.mapping.XrmbToParke`, section 4.1.1) and compared,
 frame by frame, with the pellets the version animated.

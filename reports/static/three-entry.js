@@ -1,0 +1,2 @@
+export { Scene, PerspectiveCamera, OrthographicCamera, WebGLRenderer, BufferGeometry, BufferAttribute, Float32BufferAttribute, Mesh, MeshStandardMaterial, MeshBasicMaterial, AmbientLight, DirectionalLight, HemisphereLight, Color, Vector3, Box3, Sphere, Plane, Group, Points, PointsMaterial, LineSegments, LineBasicMaterial, DoubleSide, SRGBColorSpace } from 'three';
+export { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';

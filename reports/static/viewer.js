@@ -1,0 +1,447 @@
+/* cassi-farm task viewer: the animated face of one task file, every version, in 3D, with the
+   recording's pellets, labels, sound and the rubric's events on one timeline.
+   Data: window.CASSI_VIEWER (written by cassi.reports.viewer). Strings from data files are
+   only ever set as text (textContent, option.text), never as HTML. */
+(function () {
+  "use strict";
+  const D = window.CASSI_VIEWER;
+  const $ = (id) => document.getElementById(id);
+  const status = $("status");
+  const DTYPES = { float32: Float32Array, int16: Int16Array, int32: Int32Array, uint16: Uint16Array,
+                   int8: Int8Array, uint8: Uint8Array };
+
+  function fail(err) {
+    status.textContent = "error: " + (err && err.message ? err.message : err);
+    status.className = "error";
+    console.error(err);
+  }
+
+  async function decode(a) {
+    let bytes = Uint8Array.from(atob(a.b64), (c) => c.charCodeAt(0));
+    if (a.deflate) {
+      const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream("deflate"));
+      bytes = new Uint8Array(await new Response(stream).arrayBuffer());
+    }
+    const T = DTYPES[a.dtype];
+    return new T(bytes.buffer, bytes.byteOffset, bytes.byteLength / T.BYTES_PER_ELEMENT);
+  }
+
+  // ---- versions: geometry per kept frame -------------------------------------------------
+  async function loadVersion(name) {
+    const v = D.version_data[name];
+    const out = { name: name, events: v.events, renders: v.renders, parts: v.parts,
+                  palateTop: v.palate_top };
+    for (const key of ["frames", "time_ms", "base", "moving", "q0", "dq", "gather", "sign",
+                       "triangles", "part_of", "model"]) out[key] = await decode(v[key]);
+    const K = out.frames.length, M = out.moving.length, step = v.step;
+    // every kept frame's moving vertices (face rows), from the first frame and the changes
+    const pos = new Float32Array(K * M * 3);
+    const acc = new Int32Array(M * 3);
+    for (let i = 0; i < M * 3; i++) acc[i] = out.q0[i];
+    for (let k = 0; k < K; k++) {
+      if (k > 0) { const off = (k - 1) * M * 3; for (let i = 0; i < M * 3; i++) acc[i] += out.dq[off + i]; }
+      for (let i = 0; i < M * 3; i++) pos[k * M * 3 + i] = acc[i] * step;
+    }
+    out.pos = pos; out.K = K; out.M = M;
+    out.face = Float32Array.from(out.base);   // face rows of the frame shown
+    return out;
+  }
+
+  function keptIndex(frames, row) {   // last kept frame <= row
+    let lo = 0, hi = frames.length - 1;
+    if (row <= frames[0]) return 0;
+    if (row >= frames[hi]) return hi;
+    while (hi - lo > 1) { const mid = (lo + hi) >> 1; if (frames[mid] <= row) lo = mid; else hi = mid; }
+    return lo;
+  }
+
+  function setFace(ver, row) {
+    const f = ver.frames, k = keptIndex(f, row);
+    const k2 = Math.min(k + 1, ver.K - 1);
+    const t = k2 > k && row > f[k] ? Math.min(1, (row - f[k]) / (f[k2] - f[k])) : 0;
+    const M = ver.M, a = k * M * 3, b = k2 * M * 3;
+    for (let m = 0; m < M; m++) {
+      const r = ver.moving[m] * 3;
+      for (let c = 0; c < 3; c++) {
+        const i = m * 3 + c;
+        ver.face[r + c] = ver.pos[a + i] + t * (ver.pos[b + i] - ver.pos[a + i]);
+      }
+    }
+    return k;
+  }
+
+  // Parke (x forward, y left, z up) -> three.js (glTF axes): (y, z, x)
+  function writeMerged(ver, attr) {
+    const g = ver.gather, s = ver.sign, F = ver.face, arr = attr.array;
+    for (let w = 0; w < g.length; w++) {
+      const r = g[w] * 3;
+      arr[w * 3] = F[r + 1] * s[w]; arr[w * 3 + 1] = F[r + 2]; arr[w * 3 + 2] = F[r];
+    }
+    attr.needsUpdate = true;
+  }
+
+  function buildMesh(ver, wire) {
+    const geo = new THREE.BufferGeometry();
+    const attr = new THREE.BufferAttribute(new Float32Array(ver.gather.length * 3), 3);
+    geo.setAttribute("position", attr);
+    // triangles sorted by part, one draw group (material) per part
+    const T = ver.part_of.length, order = [];
+    for (let i = 0; i < T; i++) order.push(i);
+    order.sort((x, y) => ver.part_of[x] - ver.part_of[y] || x - y);
+    const idx = new Uint32Array(T * 3);
+    order.forEach((t, j) => { for (let c = 0; c < 3; c++) idx[j * 3 + c] = ver.triangles[t * 3 + c]; });
+    geo.setIndex(new THREE.BufferAttribute(idx, 1));
+    const mats = [];
+    let start = 0;
+    while (start < T) {
+      const p = ver.part_of[order[start]];
+      let end = start;
+      while (end < T && ver.part_of[order[end]] === p) end++;
+      geo.addGroup(start * 3, (end - start) * 3, mats.length);
+      const spec = ver.parts[p];
+      const col = new THREE.Color().setRGB(spec.rgb[0], spec.rgb[1], spec.rgb[2]);
+      mats.push(wire ? new THREE.MeshBasicMaterial({ color: col, wireframe: true, transparent: true, opacity: 0.55 })
+                     : new THREE.MeshStandardMaterial({ color: col, roughness: spec.roughness, metalness: 0,
+                                                        side: THREE.DoubleSide }));
+      start = end;
+    }
+    const mesh = new THREE.Mesh(geo, mats);
+    mesh.frustumCulled = false;   // the positions move every frame; the bounds would go stale
+    mesh.userData.attr = attr;
+    return mesh;
+  }
+
+  // ---- state ---------------------------------------------------------------------------
+  const S = { row: 0, playing: false, speed: 0.25, view: "front", a: null, b: null, mode: "side",
+              check: null, pellet: 2, loaded: {}, first: 0, last: 0 };
+  const params = new URLSearchParams(location.hash.slice(1));
+
+  let renderer, sceneA, sceneB, camera, controls, meshA, meshB, meshBwire, clipPlanes = [];
+  const box = $("three");
+
+  function lights(scene) {
+    scene.add(new THREE.HemisphereLight(0xffffff, 0x444444, 1.6));
+    const key = new THREE.DirectionalLight(0xffffff, 2.2); key.position.set(-400, 500, 900); scene.add(key);
+    const fill = new THREE.DirectionalLight(0xffffff, 0.8); fill.position.set(700, 100, 500); scene.add(fill);
+    const back = new THREE.DirectionalLight(0xffffff, 0.6); back.position.set(0, 300, -800); scene.add(back);
+  }
+
+  function initThree() {
+    renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+    renderer.setPixelRatio(1);
+    renderer.setSize(box.clientWidth, box.clientHeight);
+    renderer.setScissorTest(true);
+    renderer.localClippingEnabled = true;
+    box.appendChild(renderer.domElement);
+    sceneA = new THREE.Scene(); sceneB = new THREE.Scene();
+    sceneA.background = new THREE.Color(0xf4f4f4); sceneB.background = new THREE.Color(0xf4f4f4);
+    lights(sceneA); lights(sceneB);
+    camera = new THREE.PerspectiveCamera(22, 1, 10, 100000);
+    controls = new THREE.OrbitControls(camera, renderer.domElement);
+    controls.addEventListener("change", draw);
+  }
+
+  function label(id, text, left) {
+    let el = $(id);
+    if (!el) { el = document.createElement("div"); el.id = id; el.className = "vlabel"; box.appendChild(el); }
+    el.textContent = text; el.style.left = left + "px"; el.style.display = text ? "" : "none";
+  }
+
+  function setView(name) {
+    const v = D.views[name];
+    S.view = name;
+    camera.position.set(...v.origin); camera.up.set(...v.up); camera.fov = v.fov;
+    controls.target.set(...v.target); camera.updateProjectionMatrix(); controls.update();
+    clipPlanes.length = 0;
+    // keep y >= 0 (the left half; faces on the midsagittal plane, the tongue's among them, stay)
+    if (v.half) clipPlanes.push(new THREE.Plane(new THREE.Vector3(1, 0, 0), 0.5));
+    if (v.clip_above_palate !== null && S.a && S.a.palateTop !== null)
+      clipPlanes.push(new THREE.Plane(new THREE.Vector3(0, -1, 0), S.a.palateTop + v.clip_above_palate));
+    for (const m of [meshA, meshB, meshBwire]) if (m) for (const mat of m.material) {
+      mat.clippingPlanes = clipPlanes.slice(); mat.needsUpdate = true;
+    }
+    document.querySelectorAll("button[data-view]").forEach((b) => b.classList.toggle("on", b.dataset.view === name));
+    draw();
+  }
+
+  async function setVersions() {
+    const an = $("va").value, bn = $("vb").value;
+    if (!S.loaded[an]) S.loaded[an] = await loadVersion(an);
+    if (bn && !S.loaded[bn]) S.loaded[bn] = await loadVersion(bn);
+    S.a = S.loaded[an]; S.b = bn ? S.loaded[bn] : null; S.mode = $("mode").value;
+    for (const m of [meshA, meshB, meshBwire]) if (m) m.parent.remove(m);
+    meshA = buildMesh(S.a, false); sceneA.add(meshA);
+    meshB = meshBwire = null;
+    if (S.b) {
+      if (S.mode === "overlay") { meshBwire = buildMesh(S.b, true); sceneA.add(meshBwire); }
+      else { meshB = buildMesh(S.b, false); sceneB.add(meshB); }
+    }
+    setView(S.view);
+    drawEvents();
+    go(S.row);
+  }
+
+  function draw() {
+    if (!renderer) return;
+    const W = box.clientWidth, H = box.clientHeight;
+    const split = S.b && S.mode === "side";
+    const w = split ? Math.floor(W / 2) : W;
+    camera.aspect = w / H; camera.updateProjectionMatrix();
+    renderer.setViewport(0, 0, w, H); renderer.setScissor(0, 0, w, H); renderer.render(sceneA, camera);
+    if (split) { renderer.setViewport(w, 0, W - w, H); renderer.setScissor(w, 0, W - w, H); renderer.render(sceneB, camera); }
+    label("labelA", S.a ? "A: " + S.a.name + (S.b && S.mode === "overlay" ? "  (B: " + S.b.name + ", wireframe)" : "") : "", 4);
+    label("labelB", split ? "B: " + S.b.name : "", w + 4);
+  }
+
+  // ---- time ----------------------------------------------------------------------------
+  function rowTime(row) {   // seconds from the task's first row (recording clock)
+    const v = S.a; const k = keptIndex(v.frames, row);
+    return v.time_ms[k] / 1000 + (row - v.frames[k]) / D.rate_hz - v.time_ms[0] / 1000;
+  }
+
+  function go(row) {
+    row = Math.max(S.first, Math.min(S.last, Math.round(row)));
+    S.row = row;
+    if (meshA) { setFace(S.a, row); writeMerged(S.a, meshA.userData.attr); meshA.geometry.computeVertexNormals(); }
+    const mb = meshB || meshBwire;
+    if (mb) { setFace(S.b, row); writeMerged(S.b, mb.userData.attr); mb.geometry.computeVertexNormals(); }
+    $("frame").textContent = String(row);
+    $("time").textContent = "t = " + rowTime(row).toFixed(3) + " s";
+    $("scrub").value = String(row);
+    showRenders();
+    draw(); drawTimeline();
+  }
+
+  function showRenders() {
+    const el = $("renders");
+    el.replaceChildren();
+    for (const ver of [S.a, S.b]) {
+      if (!ver) continue;
+      const here = ver.renders.filter((r) => r.frame === S.row && r.view === S.view);
+      const cap = document.createElement("div"); cap.className = "meta";
+      if (!here.length) {
+        cap.textContent = ver.name + ": no Mitsuba render of frame " + S.row + " (" + S.view + " view)";
+        el.appendChild(cap);
+        const have = ver.renders.filter((r) => r.view === S.view);
+        if (have.length) {
+          const near = have.reduce((a, r) => (Math.abs(r.frame - S.row) < Math.abs(a.frame - S.row) ? r : a));
+          const b = document.createElement("button"); b.textContent = "go to the nearest render: frame " + near.frame;
+          b.addEventListener("click", () => { pause(); go(near.frame); }); el.appendChild(b);
+        }
+        continue;
+      }
+      for (const r of here) {
+        cap.textContent = ver.name + ": Mitsuba render, " + r.view + " view, frame " + r.frame;
+        el.appendChild(cap);
+        const wrap = document.createElement("div"); wrap.className = "render";
+        const img = document.createElement("img"); img.src = r.href; img.alt = cap.textContent; wrap.appendChild(img);
+        el.appendChild(wrap);
+        if (r.mask) {
+          const m = document.createElement("img"); m.src = r.mask; m.className = "mask";
+          m.alt = "what the image checks read in this frame"; wrap.appendChild(m);
+          const t = document.createElement("label"); t.className = "meta";
+          const box = document.createElement("input"); box.type = "checkbox"; box.checked = true;
+          box.addEventListener("change", () => { m.style.display = box.checked ? "" : "none"; });
+          t.appendChild(box);
+          t.appendChild(document.createTextNode(" the image checks' masks: lips red, upper teeth yellow, lower teeth cyan, tongue magenta, mouth opening blue"));
+          el.appendChild(t);
+        }
+      }
+    }
+  }
+
+  let last = null;
+  function tick(now) {
+    if (!S.playing) return;
+    const audio = $("audio");
+    if (D.audio && !audio.paused && S.speed === 1) {
+      go(S.first + audio.currentTime * D.rate_hz);
+    } else {
+      if (last !== null) go(S.row + (now - last) / 1000 * D.rate_hz * S.speed);
+    }
+    last = now;
+    if (S.row >= S.last) { pause(); return; }
+    requestAnimationFrame(tick);
+  }
+  function play() {
+    if (S.row >= S.last) go(S.first);
+    S.playing = true; last = null; $("play").textContent = "pause";
+    const audio = $("audio");
+    if (D.audio && S.speed === 1) { audio.currentTime = rowTime(S.row); audio.play().catch(() => {}); }
+    requestAnimationFrame(tick);
+  }
+  function pause() { S.playing = false; $("play").textContent = "play"; $("audio").pause(); }
+
+  function stepKept(dir) {
+    pause();
+    const f = S.a.frames; const k = keptIndex(f, S.row);
+    if (dir > 0) go(f[Math.min(f.length - 1, f[k] > S.row ? k : k + 1)]);
+    else go(f[Math.max(0, f[k] < S.row ? k : k - 1)]);
+  }
+
+  // ---- timeline ------------------------------------------------------------------------
+  const TL = $("timeline"), ctx = TL.getContext("2d");
+  const PAD = 46, LANES = { labels: [6, 40], wave: [46, 86], trace: [92, 246], events: [252, 294] };
+  const xOf = (row) => PAD + (TL.width - PAD - 6) * (row - S.first) / Math.max(1, S.last - S.first);
+  const rowOf = (x) => S.first + (x - PAD) / (TL.width - PAD - 6) * (S.last - S.first);
+
+  function series(arr, frames, pellet, axis) {
+    const out = []; const n = frames.length;
+    for (let k = 0; k < n; k++) out.push([frames[k], arr[(k * D.pellets.length + pellet) * 2 + axis]]);
+    return out;
+  }
+
+  function drawTimeline() {
+    if (!S.a) return;
+    ctx.clearRect(0, 0, TL.width, TL.height);
+    ctx.font = "11px sans-serif"; ctx.fillStyle = "#555";
+    // labels
+    const [l0, l1] = LANES.labels;
+    ctx.fillText("labels", 2, l0 + 12);
+    if (D.labels) {
+      const tiers = [["words", l0, (l1 - l0) / 2], ["phones", l0 + (l1 - l0) / 2, (l1 - l0) / 2]];
+      for (const [name, y, h] of tiers) for (const [s0, s1, txt] of (D.labels[name] || [])) {
+        const x0 = xOf(S.first + s0 * D.rate_hz), x1 = xOf(S.first + s1 * D.rate_hz);
+        ctx.strokeStyle = "#bbb"; ctx.strokeRect(x0, y, x1 - x0, h - 1);
+        ctx.fillStyle = "#333"; if (x1 - x0 > 8) ctx.fillText(txt, x0 + 2, y + h - 4);
+      }
+    } else { ctx.fillText("no alignment in this corpus", PAD, l0 + 12); }
+    // waveform
+    const [w0, w1] = LANES.wave; ctx.fillStyle = "#555"; ctx.fillText("sound", 2, w0 + 12);
+    if (D.waveform) {
+      const n = D.waveform.min.length, mid = (w0 + w1) / 2, amp = (w1 - w0) / 2;
+      ctx.strokeStyle = "#4a6fa5"; ctx.beginPath();
+      for (let i = 0; i < n; i++) {
+        const x = xOf(S.first + (i / n) * D.waveform.seconds * D.rate_hz);
+        ctx.moveTo(x, mid - D.waveform.max[i] * amp); ctx.lineTo(x, mid - D.waveform.min[i] * amp);
+      }
+      ctx.stroke();
+    } else { ctx.fillText("no sound in this corpus", PAD, w0 + 12); }
+    // pellet traces
+    const [t0, t1] = LANES.trace;
+    const p = S.pellet, traces = [];
+    for (const axis of [0, 1]) {
+      traces.push({ pts: series(S.measured, S.measuredFrames, p, axis), style: [], axis: axis });
+      traces.push({ pts: series(S.a.model, S.a.frames, p, axis), style: [6, 3], axis: axis });
+      if (S.b) traces.push({ pts: series(S.b.model, S.b.frames, p, axis), style: [2, 3], axis: axis });
+    }
+    const half = (t1 - t0) / 2;
+    for (const axis of [0, 1]) {
+      const y0 = t0 + axis * half, vals = [];
+      for (const tr of traces) if (tr.axis === axis) for (const [, v] of tr.pts) if (isFinite(v)) vals.push(v);
+      let lo = Math.min(...vals), hi = Math.max(...vals); if (!(hi > lo)) { lo -= 1; hi += 1; }
+      const yOf = (v) => y0 + 4 + (half - 8) * (1 - (v - lo) / (hi - lo));
+      ctx.fillStyle = "#555"; ctx.fillText(D.pellets[p] + (axis ? " y" : " x"), 2, y0 + 12);
+      ctx.fillText(hi.toFixed(1), 2, y0 + 24); ctx.fillText(lo.toFixed(1) + " mm", 2, y0 + half - 4);
+      for (const tr of traces) {
+        if (tr.axis !== axis) continue;
+        ctx.setLineDash(tr.style); ctx.strokeStyle = axis ? "#b42318" : "#1f5fa8"; ctx.beginPath();
+        let pen = false;
+        for (const [row, v] of tr.pts) {
+          if (!isFinite(v)) { pen = false; continue; }
+          if (pen) ctx.lineTo(xOf(row), yOf(v)); else ctx.moveTo(xOf(row), yOf(v));
+          pen = true;
+        }
+        ctx.stroke();
+      }
+      ctx.setLineDash([]);
+    }
+    // events
+    const [e0, e1] = LANES.events; ctx.fillStyle = "#555"; ctx.fillText("events", 2, e0 + 12);
+    const evs = allEvents();
+    for (const e of evs) for (const f of e.frames) {
+      const x = xOf(f), h = Math.max(6, Math.min(e1 - e0, 6 + 8 * e.negatives));
+      ctx.fillStyle = D.table_colours[e.table] || "#888";
+      const hl = e.check === S.check && e.version === S.a.name;
+      ctx.fillRect(x - (hl ? 3 : 1.5), e1 - h, hl ? 6 : 3, h);
+      if (hl) { ctx.strokeStyle = "#000"; ctx.strokeRect(x - 4, e1 - h - 1, 8, h + 2); }
+    }
+    // cursor
+    ctx.strokeStyle = "#000"; ctx.beginPath(); ctx.moveTo(xOf(S.row), 0); ctx.lineTo(xOf(S.row), TL.height); ctx.stroke();
+  }
+
+  function allEvents() {
+    const out = [];
+    for (const ver of [S.a, S.b]) if (ver) for (const e of ver.events) out.push(Object.assign({ version: ver.name }, e));
+    return out;
+  }
+
+  function eventItem(e) {
+    const li = document.createElement("li");
+    li.dataset.check = e.check; li.dataset.version = e.version;
+    if (e.check === S.check && e.version === S.a.name) li.className = "hl";
+    const sw = document.createElement("span"); sw.className = "swatch"; sw.style.background = D.table_colours[e.table] || "#888";
+    li.appendChild(sw);
+    const t = document.createElement("span");
+    t.textContent = e.version + " · Table " + e.table + " · " + e.text + " (" + e.check + ", " + e.component + "): "
+      + e.negatives + " negative" + (e.negatives === 1 ? "" : "s")
+      + (e.value !== null ? ", value " + e.value.toPrecision(4) + " " + e.unit : "") + "; frame" + (e.frames.length === 1 ? " " : "s ");
+    li.appendChild(t);
+    for (const f of e.frames) {
+      const b = document.createElement("button"); b.textContent = String(f); b.className = "evframe";
+      b.addEventListener("click", () => { S.check = e.check; pause(); drawEvents(); go(f); });
+      li.appendChild(b);
+    }
+    return li;
+  }
+
+  function drawEvents() {
+    const ul = $("events"); ul.replaceChildren();
+    const evs = allEvents(), fired = evs.filter((e) => e.negatives > 0), silent = evs.filter((e) => e.negatives <= 0);
+    if (!fired.length) { const li = document.createElement("li"); li.textContent = "No check earned negatives on this task file."; ul.appendChild(li); }
+    for (const e of fired) ul.appendChild(eventItem(e));
+    if (silent.length) {
+      const li = document.createElement("li"), det = document.createElement("details"), sum = document.createElement("summary");
+      sum.textContent = silent.length + " silent check" + (silent.length === 1 ? "" : "s") + " (no negatives; the frame each points at)";
+      det.appendChild(sum);
+      const inner = document.createElement("ul");
+      for (const e of silent) inner.appendChild(eventItem(e));
+      det.appendChild(inner);
+      det.open = silent.some((e) => e.check === S.check);
+      li.appendChild(det); ul.appendChild(li);
+    }
+  }
+
+  // ---- start ---------------------------------------------------------------------------
+  async function start() {
+    const va = $("va"), vb = $("vb");
+    const a = params.get("a"), b = params.get("b");
+    if (a && D.versions.includes(a)) va.value = a;
+    if (b && D.versions.includes(b)) vb.value = b;
+    S.check = params.get("check");
+    D.pellets.forEach((name, i) => { const o = document.createElement("option"); o.value = String(i); o.text = name; $("pellet").appendChild(o); });
+    $("pellet").value = String(S.pellet);
+    S.measured = await decode(D.measured); S.measuredFrames = await decode(D.measured_frames);
+    S.first = S.measuredFrames[0]; S.last = S.measuredFrames[S.measuredFrames.length - 1];
+    const scrub = $("scrub"); scrub.min = String(S.first); scrub.max = String(S.last);
+    S.row = params.has("frame") ? Number(params.get("frame")) : S.first;
+    if (!isFinite(S.row)) S.row = S.first;
+    if (D.audio) $("audio").src = D.audio;
+    initThree();
+    await setVersions();
+    va.addEventListener("change", () => setVersions().catch(fail));
+    vb.addEventListener("change", () => setVersions().catch(fail));
+    $("mode").addEventListener("change", () => setVersions().catch(fail));
+    document.querySelectorAll("button[data-view]").forEach((btn) => btn.addEventListener("click", () => setView(btn.dataset.view)));
+    $("play").addEventListener("click", () => (S.playing ? pause() : play()));
+    $("next").addEventListener("click", () => stepKept(1));
+    $("prev").addEventListener("click", () => stepKept(-1));
+    $("speed").addEventListener("change", () => { S.speed = Number($("speed").value); if (S.playing) { pause(); play(); } });
+    $("pellet").addEventListener("change", () => { S.pellet = Number($("pellet").value); drawTimeline(); });
+    scrub.addEventListener("input", () => { pause(); go(Number(scrub.value)); });
+    TL.addEventListener("click", (ev) => { pause(); const r = TL.getBoundingClientRect(); go(rowOf((ev.clientX - r.left) * TL.width / r.width)); });
+    document.addEventListener("keydown", (ev) => {
+      if (ev.target.tagName === "SELECT" || ev.target.tagName === "INPUT") return;
+      if (ev.key === " ") { ev.preventDefault(); S.playing ? pause() : play(); }
+      if (ev.key === "ArrowRight") stepKept(1);
+      if (ev.key === "ArrowLeft") stepKept(-1);
+    });
+    status.textContent = "ready"; status.dataset.ready = "1";
+    // for tests and the console: the state, and where the camera is
+    window.cassiViewer = { state: S, go: go, setView: setView, three: () => ({ camera, sceneA, renderer }),
+                           camera: () => ({ position: camera.position.toArray(), up: camera.up.toArray(),
+                                            target: controls.target.toArray() }) };
+  }
+  if (!D) fail("no viewer data (the task's .js file did not load)");
+  else start().catch(fail);
+})();

@@ -1,0 +1,193 @@
+"""The task viewer in a real browser: Debian's headless Chromium driven by Playwright, on a real
+run (JW11 task 106, cassi-1.0 and cassi-2.1, front renders) and its report, opened from disk.
+
+WebGL runs on Chromium's software rasteriser (SwiftShader) here; the golden screenshot allows
+for what differs between CPUs (see :func:`test_front_view_matches_the_golden`).
+"""
+from __future__ import annotations
+
+import os
+import re
+import shutil
+from pathlib import Path
+
+import imageio.v3 as iio
+import numpy as np
+import pandas as pd
+import pytest
+
+from cassi.harness.cli import main as cli_main
+from cassi.renderer.compare import compare_images
+from cassi.reports.report import write_report
+
+pytestmark = [pytest.mark.browser, pytest.mark.render]
+
+GOLDEN = Path(__file__).resolve().parent / "golden" / "viewer_front_jw11_106_1023.png"
+REGEN = os.environ.get("CASSI_REGEN_VIEWER", "") not in ("", "0")
+ARGS = ["--no-sandbox", "--disable-background-networking", "--disable-component-update",
+        "--disable-sync", "--no-first-run", "--disable-quic",
+        # WebGL on SwiftShader, said explicitly: Chromium may stop falling back to it silently
+        "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
+#: Console messages that are not errors of the page: SwiftShader's performance notes.
+BENIGN = re.compile(r"GL Driver Message|GPU stall")
+
+
+def _chromium() -> str:
+    for name in (os.environ.get("CHROMIUM", ""), "chromium", "chromium-browser"):
+        if name and shutil.which(name):
+            return shutil.which(name)
+    pytest.skip("no Chromium installed (.ci/run installs Debian's chromium)")
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory):
+    root = tmp_path_factory.mktemp("viewer")
+    run = root / "run"
+    assert cli_main(["run", "--subjects", "JW11", "--versions", "cassi-1.0", "cassi-2.1",
+                     "--tasks", "106", "--views", "front", "--no-progress",
+                     "--out", str(run)]) == 0
+    write_report(run, root / "report")
+    return run, root / "report"
+
+
+@pytest.fixture(scope="module")
+def browser():
+    exe = _chromium()
+    sync_api = pytest.importorskip("playwright.sync_api", reason="Playwright for Python not installed")
+    with sync_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=exe, args=ARGS)
+        yield b
+        b.close()
+
+
+class Page:
+    """A page with its console errors and every URL it asked for."""
+
+    def __init__(self, browser, url: str, *, width: int = 1100, height: int = 900):
+        self.page = browser.new_page(viewport={"width": width, "height": height})
+        self.errors: list[str] = []
+        self.requests: list[str] = []
+        self.page.on("console", lambda m: self.errors.append(m.text)
+                     if m.type == "error" and not BENIGN.search(m.text) else None)
+        self.page.on("pageerror", lambda e: self.errors.append(str(e)))
+        self.page.on("request", lambda r: self.requests.append(r.url))
+        self.page.goto(url)
+
+    def ready(self):
+        self.page.wait_for_selector("#status[data-ready='1']", timeout=30000)
+        return self
+
+    def frame(self) -> int:
+        return int(self.page.text_content("#frame"))
+
+    def pixels(self) -> np.ndarray:
+        return np.asarray(iio.imread(self.page.locator("#three canvas").screenshot()))[..., :3]
+
+
+def _viewer_url(report: Path, fragment: str = "") -> str:
+    return (report / "viewer" / "JW11" / "106_1.html").as_uri() + fragment
+
+
+def test_viewer_loads_with_no_console_error_and_no_remote_resource(report, browser):
+    _, rep = report
+    p = Page(browser, _viewer_url(rep)).ready()
+    assert p.errors == []
+    assert p.requests and all(u.startswith(("file://", "data:", "blob:")) for u in p.requests), \
+        [u for u in p.requests if not u.startswith(("file://", "data:", "blob:"))]
+    assert p.page.text_content("#status") == "ready"
+    p.page.close()
+
+
+def test_play_advances_the_frame_and_changes_the_canvas(report, browser):
+    _, rep = report
+    p = Page(browser, _viewer_url(rep, "#frame=600&a=cassi-1.0")).ready()
+    before, shot = p.frame(), p.pixels()
+    assert before == 600
+    p.page.select_option("#speed", "1")
+    p.page.click("#play")
+    p.page.wait_for_function("Number(document.getElementById('frame').textContent) > 640",
+                             timeout=20000)
+    p.page.click("#play")  # pause
+    after = p.frame()
+    assert after > before
+    changed = np.abs(p.pixels().astype(int) - shot.astype(int)).max(axis=-1) > 24
+    assert changed.sum() > 200, "the face did not move on the canvas"
+    assert p.errors == []
+    p.page.close()
+
+
+def test_a_negative_in_the_subject_page_opens_the_viewer_at_its_first_frame(report, browser):
+    run, rep = report
+    p = Page(browser, (rep / "subjects" / "JW11.html").as_uri())
+    link = p.page.locator("a.viewer").first
+    href = link.get_attribute("href")
+    check = re.search(r"check=([^&]+)", href).group(1)
+    version = re.search(r"a=([^&]+)", href).group(1)
+    link.click()
+    p.ready()
+    res = pd.read_parquet(run / "results.parquet")
+    ev = res[(res["check"] == check) & (res["version"] == version) & (res["frame"] >= 0)
+             & (res["task"] == 106)]
+    assert p.frame() == int(ev["frame"].min())
+    hl = p.page.locator("#events li.hl")
+    assert hl.count() == 1 and hl.get_attribute("data-check") == check
+    assert p.page.input_value("#va") == version
+    assert p.errors == []
+    p.page.close()
+
+
+def test_a_fault_in_the_thesis_tables_opens_the_viewer(report, browser):
+    _, rep = report
+    p = Page(browser, (rep / "index.html").as_uri())
+    link = p.page.locator("a.fault").first
+    frame = int(re.search(r"frame=(\d+)", link.get_attribute("href")).group(1))
+    link.click()
+    p.ready()
+    assert p.frame() == frame
+    p.page.close()
+
+
+def test_a_b_shows_two_versions_at_the_same_frame(report, browser):
+    _, rep = report
+    p = Page(browser, _viewer_url(rep, "#frame=1023&a=cassi-1.0&b=cassi-2.1")).ready()
+    assert p.page.text_content("#labelA") == "A: cassi-1.0"
+    assert p.page.text_content("#labelB") == "B: cassi-2.1"
+    img = p.pixels().astype(int)
+    bg = np.array([0xf4, 0xf4, 0xf4])
+    w = img.shape[1] // 2
+    for half in (img[:, :w], img[:, w:]):
+        assert (np.abs(half - bg).max(axis=-1) > 30).mean() > 0.1, "a viewport shows no face"
+    assert p.frame() == 1023
+    # both faces are set from the same recording row, and they differ (two versions)
+    state = p.page.evaluate("window.cassiViewer.state.row")
+    assert state == 1023
+    assert np.abs(img[:, :w] - img[:, w:2 * w]).max(axis=-1).mean() > 0.5
+    # overlaid: one viewport, B as wireframe, still one frame
+    p.page.select_option("#mode", "overlay")
+    p.page.wait_for_function("document.getElementById('labelB').style.display === 'none'")
+    assert "B: cassi-2.1, wireframe" in p.page.text_content("#labelA")
+    assert p.frame() == 1023 and p.errors == []
+    p.page.close()
+
+
+def test_front_view_matches_the_golden(report, browser):
+    """The front view of cassi-1.0 at frame 1023 against a golden screenshot, by the project's
+    one image rule (:func:`cassi.renderer.compare.compare_images`: at most 0.5% of the pixels
+    more than one 8-bit level apart). WebGL runs on SwiftShader here, whose JIT may round the
+    last bit differently on another CPU, as Dr.Jit's does; geometry, camera or colour errors
+    change whole regions. The rule must also tell a wrong frame: frame 644 (the jaw at its widest
+    in this task) fails it."""
+    _, rep = report
+    p = Page(browser, _viewer_url(rep, "#frame=1023&a=cassi-1.0"), width=1100, height=900).ready()
+    img = p.pixels()
+    if REGEN:
+        iio.imwrite(GOLDEN, img)
+    if not GOLDEN.is_file():
+        pytest.fail(f"no golden {GOLDEN.name}: record it with CASSI_REGEN_VIEWER=1")
+    gold = np.asarray(iio.imread(GOLDEN))[..., :3]
+    same = compare_images(img, gold)
+    assert same.passed, same.reason
+    p.page.evaluate("window.cassiViewer.go(644)")
+    moved = compare_images(p.pixels(), gold)
+    assert not moved.passed, moved.reason
+    p.page.close()

@@ -1,0 +1,129 @@
+"""The task viewer's data: what the geometry stage keeps (frames, quantised positions, pellets,
+topology) and what the report writes for the page (links, escaping, events)."""
+from __future__ import annotations
+
+import json
+import shutil
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from cassi.harness.actions import task_positions
+from cassi.harness.cli import main as cli_main
+from cassi.harness.evaluation.frames import VIEWER_STRIDE, viewer_frames
+from cassi.harness.evaluation.caches import get_corpus, get_profile
+from cassi.harness.evaluation.viewerdata import (STEP_UNITS, read_viewer_blob, viewer_blob)
+from cassi.harness.rubric.fidelity import virtual_pellets
+from cassi.reports.report import _env, write_report
+from cassi.reports.runio import load_run
+from cassi.reports.viewer import viewer_href
+from cassi.versions.mapping import XrmbToParke
+
+
+def test_viewer_frames_keep_the_grid_the_last_row_and_every_evidence_frame():
+    frames = np.arange(10, 60)
+    rows = pd.DataFrame({"frame": [-1, 13, 13, 57, 22], "view": ["geometry", "geometry", "side",
+                                                                  "geometry", "trace"]})
+    kept = viewer_frames(frames, rows, stride=8)
+    assert kept == sorted({10, 18, 26, 34, 42, 50, 58, 59, 13, 57})
+    assert 22 not in kept            # a fidelity trace row is data, not a check's frame
+    assert viewer_frames(frames, None) == sorted(set(range(10, 60, VIEWER_STRIDE)) | {59})
+
+
+@pytest.fixture(scope="module")
+def jw11_106():
+    face, frames, positions = task_positions(None, "JW11", 106, 1, "cassi-1.0")
+    corpus = get_corpus(None)
+    rec = corpus.subject("JW11").load(106, 1)
+    return face, frames, positions, rec, get_profile(corpus, "JW11")
+
+
+def test_a_blob_gives_back_every_kept_frame_within_half_a_step(jw11_106):
+    face, frames, positions, rec, profile = jw11_106
+    keep = viewer_frames(frames, None)
+    idx = np.searchsorted(frames, keep)
+    blob = viewer_blob(face, positions[idx], np.asarray(keep), np.asarray(rec.time_us)[keep],
+                       np.asarray(rec.xy_mm)[keep], np.asarray(rec.valid)[keep],
+                       profile.jaw_length_mm)
+    vd = read_viewer_blob(blob)
+    assert vd.frames.tolist() == keep
+    err = np.abs(vd.positions() - positions[idx]).max()
+    assert err <= STEP_UNITS / 2 + 1e-4
+    # only vertices that move are stored per frame; the still ones are exact
+    still = np.setdiff1d(np.arange(positions.shape[1]), vd.moving)
+    assert len(vd.moving) < positions.shape[1] / 2
+    assert np.array_equal(vd.positions()[:, still], np.repeat(positions[idx][:1, still],
+                                                              len(keep), axis=0))
+    # the model's pellet sites are Table F's (the same mapping, same frames)
+    mapping = XrmbToParke.from_face(face.vertices, profile.jaw_length_mm)
+    assert np.allclose(vd.model, virtual_pellets(positions[idx], mapping), atol=1e-3)
+    assert np.allclose(vd.measured[np.asarray(rec.valid)[keep]],
+                       np.asarray(rec.xy_mm)[keep][np.asarray(rec.valid)[keep]], atol=1e-4)
+    # the merged topology draws every triangle from face rows
+    assert vd.triangles.max() < len(vd.gather) and vd.gather.max() < positions.shape[1]
+    assert set(vd.parts) >= {"skin", "lips", "tongue"}
+    # a small blob: well under the float positions of the kept frames
+    assert len(blob) < positions[idx].nbytes / 10
+
+
+def test_a_blob_of_another_format_is_refused(jw11_106):
+    import io
+    buf = io.BytesIO()
+    np.savez(buf, format=np.int64(99))
+    with pytest.raises(ValueError, match="format 99"):
+        read_viewer_blob(buf.getvalue())
+
+
+def test_viewer_links_quote_what_they_carry():
+    href = viewer_href("JW11", 106, 1, frame=12, a="v&1", check="a#b", base="../")
+    assert href == "../viewer/JW11/106_1.html#frame=12&a=v%261&check=a%23b"
+    assert viewer_href("JW11", 5, 2) == "viewer/JW11/005_2.html"
+
+
+def test_the_page_escapes_what_it_is_given():
+    html = _env().get_template("viewer.html.j2").render(
+        subject="<script>alert(1)</script>", task=1, rep=1, synthetic=True,
+        versions=['"><img src=x onerror=alert(1)>'], data="001_1.js", static="../../static",
+        index="../../index.html", subject_page="x.html")
+    assert "<script>alert(1)" not in html and "&lt;script&gt;" in html
+    assert "<img src=x" not in html
+
+
+@pytest.mark.render
+def test_the_report_writes_one_viewer_per_task_file_with_its_events(tmp_path):
+    run = tmp_path / "run"
+    assert cli_main(["run", "--subjects", "JW11", "--versions", "cassi-1.0", "cassi-2.1",
+                     "--tasks", "106", "--views", "front", "--no-progress",
+                     "--out", str(run)]) == 0
+    write_report(run, tmp_path / "report")
+    page = tmp_path / "report" / "viewer" / "JW11" / "106_1.html"
+    text = (page.with_suffix(".js")).read_text()
+    assert text.startswith("window.CASSI_VIEWER = ") and text.endswith(";\n")
+    data = json.loads(text[len("window.CASSI_VIEWER = "):-2])
+    assert data["versions"] == ["cassi-1.0", "cassi-2.1"] and data["synthetic"] is True
+    res = pd.read_parquet(run / "results.parquet")
+    for version in data["versions"]:
+        events = {e["check"]: e for e in data["version_data"][version]["events"]}
+        ev = res[(res["version"] == version) & (res["frame"] >= 0) & res["table"].notna()
+                 & (res["view"] != "trace")]
+        assert set(events) == set(ev["check"])
+        for check, g in ev.groupby("check"):
+            assert events[check]["frames"] == sorted(set(g["frame"].astype(int)))
+        # the renders beside the 3D view are linked from the page's folder
+        for r in data["version_data"][version]["renders"]:
+            assert (page.parent / r["href"]).is_file()
+    for name in ("three.min.js", "three.LICENSE.txt", "viewer.js"):
+        assert (tmp_path / "report" / "static" / name).is_file()
+    index = (tmp_path / "report" / "index.html").read_text()
+    assert 'href="viewer/JW11/106_1.html"' in index
+    # a run written before the attachment index has no viewer, and still reports
+    (run / "attachments.parquet").unlink()
+    (run / "attachments.csv").unlink()
+    doc = json.loads((run / "tables.json").read_text())
+    doc["files"] = {k: v for k, v in doc["files"].items() if not k.startswith("attachments")}
+    (run / "tables.json").write_text(json.dumps(doc))
+    assert len(load_run(run).attachments) == 0
+    shutil.rmtree(tmp_path / "report")
+    write_report(run, tmp_path / "report")
+    assert not (tmp_path / "report" / "viewer").exists()
