@@ -127,3 +127,41 @@ def test_the_report_writes_one_viewer_per_task_file_with_its_events(tmp_path):
     shutil.rmtree(tmp_path / "report")
     write_report(run, tmp_path / "report")
     assert not (tmp_path / "report" / "viewer").exists()
+
+
+@pytest.mark.render
+def test_a_corpus_with_sound_and_an_alignment_gives_the_timeline_both(tmp_path):
+    from praatio import textgrid
+    from praatio.data_classes.interval_tier import IntervalTier
+    from scipy.io import wavfile
+
+    from cassi.harness.evaluation.caches import corpus_root
+
+    src, corpus = corpus_root(None), tmp_path / "corpus"
+    (corpus / "JW11").mkdir(parents=True)
+    shutil.copy(src / "Headmeasures.txt", corpus)
+    for name in ("Mis.dat", "PAL.DAT", "PHA.DAT", "tp106.txy"):
+        shutil.copy(src / "JW11" / name, corpus / "JW11")
+    rate = 16000
+    t = np.arange(rate * 8) / rate
+    wavfile.write(corpus / "JW11" / "tp106.wav", rate,
+                  (0.3 * np.sin(2 * np.pi * 220 * t) * 32767).astype(np.int16))
+    tg = textgrid.Textgrid()
+    tg.addTier(IntervalTier("word", [(0.5, 1.0, "sa"), (1.2, 1.8, "<b>x</b>")], 0, 8))
+    tg.addTier(IntervalTier("phone", [(0.5, 0.7, "s"), (0.7, 1.0, "aa")], 0, 8))
+    tg.save(str(corpus / "JW11" / "tp106.TextGrid"), format="long_textgrid",
+            includeBlankSpaces=True)
+    run = tmp_path / "run"
+    assert cli_main(["run", "--corpus", str(corpus), "--subjects", "JW11", "--tasks", "106",
+                     "--versions", "cassi-1.0", "--views", "front", "--no-progress",
+                     "--out", str(run)]) == 0
+    write_report(run, tmp_path / "report")
+    page = tmp_path / "report" / "viewer" / "JW11" / "106_1.html"
+    text = page.with_suffix(".js").read_text()
+    data = json.loads(text[len("window.CASSI_VIEWER = "):-2])
+    assert data["audio"] == "106_1.wav" and (page.parent / "106_1.wav").is_file()
+    assert data["waveform"]["seconds"] == pytest.approx(8.0)
+    assert max(data["waveform"]["max"]) == pytest.approx(0.3, abs=0.01)
+    assert [w[2] for w in data["labels"]["words"] if w[2]] == ["sa", "<b>x</b>"]
+    assert [p[2] for p in data["labels"]["phones"] if p[2]] == ["s", "aa"]
+    assert "<b>x</b>" not in page.read_text()   # labels reach the page only as JSON text

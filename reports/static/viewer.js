@@ -194,10 +194,11 @@
   }
 
   // ---- time ----------------------------------------------------------------------------
-  function rowTime(row) {   // seconds from the task's first row (recording clock)
+  function rowTime(row) {   // seconds on the recording's clock (the sound's and the labels')
     const v = S.a; const k = keptIndex(v.frames, row);
-    return v.time_ms[k] / 1000 + (row - v.frames[k]) / D.rate_hz - v.time_ms[0] / 1000;
+    return v.time_ms[k] / 1000 + (row - v.frames[k]) / D.rate_hz;
   }
+  const timeRow = (sec) => { const v = S.a; return v.frames[0] + (sec - v.time_ms[0] / 1000) * D.rate_hz; };
 
   function go(row) {
     row = Math.max(S.first, Math.min(S.last, Math.round(row)));
@@ -255,7 +256,7 @@
     if (!S.playing) return;
     const audio = $("audio");
     if (D.audio && !audio.paused && S.speed === 1) {
-      go(S.first + audio.currentTime * D.rate_hz);
+      go(timeRow(audio.currentTime));
     } else {
       if (last !== null) go(S.row + (now - last) / 1000 * D.rate_hz * S.speed);
     }
@@ -301,7 +302,8 @@
     if (D.labels) {
       const tiers = [["words", l0, (l1 - l0) / 2], ["phones", l0 + (l1 - l0) / 2, (l1 - l0) / 2]];
       for (const [name, y, h] of tiers) for (const [s0, s1, txt] of (D.labels[name] || [])) {
-        const x0 = xOf(S.first + s0 * D.rate_hz), x1 = xOf(S.first + s1 * D.rate_hz);
+        const x0 = Math.max(PAD, xOf(timeRow(s0))), x1 = Math.min(TL.width - 6, xOf(timeRow(s1)));
+        if (x1 <= x0) continue;
         ctx.strokeStyle = "#bbb"; ctx.strokeRect(x0, y, x1 - x0, h - 1);
         ctx.fillStyle = "#333"; if (x1 - x0 > 8) ctx.fillText(txt, x0 + 2, y + h - 4);
       }
@@ -312,7 +314,8 @@
       const n = D.waveform.min.length, mid = (w0 + w1) / 2, amp = (w1 - w0) / 2;
       ctx.strokeStyle = "#4a6fa5"; ctx.beginPath();
       for (let i = 0; i < n; i++) {
-        const x = xOf(S.first + (i / n) * D.waveform.seconds * D.rate_hz);
+        const x = xOf(timeRow((i / n) * D.waveform.seconds));
+        if (x < PAD || x > TL.width - 6) continue;
         ctx.moveTo(x, mid - D.waveform.max[i] * amp); ctx.lineTo(x, mid - D.waveform.min[i] * amp);
       }
       ctx.stroke();
