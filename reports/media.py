@@ -31,24 +31,6 @@ def copy_image(src: str | os.PathLike, dest: Path) -> Path:
     return link_or_copy(src, dest)
 
 
-def link_image(src: str | os.PathLike, dest: Path) -> Path:
-    """:func:`copy_image` for many renders: a hard link is made in one step (it appears whole
-    or not at all, so it needs no temporary name: 20,548 of a night's renders in about 1 s
-    against 5 s), a copy where the file systems differ."""
-    try:
-        os.link(src, dest)
-    except FileNotFoundError:
-        if dest.parent.is_dir():
-            raise  # the render itself is missing
-        dest.parent.mkdir(parents=True, exist_ok=True)
-        return link_image(src, dest)
-    except FileExistsError:
-        pass
-    except OSError:
-        return copy_image(src, dest)
-    return dest
-
-
 def read_rgb8(path) -> np.ndarray:
     """An image file as 8-bit RGB (grey expanded, alpha dropped)."""
     img = np.asarray(iio.imread(path))

@@ -22,6 +22,7 @@ from cassi.reports.agree import agreement, write_agreement
 from cassi.reports import media, plots
 from cassi.reports.runio import Run, load_run, order_versions
 from cassi.harness.evaluation.frames import COMPARISON_VIEW, VIDEO_VIEWS
+from cassi.harness.evaluation.stages import MASKS_OUTPUT
 from cassi.harness.rubric import (AGGREGATION_RULES, CHECKS, RATINGS, component_ratings,
                                   file_verdicts, rating_counts, table_c_rule, table_title,
                                   version_comparisons)
@@ -180,11 +181,18 @@ def _evidence_frames(results: pd.DataFrame) -> dict[tuple, int]:
             for r in ev.itertuples(index=False)}
 
 
-def _fault_order(fv: pd.DataFrame) -> pd.DataFrame:
-    """The checks that earned negatives, the worst first (as the subject pages list them)."""
-    hit = fv[fv["raw_negatives"] > 0]
-    return hit.sort_values(["negatives", "raw_negatives", "task", "rep", "check"],
-                           ascending=[False, False, True, True, True], kind="mergesort")
+def _worst_first(fv: pd.DataFrame) -> pd.DataFrame:
+    """File verdicts, the most negatives first (the subject pages' order, and the fault a
+    thesis table's cell opens in the viewer)."""
+    return fv.sort_values(["negatives", "raw_negatives", "task", "rep", "check"],
+                          ascending=[False, False, True, True, True], kind="mergesort")
+
+
+def _image_dest(out: Path, subject: str, version: str, task: int, rep: int, frame: int,
+                view: str) -> Path:
+    """Where a render goes beside the report (subject pages and viewer share the file)."""
+    return out / "images" / slug(subject) / slug(version) / \
+        f"{int(task):03d}_{int(rep)}_{int(frame):05d}_{slug(view)}.png"
 
 
 def _first_faults(run: Run, fv: pd.DataFrame, viewers: dict) -> dict[tuple, str]:
@@ -192,7 +200,7 @@ def _first_faults(run: Run, fv: pd.DataFrame, viewers: dict) -> dict[tuple, str]
     cell's worst fault, its event highlighted (relative to the report)."""
     evidence = _evidence_frames(run.results)
     out: dict[tuple, str] = {}
-    for r in _fault_order(fv).itertuples(index=False):
+    for r in _worst_first(fv[fv["raw_negatives"] > 0]).itertuples(index=False):
         key = (r.subject, r.version, r.table, r.component)
         file = (r.subject, int(r.task), int(r.rep))
         frame = evidence.get((*file, r.version, r.check))
@@ -211,8 +219,9 @@ def _viewer_images(run: Run, out: Path):
     groups = {k: g for k, g in rend.groupby(["subject", "task", "rep", "version"])} if len(rend) \
         else {}
     att = run.attachments
-    masks = {(a.subject, int(a.task), int(a.rep), a.version, a.view, int(a.name[6:])): a.path
-             for a in att[att["name"].str.startswith("masks-")].itertuples(index=False)} \
+    masks = {(a.subject, int(a.task), int(a.rep), a.version, a.view,
+              int(a.name[len(MASKS_OUTPUT):])): a.path
+             for a in att[att["name"].str.startswith(MASKS_OUTPUT)].itertuples(index=False)} \
         if len(att) else {}
     res = run.results
     judged = res[(res["frame"] >= 0) & res["table"].notna()
@@ -226,10 +235,9 @@ def _viewer_images(run: Run, out: Path):
             return []
         found = []
         for v in g.sort_values(["frame", "view"]).itertuples(index=False):
-            dest = out / "images" / slug(subject) / slug(version) / \
-                f"{int(task):03d}_{int(rep)}_{int(v.frame):05d}_{slug(v.view)}.png"
+            dest = _image_dest(out, subject, version, task, rep, v.frame, v.view)
             if not dest.is_file():
-                media.link_image(v.path, dest)
+                media.copy_image(v.path, dest)
             item = {"frame": int(v.frame), "view": str(v.view),
                     "href": os.path.relpath(dest, out / "viewer" / slug(subject))}
             key = (subject, int(task), int(rep), version, v.view, int(v.frame))
@@ -258,8 +266,7 @@ def _views_at(run: Run, rend: pd.DataFrame, subject: str, task: int, rep: int, v
     near = _nearest_rendered(g, frame)
     images = []
     for v in g[g["frame"] == near].sort_values("view").itertuples(index=False):
-        dest = out / "images" / slug(subject) / slug(version) / \
-            f"{int(task):03d}_{int(rep)}_{int(near):05d}_{slug(v.view)}.png"
+        dest = _image_dest(out, subject, version, task, rep, near, v.view)
         if not dest.is_file():
             media.copy_image(v.path, dest)
         images.append({"href": os.path.relpath(dest, out / "subjects"),
@@ -283,9 +290,7 @@ def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
         tables = []
         sheets = 0
         for table in sorted(mine.loc[mine["version"] == version, "table"].unique()):
-            rows = mine[(mine["version"] == version) & (mine["table"] == table)].sort_values(
-                ["negatives", "raw_negatives", "task", "rep", "check"],
-                ascending=[False, False, True, True, True], kind="mergesort")
+            rows = _worst_first(mine[(mine["version"] == version) & (mine["table"] == table)])
             fired, silent = [], []
             for r in rows.itertuples(index=False):
                 c = CHECKS.get(r.check)

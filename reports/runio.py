@@ -14,7 +14,7 @@ import pandas as pd
 from cassi.common.errors import CassiInputError
 from cassi.harness.farm.results import read_results
 from cassi.harness.farm.runner import ATTACHMENT_COLUMNS, RENDER_COLUMNS  # indexes the farm writes
-from cassi.harness.farm.tableset import SUMMARY_FILE, verify_table_set
+from cassi.harness.farm.tableset import OPTIONAL_TABLES, SUMMARY_FILE, verify_table_set
 from cassi.harness.rubric.tables import order_versions as rubric_order
 
 
@@ -93,14 +93,15 @@ def _read_index(root: Path, name: str, columns) -> pd.DataFrame:
     """A path index of the run (renders, attachments), paths checked and made absolute; an
     index the run did not write (older runs had no attachments) is empty."""
     path = root / f"{name}.parquet"
-    if not path.is_file() and name != "renders":
+    optional = name in OPTIONAL_TABLES
+    if optional and not path.is_file():
         return pd.DataFrame(columns=list(columns))
     df = pd.read_parquet(path)
     missing = [c for c in columns if c not in df]
-    if missing and len(df):
-        raise CassiInputError(f"{name} index lacks columns {missing}", path=path)
-    if missing:
+    if missing and optional and not len(df):  # left out by the writer: written without columns
         return pd.DataFrame(columns=list(columns))
+    if missing:
+        raise CassiInputError(f"{name} index lacks columns {missing}", path=path)
     df = df[list(columns)].copy()
     real = root.resolve()  # once: a night's index holds 20,000-30,000 paths
     df["path"] = [str(_inside(root, p, real)) for p in df["path"]]

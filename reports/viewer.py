@@ -16,21 +16,22 @@ from __future__ import annotations
 
 import base64
 import json
-import os
-import shutil
 import urllib.parse
 import wave
 from pathlib import Path
 
+import imageio.v3 as iio
 import numpy as np
 import pandas as pd
 
-from cassi.common.atomic import atomic_write_text
+from cassi.common.atomic import atomic_write_bytes, atomic_write_text, link_or_copy
 from cassi.data.corpus.disk import Corpus
 from cassi.harness.evaluation.frames import VIEWER_STRIDE
+from cassi.harness.evaluation.stages import read_masks_blob
 from cassi.harness.evaluation.viewerdata import read_viewer_blob
 from cassi.harness.rubric import CHECKS
 from cassi.harness.rubric.fidelity import PELLETS
+from cassi.harness.rubric.image import FrameMasks, mouth_opening
 from cassi.renderer.gltf import AXES
 from cassi.renderer.views import VIEWS, material_for
 from cassi.reports.runio import Run, order_versions
@@ -161,21 +162,13 @@ def mask_overlay(blob: bytes, frame: int, dest: Path) -> Path:
     """An RGBA PNG of what the image checks read in a frame (``masks-<frame>`` blob): lips,
     upper and lower teeth (split as the checks split them), tongue and the mouth opening,
     coloured as :data:`MASK_COLOURS`, transparent elsewhere; shown over the render."""
-    import imageio.v3 as iio  # noqa: PLC0415 - only for runs with image checks
-    # noqa reasons: scipy and the render stage's blob reader, only for runs with image checks
-    from cassi.harness.evaluation.stages import read_masks_blob  # noqa: PLC0415 - image runs
-    from cassi.harness.rubric.image import FrameMasks, mouth_opening  # noqa: PLC0415 - scipy
-
     fm = FrameMasks.of(frame, read_masks_blob(blob))
     layers = {"lips": fm.lips, "upper_teeth": fm.upper_teeth, "lower_teeth": fm.lower_teeth,
               "tongue": fm.tongue, "opening": mouth_opening(fm.lips) & ~fm.teeth & ~fm.tongue}
     rgba = np.zeros((*fm.lips.shape, 4), np.uint8)
     for name, colour in MASK_COLOURS:
         rgba[layers[name]] = colour
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    tmp = dest.with_name(dest.name + ".tmp.png")
-    iio.imwrite(tmp, rgba)
-    os.replace(tmp, dest)
+    atomic_write_bytes(dest, iio.imwrite("<bytes>", rgba, extension=".png"))
     return dest
 
 
@@ -185,9 +178,9 @@ def _copy_static(out: Path) -> None:
     for name in _STATIC_FILES:
         dest = out / STATIC_DIR / name
         src = here / name
-        if not dest.is_file() or dest.stat().st_size != src.stat().st_size or \
-                dest.read_bytes() != src.read_bytes():
-            shutil.copyfile(src, dest)
+        data = src.read_bytes()
+        if not dest.is_file() or dest.read_bytes() != data:
+            atomic_write_bytes(dest, data)
 
 
 def write_viewers(run: Run, out: Path, env, *, slug, audio_for=None, images=None) -> dict:
@@ -207,12 +200,11 @@ def write_viewers(run: Run, out: Path, env, *, slug, audio_for=None, images=None
     events = _events(run.results)
     for (subject, task, rep), g in att.groupby(["subject", "task", "rep"], sort=True):
         task, rep = int(task), int(rep)
-        versions, measured, first = {}, None, None
+        versions, first = {}, None
         for version in order_versions(g["version"].unique()):
             path = Path(g[g["version"] == version]["path"].iloc[0])
             data = read_viewer_blob(path.read_bytes())
-            if measured is None:
-                measured, first = data.measured, data
+            first = first or data  # the measured pellets are the same in every version
             rend = images(subject, task, rep, version) if images else []
             versions[version] = _version_payload(
                 data, events.get((subject, task, rep, version), []), rend)
@@ -222,8 +214,7 @@ def write_viewers(run: Run, out: Path, env, *, slug, audio_for=None, images=None
         audio = audio_for(subject, task, rep) if audio_for else None
         audio_href = None
         if audio is not None and Path(audio).is_file():
-            dest.parent.mkdir(parents=True, exist_ok=True)
-            shutil.copyfile(audio, dest.parent / f"{stem}.wav")
+            link_or_copy(audio, dest.parent / f"{stem}.wav")
             audio_href = f"{stem}.wav"
         payload = {
             "subject": str(subject), "task": task, "rep": rep, "synthetic": run.synthetic,
@@ -235,7 +226,6 @@ def write_viewers(run: Run, out: Path, env, *, slug, audio_for=None, images=None
             "waveform": _waveform(audio) if audio_href else None,
             "table_colours": TABLE_COLOURS,
             "subject_page": f"../../subjects/{slug(subject)}.html"}
-        dest.parent.mkdir(parents=True, exist_ok=True)
         atomic_write_text(dest.with_suffix(".js"), "window.CASSI_VIEWER = "
                           + json.dumps(payload, separators=(",", ":"), allow_nan=False) + ";\n")
         atomic_write_text(dest, env.get_template("viewer.html.j2").render(

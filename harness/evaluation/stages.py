@@ -229,6 +229,8 @@ class StoredFrame:
 #: measures read it (:func:`cassi.harness.rubric.image.depth_read`: teeth and tongue), exact
 #: float32 there and inf elsewhere, as for background (about 2 KB a frame).
 MASKS_FORMAT = 2
+#: The masks outputs' name prefix (``masks-<frame:06d>``), listed as run attachments.
+MASKS_OUTPUT = "masks-"
 
 
 def masks_blob(mask: np.ndarray, depth: np.ndarray, part_names) -> bytes:
@@ -280,7 +282,7 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
         files[f"render-{f:06d}"] = (_png_bytes(res.srgb8(), {**res.metadata(), **meta}), ".png")
         if not judged:
             continue
-        files[f"masks-{f:06d}"] = (masks_blob(res.mask, res.depth, res.part_names), ".npz")
+        files[f"{MASKS_OUTPUT}{f:06d}"] = (masks_blob(res.mask, res.depth, res.part_names), ".npz")
     return StageOutput(files=files, meta={"render_s": round(seconds, 3)},
                        log=[f"rendered {len(job.frames)} frame(s) of {job.view} "
                             f"({ctx.preset}, {renderer.variant}) in {seconds:.2f} s"])
@@ -304,7 +306,7 @@ def cassi_pipeline(*, render: bool = True) -> Pipeline:
     """The real pipeline; ``render=False`` for geometry-only runs."""
     return Pipeline(geometry=geometry_stage, render=render_stage if render else None,
                     image=image_stage if render else None, ratings=rubric.ratings_table,
-                    attachments=("viewer", "masks-*"))
+                    attachments=("viewer", f"{MASKS_OUTPUT}*"))
 
 
 def catalog(corpus):

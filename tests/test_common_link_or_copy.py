@@ -1,0 +1,34 @@
+"""``link_or_copy``: a new name is a hard link made in one step, an existing one is replaced
+atomically, a missing folder is made, and a missing source is an error, not a new folder."""
+from __future__ import annotations
+
+import os
+
+import pytest
+
+from cassi.common.atomic import link_or_copy
+
+
+def test_a_new_name_is_a_hard_link_in_a_folder_made_for_it(tmp_path):
+    src = tmp_path / "a.bin"
+    src.write_bytes(b"render")
+    dest = tmp_path / "x" / "y" / "b.bin"
+    assert link_or_copy(src, dest) == dest
+    assert dest.read_bytes() == b"render" and os.path.samefile(src, dest)
+    assert sorted(p.name for p in dest.parent.iterdir()) == ["b.bin"]  # no temporary left
+
+
+def test_an_existing_name_is_replaced(tmp_path):
+    src, dest = tmp_path / "a.bin", tmp_path / "b.bin"
+    src.write_bytes(b"new")
+    dest.write_bytes(b"old")
+    link_or_copy(src, dest)
+    assert dest.read_bytes() == b"new" and os.path.samefile(src, dest)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.bin", "b.bin"]
+
+
+def test_a_missing_source_is_an_error(tmp_path):
+    with pytest.raises(FileNotFoundError):
+        link_or_copy(tmp_path / "none.bin", tmp_path / "b.bin")
+    with pytest.raises(FileNotFoundError):
+        link_or_copy(tmp_path / "none.bin", tmp_path / "new" / "b.bin")
