@@ -11,6 +11,7 @@ import pytest
 from cassi.data.face import numbering as N
 from cassi.data.face.model import build_face
 from cassi.harness import rubric as R
+from cassi.harness.rubric.leaveout import WITHHELD, WithheldSite
 from cassi.versions.mapping import XrmbToParke
 
 from test_rubric_fidelity import F, recording  # the speech-like pellets of Table F's tests
@@ -43,11 +44,13 @@ def lips_that_follow(face, rec, *, rounding=1.0, width=1.0):
             pos[:, r - 1, [0, 2]] += move[:, k][:, [0, 2]]
     for r in CORNERS:
         pos[:, r - 1, [0, 2]] += 0.5 * (move[:, 0] + move[:, 1])[:, [0, 2]]
-    sites = {2: [N.TONGUE_PELLETS[0]], 3: [N.TONGUE_PELLETS[1]], 4: [N.TONGUE_PELLETS[2]],
-             5: [N.TONGUE_PELLETS[3]], 6: [N.MANI], 7: list(N.MANM_PAIR)}
+    sites = {6: [N.MANI], 7: list(N.MANM_PAIR)}
     for k, rows in sites.items():
         for r in rows:
             pos[:, r - 1, [0, 2]] += move[:, k][:, [0, 2]]
+    # the tongue's sites on their pellets (a leave-one-out prediction on the spot)
+    for k, r in enumerate(N.TONGUE_PELLETS, start=2):
+        pos[:, r - 1, [0, 2]] = m.to_parke3(rec.xy_mm[:, k])[:, [0, 2]]
     # the inner edges meet (gap 0) at the recording's narrowest lip aperture
     narrowest = int(np.argmin(np.linalg.norm(rec.xy_mm[:, 0] - rec.xy_mm[:, 1], axis=1)))
     gap = pos[narrowest, N.UPPER_INNER[0] - 1, 2] - pos[narrowest, N.LOWER_INNER[0] - 1, 2]
@@ -62,16 +65,27 @@ def lips_that_follow(face, rec, *, rounding=1.0, width=1.0):
     return pos
 
 
+def sites_of(face, positions):
+    """The planted face as its own leave-one-out prediction: its T2 and T3 sites (290, 291)."""
+    m = XrmbToParke.from_face(face.vertices, JAW_MM)
+    return {p: WithheldSite(p, np.arange(F),
+                            m.to_xrmb(positions[:, N.TONGUE_PELLETS[k] - 1][:, [0, 2]]))
+            for k, p in ((1, "T2"), (2, "T3"))}
+
+
 def judge(face, positions, rec, *, task=118):
     anim = SimpleNamespace(positions=positions, frames=np.arange(F), diagnostics=None,
                            version="planted")
     out = R.run_geometry_checks(anim, face, SimpleNamespace(jaw_length_mm=JAW_MM, subject="SYN"),
-                                task=task, recording=rec, checks=SHAPE + PELLET_CHECKS)
+                                task=task, recording=rec, checks=SHAPE + PELLET_CHECKS,
+                                withheld=sites_of(face, positions))
     return out[out["frame"] == -1].set_index("check")
 
 
 def test_table_g_is_its_own_table_of_fidelity_checks():
-    assert set(SHAPE) == {"shape_lip_contact", "shape_mouth_width", "shape_rounding"}
+    assert set(SHAPE) == {"shape_lip_contact", "shape_mouth_width", "shape_rounding",
+                          "shape_tongue_t2", "shape_tongue_t3"}
+    assert WITHHELD == ("T2", "T3")
     assert all(R.get_check(c).table == "G" for c in SHAPE)
     assert "not in the thesis" in R.table_title("G")
     assert R.get_check("shape_rounding").tasks == (118,)
@@ -87,16 +101,18 @@ def test_lips_that_follow_the_recording_pass(face):
     assert r.loc["shape_rounding", "value"] == pytest.approx(1.0, rel=0.05)
 
 
-def test_a_still_face_scores_worst_on_contact_and_rounding(face):
+def test_a_still_face_scores_worst_on_contact_rounding_and_the_tongue_between_pellets(face):
     rec = recording()
     still = np.repeat(np.asarray(face.vertices, float)[None], F, 0)
     r = judge(face, still, rec)
-    for check in ("shape_lip_contact", "shape_rounding"):
+    for check in ("shape_lip_contact", "shape_rounding", "shape_tongue_t2"):
         c = R.get_check(check)
         assert r.loc[check, "negatives"] == max(c.negatives), (check, r.loc[check, "detail"])
     # a face that never changes its contact shares nothing with the recording's closures
     assert r.loc["shape_lip_contact", "value"] == pytest.approx(0.0)
     assert r.loc["shape_rounding", "value"] == pytest.approx(0.0)
+    # Parke's tongue stays where the model has it, centimetres from the recorded T2 and T3
+    assert r.loc[["shape_tongue_t2", "shape_tongue_t3"], "value"].min() > 6.0
     # the width at rest is a shape, not a movement: Parke's rest mouth is an adult's
     assert r.loc["shape_mouth_width", "negatives"] == 0
 

@@ -24,6 +24,7 @@ disabled parameters are listed in :mod:`cassi.versions.constants` and refused by
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -340,6 +341,27 @@ class TongueStage:
     parameters 55-62)."""
 
     name: str = "tongue"
+    #: The pellets between two others, which a leave-one-out animation may withhold.
+    predicts: ClassVar[tuple[str, ...]] = ("T2", "T3")
+
+    def predict_withheld(self, ctx: TaskContext, name: str) -> np.ndarray:
+        """Where CASSI 1.0's tongue puts a withheld T2 or T3 (Parke (x, z), (F, 2)): its vertex
+        moves with the mean of its two neighbours' offsets from their neutral vertices.
+
+        CHOSEN (the thesis has no rule for a pellet missing throughout; a missing value is held,
+        3.2.5): 1.0 moves each tongue vertex without a pellet with the pellet beside it
+        (:data:`~cassi.versions.constants.TONGUE_FOLLOW`), keeping Parke's shape between them;
+        a centre vertex between two pellets follows both, equally."""
+        names = ("T1", "T2", "T3", "T4")
+        i = names.index(name)
+        before, after = names[i - 1], names[i + 1]
+        if {before, after} & set(ctx.withheld):
+            raise CassiInputError(f"cannot predict {name} with {before} or {after} withheld too")
+        centre = K.V_TONGUE_PELLETS
+        n = ctx.neutral[:, _XZ]
+        offset = 0.5 * ((ctx.pellet(before) - n[centre[i - 1] - 1])
+                        + (ctx.pellet(after) - n[centre[i + 1] - 1]))
+        return n[centre[i] - 1] + offset
 
     def _setup(self, ctx: TaskContext):
         if "tongue_plan" not in ctx.state:

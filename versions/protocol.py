@@ -19,6 +19,7 @@ versions without the hook are untouched.
 from __future__ import annotations
 
 import dataclasses
+import inspect
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Iterator, Protocol, runtime_checkable
 
@@ -43,6 +44,7 @@ __all__ = [
     "PELLET_INDEX",
     "held_pellets",
     "version_face",
+    "accepts_withheld",
 ]
 
 #: Column of each pellet in ``TaskRecording.xy_mm`` (order of ``cassi.data.xrmb.files.PELLETS``).
@@ -208,6 +210,11 @@ class TaskContext:
     first : float64 (8, 2)
         The mapped pellets at the first valid row: the reference of every displacement, also
         in a window (:meth:`window`) that starts later.
+    withheld : tuple of str
+        Pellets the version animates without (leave-one-out, see
+        :meth:`StagedVersion.animate_chunks`): their columns of ``pellets`` and ``pellets_mm``
+        are what a stage's ``predict_withheld`` made of the others (NaN when no stage predicts
+        one), ``held`` is True for them throughout.
     """
 
     profile: Any
@@ -223,6 +230,7 @@ class TaskContext:
     diagnostics: dict[str, np.ndarray] = field(default_factory=dict)
     state: dict[str, Any] = field(default_factory=dict)
     first: np.ndarray | None = None
+    withheld: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.first is None:
@@ -254,7 +262,12 @@ class TaskContext:
 
 
 class Stage(Protocol):
-    """One part of the face in a :class:`StagedVersion`."""
+    """One part of the face in a :class:`StagedVersion`.
+
+    Optional: ``predicts`` (pellet names) and ``predict_withheld(ctx, name) -> float64 (F, 2)``
+    Parke (x, z): where this stage's model puts pellet ``name``'s site from the other pellets,
+    for a leave-one-out animation (``ctx.pellets[:, k]`` of a withheld pellet is NaN until then).
+    """
 
     name: str
 
@@ -283,10 +296,18 @@ class StagedVersion:
         raise NotImplementedError
 
     # --- the shared skeleton (thesis Figure 4.1) ---------------------------------------------
-    def context(self, profile: "SubjectProfile", face: "FaceModel", rec: "TaskRecording") -> TaskContext:
+    def context(self, profile: "SubjectProfile", face: "FaceModel", rec: "TaskRecording", *,
+                withheld: tuple[str, ...] = ()) -> TaskContext:
         """Find the first valid row, hold missing pellets, map to Parke space (4.1.1), on the
-        face this version animates (:func:`version_face`)."""
+        face this version animates (:func:`version_face`). A ``withheld`` pellet counts as
+        missing in every row: the first valid row is the first with all the others valid, and
+        its columns are NaN (the stages predict them, :meth:`animate_chunks`)."""
         face = version_face(self, face)
+        unknown = sorted(set(withheld) - set(PELLET_INDEX))
+        if unknown:
+            raise CassiInputError(f"cannot withhold {', '.join(unknown)}: pellets are "
+                                  f"{', '.join(PELLET_INDEX)}")
+        out = [PELLET_INDEX[p] for p in withheld]
 
         xy_mm = np.asarray(rec.xy_mm)
         if xy_mm.ndim != 3 or xy_mm.shape[1:] != (8, 2):
@@ -297,28 +318,41 @@ class StagedVersion:
         if n_vertices < numbering.CORNER_MIDDLE:
             raise CassiInputError(f"the face has {n_vertices} vertices; CASSI needs Parke's 287, "
                                   f"the tongue and vertex {numbering.CORNER_MIDDLE}")
-        first = rec.first_valid_index
+        valid = np.array(rec.valid, dtype=bool)
+        valid[:, out] = False
+        kept = np.delete(valid, out, axis=1).all(axis=1)
+        first = int(np.argmax(kept)) if kept.any() else None
         if first is None:
-            raise CassiInputError("no row with all eight pellets valid: nothing to animate",
+            raise CassiInputError("no row with all eight pellets valid: nothing to animate"
+                                  if not out else f"no row with every pellet but "
+                                  f"{', '.join(withheld)} valid: nothing to animate",
                                   path=getattr(rec, "path", None))
-        xy, held = held_pellets(rec.xy_mm, rec.valid, first)
+        xy, held = held_pellets(rec.xy_mm, valid, first)
+        xy[:, out] = np.nan
+        held[:, out] = True
         neutral = np.array(face.vertices, dtype=np.float64)
         mapping = XrmbToParke.from_face(neutral, profile.jaw_length_mm)
         rows = np.arange(first, xy.shape[0] + first, dtype=np.int64)
         return TaskContext(profile=profile, face=face, rec=rec, mapping=mapping, rows=rows,
                            pellets_mm=xy, held=held, pellets=mapping.to_parke(xy), neutral=neutral,
-                           start=neutral.copy())
+                           start=neutral.copy(), withheld=tuple(withheld))
 
     def animate(self, profile: "SubjectProfile", face: "FaceModel", rec: "TaskRecording") -> Animation:
         return next(self.animate_chunks(profile, face, rec, frames=None))
 
     def animate_chunks(self, profile: "SubjectProfile", face: "FaceModel", rec: "TaskRecording",
-                       *, frames: int | None) -> Iterator[Animation]:
+                       *, frames: int | None, withheld: tuple[str, ...] = ()) -> Iterator[Animation]:
         """Animate ``frames`` frames at a time (None: all at once), one :class:`Animation` per
         chunk, in order; together they equal :meth:`animate` exactly (stages carry what a
-        frame needs from the previous one in ``ctx.state``), in memory bounded by the chunk."""
-        ctx = self.context(profile, face, rec)
+        frame needs from the previous one in ``ctx.state``), in memory bounded by the chunk.
+
+        ``withheld``: pellets animated without (leave-one-out): a stage that ``predicts`` one
+        places it from the others (:meth:`Stage.predict_withheld`), and every stage then runs
+        on that. A version none of whose stages reads the pellet (Parke's still tongue) needs no
+        prediction; one that reads it unpredicted would animate NaN, which is refused."""
+        ctx = self.context(profile, face, rec, withheld=withheld)
         stages = self.stages()
+        _predict_withheld(ctx, stages)
         for stage in stages:            # initialisation phase: the subject's starting face
             stage.initialise(ctx)
         n = ctx.n_frames
@@ -333,6 +367,9 @@ class StagedVersion:
             positions[...] = ctx.start
             for stage in stages:        # animation phase: every line against the first line
                 stage.animate(window, positions)
+            if withheld and not np.isfinite(positions).all():
+                raise CassiInputError(f"{self.name} reads {', '.join(withheld)}, withheld, and "
+                                      f"none of its stages predicts it")
             yield self.finish(window, positions)
 
     def finish(self, ctx: TaskContext, positions: np.ndarray) -> Animation:
@@ -347,3 +384,29 @@ class StagedVersion:
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(name={self.name!r})"
+
+
+def _predict_withheld(ctx: TaskContext, stages: list) -> None:
+    """Fill each withheld pellet's columns with the first stage's prediction that ``predicts``
+    it (from the pellets kept), and the first row's reference with them."""
+    for name in ctx.withheld:
+        stage = next((s for s in stages if name in getattr(s, "predicts", ())), None)
+        if stage is None:
+            continue
+        k = PELLET_INDEX[name]
+        xz = np.asarray(stage.predict_withheld(ctx, name), dtype=np.float64)
+        ctx.pellets[:, k] = xz
+        ctx.pellets_mm[:, k] = ctx.mapping.to_xrmb(xz)
+    ctx.first = np.array(ctx.pellets[0], dtype=np.float64)
+
+
+def accepts_withheld(version: Any) -> bool:
+    """Whether ``version`` can animate with pellets withheld (its ``animate_chunks`` takes
+    ``withheld``): every :class:`StagedVersion` can; the protocol does not ask it of others."""
+    chunks = getattr(version, "animate_chunks", None)
+    if chunks is None:
+        return False
+    try:
+        return "withheld" in inspect.signature(chunks).parameters
+    except (TypeError, ValueError):
+        return False

@@ -28,6 +28,7 @@ from cassi.harness.evaluation.evalset import task_catalog
 from cassi.harness.evaluation.frames import (DEFAULT_EXTREMES, frames_to_render, image_views,
                                              viewer_frames)
 from cassi.harness.evaluation.viewerdata import viewer_blob
+from cassi.harness.evaluation.withheld import withheld_sites
 from cassi.harness.evaluation.inputs import (read_planned, verify_code, verify_profile,
                                              verify_subject_files)
 from cassi.harness.farm.jobs import Job, SkipJob, StageContext, StageOutput, npz_bytes
@@ -108,7 +109,8 @@ def load_usable(subject_data, job: Job, data: bytes | None = None):
 
 
 def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> StageOutput:
-    """Animate every frame, run the geometric checks, choose and keep the frames to render.
+    """Animate every frame (and again with T2, then T3, withheld: Table G's leave-one-out
+    tongue), run the geometric checks, choose and keep the frames to render.
 
     Outputs: ``rows`` (the checks' rows, view ``"geometry"``), ``keyframes`` (npz: ``frames``
     int64 (K,) recording rows, ``positions`` float32 (K, V, 3) Parke units), ``viewer`` (the
@@ -131,9 +133,11 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
     face = get_face(corpus, job.subject, profile)
     with geometry_temp_dir() as tmp:
         anim = animate_to_file(version, profile, face, rec, Path(tmp))
+        withheld = withheld_sites(version, profile, face, rec)           # leave-one-out tongue
         face = get_version_face(corpus, job.subject, profile, version)  # what it animated
         rows = rubric.run_geometry_checks(anim, face, profile, task=job.task, subject=job.subject,
-                                          rep=job.rep, neutral=get_neutral(), recording=rec)
+                                          rep=job.rep, neutral=get_neutral(), recording=rec,
+                                          withheld=withheld)
         out = _geometry_output(job, ctx, rec, anim, pd.DataFrame(rows))
         out.files["viewer"] = (_viewer_output(rec, anim, face, profile, out.rows), ".npz")
         return out

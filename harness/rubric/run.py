@@ -22,6 +22,7 @@ from cassi.harness.rubric.registry import TRACE_STEP, TRACE_TASKS, checks_for, g
 from cassi.data.face.model import build_face
 from cassi.versions.mapping import XrmbToParke
 from cassi.harness.rubric.fidelity import FidelityContext, traces
+from cassi.harness.rubric.leaveout import LeaveOutContext
 from cassi.harness.rubric.shape import ShapeContext
 
 __all__ = ["criterion_rows", "run_geometry_checks", "run_image_checks"]
@@ -52,6 +53,7 @@ def _frame_numbers(anim, n: int) -> np.ndarray:
 def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | None = None,
                         rep: int = 1, parts: G.MouthParts | None = None,
                         mm_per_unit: float | None = None, neutral=None, recording=None,
+                        withheld: dict | None = None,
                         checks: Iterable[str] | None = None) -> pd.DataFrame:
     """Run every geometric check that applies to ``task`` on one animation, and with
     ``recording`` the fidelity checks (Table F).
@@ -72,6 +74,11 @@ def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | N
         The recording the version animated: its pellets are what Table F compares the face
         with (needs ``face`` and the profile's jaw length for the 4.1.1 mapping). Without it
         Table F is not measured.
+    withheld : dict, optional
+        Pellet name -> :class:`~cassi.harness.rubric.leaveout.WithheldSite`, the version
+        animated with that pellet withheld (:func:`cassi.harness.evaluation.withheld.withheld_sites`;
+        empty: the version cannot be, and its rows say so). Without it (None) Table G's
+        leave-one-out checks are not measured.
     checks : iterable of str, optional
         Only these checks.
 
@@ -100,7 +107,8 @@ def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | N
     frame_no = _frame_numbers(anim, pos.n_frames)
     rows = _measured_rows(checks_for(kind="geometry", task=task), ctx, ids, wanted, frame_no)
     if recording is not None:
-        rows.extend(_fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no))
+        rows.extend(_fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no,
+                                   withheld))
     if wanted is None:
         rows.extend(criterion_rows(ctx.diagnostics, ids, mm_per_unit))
     return _frame(rows)
@@ -141,7 +149,8 @@ def _measured_rows(checks, ctx, ids: dict, wanted, frame_no) -> list[dict]:
     return rows
 
 
-def _fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no) -> list[dict]:
+def _fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no,
+                   withheld=None) -> list[dict]:
     jaw = getattr(profile, "jaw_length_mm", None)
     if face is None or jaw is None:
         raise CassiInputError("fidelity checks need the face and the subject's jaw length "
@@ -157,6 +166,10 @@ def _fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no) -> lis
     if shape:  # the lips' shape between the pellets, against the same recording
         sctx = ShapeContext.of(anim, recording, mapping, G.mouth_parts(face))
         rows.extend(_measured_rows(shape, sctx, ids, wanted, frame_no))
+    leave = [c for c in todo if c.measure.startswith("leaveout:")]
+    if leave and withheld is not None:  # the tongue between the pellets, one withheld at a time
+        rows.extend(_measured_rows(leave, LeaveOutContext(withheld, recording), ids, wanted,
+                                   frame_no))
     if ids["task"] in TRACE_TASKS and wanted is None:
         rows.extend(dict(ids, negatives=0, **r) for r in traces(ctx, step=TRACE_STEP))
     return rows

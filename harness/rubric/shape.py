@@ -12,7 +12,8 @@ the same recording:
 - rounding on task 118: how much the mouth narrows for each millimetre the recording says the
   lips protrude.
 
-Every band is declared in :mod:`.registry` with its source; results on the synthetic corpus
+The tongue between the pellets (leave one out) is Table G's too: :mod:`.leaveout`. Every
+band is declared in :mod:`.registry` with its source; results on the synthetic corpus
 describe the software, not real speakers.
 
 Why a table of its own rather than rows of Table F: Table F's rating says "the model follows the

@@ -108,6 +108,25 @@ class ThickTongueStage:
     """The tongue of CASSI 3.0 (see the module docstring); replaces CASSI 1.0's tongue stage."""
 
     name = "tongue"
+    #: The pellets between two others, which a leave-one-out animation may withhold.
+    predicts = ("T2", "T3")
+
+    def predict_withheld(self, ctx: TaskContext, name: str) -> np.ndarray:
+        """Where 3.0's centre line puts a withheld T2 or T3 (Parke (x, z), (F, 2)): the
+        Catmull-Rom midpoint of the curve through the pellets kept, as between any two pellets
+        (:func:`cassi30.shape.centre_stations`). The knot beyond the free end (the tip for T2,
+        the first back point for T3, both drawn from the withheld pellet) is the mirror image of
+        its neighbour's, the usual end condition."""
+        names = list(_PELLETS)
+        i = names.index(name)
+        if set(names[i - 1:i + 2:2]) & set(ctx.withheld):
+            raise CassiInputError(f"cannot predict {name} with a neighbour withheld too")
+        p = {n: ctx.pellet(n) for n in names if n != name}
+        if name == "T2":
+            p0, p1, p2, p3 = 2.0 * p["T1"] - p["T3"], p["T1"], p["T3"], p["T4"]
+        else:
+            p0, p1, p2, p3 = p["T1"], p["T2"], p["T4"], 2.0 * p["T4"] - p["T2"]
+        return (9.0 * (p1 + p2) - p0 - p3) / 16.0
 
     def _setup(self, ctx: TaskContext) -> dict:
         plan = ctx.state.get("tongue30")
