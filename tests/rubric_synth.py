@@ -182,6 +182,21 @@ def animate(m: Mouth, *, F: int = 200, open_rad: float = 0.10, noise: float = 0.
     return Anim(pos.astype(np.float32), diag, t.copy())
 
 
+def round_opening(m: Mouth, anim: Anim) -> Anim:
+    """Wide-open lips of a smooth outline (task 106): the inner outline's side vertices on the
+    half-ellipses through 61 (58), the inner corner 287 and its height; the rigid jaw alone
+    gives a flat-topped hexagon (CASSI 1.0's fault)."""
+    pos = anim.positions.astype(float).copy()
+    p = m.parts
+    c = pos[:, p.inner_corner]
+    for centre, side in ((p.ul_inner, p.upper_inner[1:]), (p.ll_inner, p.lower_inner[1:])):
+        h = pos[:, centre, 2] - c[:, 2]
+        for v in side:
+            t = np.clip(pos[:, v, 1] / c[:, 1], 0.0, 1.0)
+            pos[:, v, 2] = c[:, 2] + h * np.sqrt(1.0 - t ** 2)
+    return Anim(pos.astype(np.float32), anim.diagnostics, anim.frames)
+
+
 def protrude(m: Mouth, anim: Anim, *, forward: float = 5.0, round_to: float = 0.75) -> Anim:
     """Task 118: the lips move forward and the corners in, peaking at the middle of the task."""
     F = anim.positions.shape[0]

@@ -30,7 +30,7 @@ def _base(task):
     if task == 118:
         return S.protrude(M, S.animate(M, open_rad=0.03))
     if task == 106:
-        return S.animate(M, open_rad=0.2)
+        return S.round_opening(M, S.animate(M, open_rad=0.2))
     return S.animate(M)
 
 
@@ -253,6 +253,17 @@ def p_diamond(a, s):
     return a
 
 
+def p_hexagon(a, s):
+    # CASSI 1.0's opening (synthetic JW24 task 106 row 957): the inner outline's side points
+    # pulled (fraction s) to the height of its centre, flat top and bottom edges kinked
+    # beside the corners
+    pos = a.positions
+    for centre, pts in ((P.ul_inner, P.upper_inner[1:]), (P.ll_inner, P.lower_inner[1:])):
+        for v in pts:
+            pos[:, v, 2] += s * (pos[:, centre, 2] - pos[:, v, 2])
+    return a
+
+
 def p_lower_lip_through_lower(a, d):
     lt = M.rest[P.lower_incisor_tip]
     for v in (P.ll_inner, P.lower_inner[1]):
@@ -327,6 +338,7 @@ CASES = {
     "upper_lip_sharp": (118, p_sharp, [0.3, 4.0], [0, 1]),
     "lip_jitter": (118, p_jitter, [0.05, 1.0], [0, 1]),
     "lip_shape_triangular": (106, p_diamond, [0.2, 1.0], [0, 1]),
+    "lip_outline_angular": (106, p_hexagon, [0.2, 1.0], [0, 1]),
     "lower_lip_through_teeth": (106, p_lower_lip_through_lower, [-1.0, 2.0], [0, 1]),
     "below_lip_cave_in": (106, p_below_cave, [0.5, 2.5], [0, 1]),
     "corners_misplaced": (106, p_corner_up, [0.5, 2.5], [0, 1]),
@@ -555,3 +567,13 @@ def test_too_few_vertices_raise_input_error():
     a.positions = a.positions[:, :10]
     with pytest.raises(CassiInputError, match="vertices"):
         run(a, 5)
+
+
+def test_a_flat_topped_hexagon_is_angular_though_it_fills_its_box():
+    # CASSI 1.0's wide opening: area / box stays above an ellipse's, only the kinks show it
+    r = run(p_hexagon(S.copy(BASE[106]), 1.0), 106,
+            checks=["lip_shape_triangular", "lip_outline_angular"])
+    assert r.loc["lip_shape_triangular", "negatives"] == 0
+    assert r.loc["lip_shape_triangular", "value"] > np.pi / 4
+    assert r.loc["lip_outline_angular", "negatives"] == 1
+    assert r.loc["lip_outline_angular", "value"] < 125.0

@@ -30,7 +30,7 @@ __all__ = [
     "inner_lip_gap", "lower_lip_below_teeth", "protrusion_difference", "lip_nose_clearance",
     "concavity", "corner_misplacement", "excess_jitter", "switch_jumps",
     "palate_below_incisor", "teeth_overlap", "teeth_slope", "teeth_gap", "lip_rounding",
-    "opening_polygon", "polygon_extent", "profile_angle", "max_protrusion_frame",
+    "opening_polygon", "polygon_extent", "outline_angles", "profile_angle", "max_protrusion_frame",
 ]
 
 
@@ -539,6 +539,19 @@ def polygon_extent(poly: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     area = 0.5 * np.abs(np.sum(y * np.roll(z, -1, axis=1) - np.roll(y, -1, axis=1) * z, axis=1))
     box = np.ptp(y, axis=1) * np.ptp(z, axis=1)
     return area, np.where(box > 0, area / np.where(box > 0, box, 1.0), np.nan)
+
+
+def outline_angles(poly: np.ndarray) -> np.ndarray:
+    """Interior angle, degrees, at every vertex of closed polygons (F, N, 2) -> (F, N).
+
+    180 where the outline runs straight on; a smooth outline turns a little at each vertex, an
+    angular one (a hexagon: 120) turns all at once at a few.
+    """
+    poly = np.asarray(poly, np.float64)
+    u = np.roll(poly, 1, axis=1) - poly
+    v = np.roll(poly, -1, axis=1) - poly
+    cos = np.sum(u * v, -1) / np.maximum(np.linalg.norm(u, axis=-1) * np.linalg.norm(v, axis=-1), 1e-12)
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
 
 
 def profile_angle(pos: np.ndarray, a: int, b: int, c: int) -> np.ndarray:

@@ -463,18 +463,45 @@ def m_corner_jump(ctx):
                                f"largest jump {sv:.2f} mm)", frame_value=float(jit[jf]))
 
 
+def _wide_open(ctx) -> np.ndarray:
+    """Frames (indices) where the lips are open wide (WIDE_OPEN_SHARE of the task's widest, at
+    least WIDE_OPEN_MM): Table E's shapes are judged "especially when opened wide"."""
+    height = ctx.gap
+    return np.flatnonzero(height >= max(WIDE_OPEN_MM, WIDE_OPEN_SHARE * float(height.max())))
+
+
 def m_lip_shape(ctx):
     area, extent = ctx.series(lambda pos: G.polygon_extent(G.opening_polygon(pos, ctx.parts)))
-    height = ctx.gap
-    wide = height >= max(WIDE_OPEN_MM, WIDE_OPEN_SHARE * float(height.max()))
-    if not np.any(wide):
+    idx = _wide_open(ctx)
+    if not idx.size:
         return Measurement(float("nan"), -1, f"the lips never open wide (> {WIDE_OPEN_MM} mm)")
-    idx = np.flatnonzero(wide)
     v = float(np.median(extent[idx]))
     f = int(idx[np.argmin(extent[idx])])
     return Measurement(v, f, f"median over {len(idx)} wide-open frames of the opening's "
                              "area / bounding box (ellipse 0.79, diamond 0.5)",
                        frame_value=float(extent[f]))
+
+
+def _sharpest_side_turn(pos, parts):
+    # the opening outline's smallest interior angle away from its two corners (287 and its
+    # mirror image), where a mouth is pointed: a kink on the lips' edges is the fault
+    poly = G.opening_polygon(pos, parts)
+    nu, n_half = len(parts.upper_inner), len(parts.upper_inner) + 1 + len(parts.lower_inner)
+    corners = [nu, n_half + (n_half - 1 - nu) - 1]
+    a = G.outline_angles(poly)
+    return np.delete(a, corners, axis=1).min(axis=1)
+
+
+def m_lip_outline_angular(ctx):
+    idx = _wide_open(ctx)
+    if not idx.size:
+        return Measurement(float("nan"), -1, f"the lips never open wide (> {WIDE_OPEN_MM} mm)")
+    turn = ctx.series(_sharpest_side_turn, ctx.parts)
+    v = float(np.median(turn[idx]))
+    f = int(idx[np.argmin(turn[idx])])
+    return Measurement(v, f, f"median over {len(idx)} wide-open frames of the opening outline's "
+                             "sharpest angle away from the corners (straight on 180, hexagon 120)",
+                       frame_value=float(turn[f]))
 
 
 def m_lower_lip_through_lower_teeth(ctx):

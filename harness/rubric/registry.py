@@ -60,6 +60,10 @@ LIPS_BELOW_TEETH_MM = 0.5
 #: opening, and at least WIDE_OPEN_MM apart: the shape of a slit is not the shape of the mouth.
 WIDE_OPEN_SHARE = 0.7
 WIDE_OPEN_MM = 3.0
+#: An outline reads as angular (Table E's "diamond-shaped") when it turns at a kink sharper than
+#: this, degrees, away from the mouth's corners: a regular hexagon's 120 plus 5 for the shading's
+#: round-off (lip_outline_angular's reason names the renders).
+LIP_OUTLINE_KINK_DEG = 125.0
 #: "Often" over a task for protrusion and crossing lips: the value a tenth of the frames reach
 #: (90th percentile), so a few frames at a turning point do not decide and a habit does.
 OFTEN_PERCENTILE = 90
@@ -802,6 +806,29 @@ _ALL: list[Check] = [
           measure="image:m_opening_extent",
           tasks=(106,),
           counted=False),
+    Check(name="lip_outline_angular",
+          table="E",
+          component="lips",
+          view="front",
+          unit="deg",
+          frames="wide-open frames",
+          description="the lip opening's (inner outline's) sharpest interior angle away from its two "
+                      "corners, median over the wide-open frames",
+          thresholds=(LIP_OUTLINE_KINK_DEG,),
+          negatives=(1,),
+          direction="lower",
+          reason="added after the renders: CASSI 1.0 at the widest opening of task 106 (synthetic "
+                 "JW24 row 957, JW40 row 364, front) shows a hexagon, flat top and bottom edges "
+                 "meeting straight sides at kinks of 110-117 deg beside the corners, which "
+                 "lip_shape_triangular's area/box (0.86, above an ellipse's 0.79) cannot see; "
+                 "2.0, 2.1 and Parke's lips (136-156 deg there) read as rounded arches. A regular "
+                 "hexagon turns 120 deg at each vertex; 125 leaves 5 deg for the round-off of the "
+                 "shading. Charged with lip_shape_triangular: one fault, one charge",
+          text="lips very triangular or diamond-shaped when opened wide",
+          kind="geometry",
+          measure="measures:m_lip_outline_angular",
+          tasks=(106,),
+          charged_with="lip_shape_triangular"),
     Check(name="lower_lip_through_teeth",
           table="E",
           component="lips",
