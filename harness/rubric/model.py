@@ -34,7 +34,7 @@ TABLES = {
 #: What each table judges, for the "versions compared" sentences.
 TABLE_TOPICS = {"A": "teeth, lips and tongue", "B": "face shape", "C": "lip placement",
                 "D": "maximum lip protrusion", "E": "jaw wagging", "F": "fidelity to the recording",
-                "G": "the lip shape between the pellets"}
+                "G": "the lips and tongue between the pellets"}
 
 #: Versions in the order the thesis compares them (Table C: "compared with the previous version").
 VERSION_ORDER = ("parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1")

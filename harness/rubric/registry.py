@@ -16,7 +16,7 @@ comes from the thesis or from looking at renders, as its reason says.
 Tables (``Check.table``): ``A`` teeth/lips/tongue per subject (thesis Table 5.3), ``B`` face
 shape at initialization (5.4), ``C`` lip placement across versions (5.5, summary 5.6), ``D``
 maximum lip protrusion, task 118 (5.8), ``E`` jaw wagging, task 106 (5.9), ``F`` fidelity to
-the recording at the pellet sites and ``G`` the lip shape between the pellets (neither is the
+the recording at the pellet sites and ``G`` the lips and tongue between the pellets (neither is the
 thesis's; G is charged apart from F because a face on the pellets can still be the wrong shape).
 """
 from __future__ import annotations
