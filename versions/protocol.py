@@ -318,17 +318,15 @@ class StagedVersion:
         if n_vertices < numbering.CORNER_MIDDLE:
             raise CassiInputError(f"the face has {n_vertices} vertices; CASSI needs Parke's 287, "
                                   f"the tongue and vertex {numbering.CORNER_MIDDLE}")
-        valid = np.array(rec.valid, dtype=bool)
-        valid[:, out] = False
-        kept = np.delete(valid, out, axis=1).all(axis=1)
-        first = int(np.argmax(kept)) if kept.any() else None
-        if first is None:
+        kept = np.delete(np.asarray(rec.valid, dtype=bool), out, axis=1).all(axis=1)
+        if not kept.any():
             raise CassiInputError("no row with all eight pellets valid: nothing to animate"
                                   if not out else f"no row with every pellet but "
                                   f"{', '.join(withheld)} valid: nothing to animate",
                                   path=getattr(rec, "path", None))
-        xy, held = held_pellets(rec.xy_mm, valid, first)
-        xy[:, out] = np.nan
+        first = int(np.argmax(kept))
+        xy, held = held_pellets(rec.xy_mm, rec.valid, first)
+        xy[:, out] = np.nan                 # what the stages predict (_predict_withheld)
         held[:, out] = True
         neutral = np.array(face.vertices, dtype=np.float64)
         mapping = XrmbToParke.from_face(neutral, profile.jaw_length_mm)

@@ -17,12 +17,12 @@ import numpy as np
 
 from cassi.harness.rubric.model import Measurement
 from cassi.harness.rubric.registry import MIN_FRAMES
+from cassi.versions.protocol import PELLET_INDEX
 
 __all__ = ["WITHHELD", "WithheldSite", "LeaveOutContext", "m_tongue_t2", "m_tongue_t3"]
 
 #: The pellets withheld, one at a time: the two with a pellet on either side.
 WITHHELD = ("T2", "T3")
-_COLUMN = {"T2": 3, "T3": 4}     # their columns in TaskRecording.xy_mm
 
 
 @dataclass(frozen=True)
@@ -59,7 +59,7 @@ class LeaveOutContext:
                                                  f"withheld: its tongue between the pellets is "
                                                  f"not measured")
         rows = np.asarray(site.frames, np.int64)
-        k = _COLUMN[name]
+        k = PELLET_INDEX[name]
         ok = np.asarray(self.recording.valid, bool)[rows, k]
         if ok.sum() < MIN_FRAMES:
             return Measurement(float("nan"), -1, f"{name} valid in {ok.sum()} frames: nothing to "
