@@ -319,6 +319,42 @@ def test_the_tongue_heads_out_and_back_without_jumps(protrusion, corpus, version
     assert step.max() < 2.5 * pellet.max()
 
 
+def _turn_figures(corpus, version, subject):
+    """Task 118 of ``subject`` while the front turns toward or back from the gap (gap weight
+    strictly between 0 and 1): the tongue's largest step over the task's fastest pellet step,
+    and its largest shake beyond its pellets' (mm)."""
+    from cassi.harness.rubric.registry import JITTER_ORDER, JITTER_WINDOW
+
+    profile, face, rec = _inputs(corpus, subject, 118)
+    anim = version.animate(profile, face, rec)
+    own = version_face(version, face)
+    rows = tongue_rows(own.vertex_count)
+    pos = anim.positions.astype(np.float64)
+    w = np.asarray(anim.diagnostics["tongue_gap_weight"])
+    turning = (w > 0.0) & (w < 1.0)
+    step = np.linalg.norm(np.diff(pos[:, rows], axis=0), axis=-1).max(axis=1)
+    pellet = np.linalg.norm(np.diff(version.context(profile, face, rec).pellets[:, 2:6], axis=0),
+                            axis=-1).max()
+    mm = G.mm_per_unit(face.vertices, profile.jaw_length_mm)
+    shake = G.excess_jitter(pos, rows, np.asarray(N.TONGUE_PELLETS) - 1,
+                            window=JITTER_WINDOW, order=JITTER_ORDER) * mm
+    return turning.sum(), step[turning[1:]].max() / pellet, shake[turning].max()
+
+
+@pytest.mark.parametrize("subject", ["JW16", "JW24"])
+def test_the_front_turns_no_faster_than_the_tongue(corpus, version, subject, monkeypatch):
+    """The turn toward the gap and back is as long as the farthest its front moves (TURN_MM,
+    24 mm): no tongue vertex then steps more than 1.6 times the fastest pellet, and the tongue
+    shakes by under 1 mm beyond its pellets (1.34-1.38 and 0.87-0.95 mm when written). The
+    planted defect, the station's 12 mm alone, turned in 4 frames: 1.81-1.94 and 1.35-1.80 mm
+    (the 19 shaking frames of the default set, issue 23 section 6)."""
+    frames, ratio, shake = _turn_figures(corpus, version, subject)
+    assert frames > 0 and ratio < 1.6 and shake < 1.0
+    monkeypatch.setattr(K, "TURN_MM", 12.0)
+    _, ratio, shake = _turn_figures(corpus, version, subject)
+    assert ratio > 1.6 and shake > 1.0
+
+
 def test_the_projection_is_smooth_in_time():
     """A coordinate swept through its bound at constant speed: the soft projection's largest
     second difference stays a small fraction of what a hard clamp's kink gives, so a smooth

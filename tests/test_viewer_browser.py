@@ -110,9 +110,17 @@ def test_play_advances_the_frame_and_changes_the_canvas(report, browser):
     p.page.click("#play")  # pause
     after = p.frame()
     assert after > before
-    changed = np.abs(p.pixels().astype(int) - shot.astype(int)).max(axis=-1) > 24
-    assert changed.sum() > 200, "the face did not move on the canvas"
-    assert p.errors == []
+    played = p.pixels()
+    # The canvas shows the frame it names: the same as the viewer opened at that frame (how far
+    # play got under load varies, and so does how much the face moved since frame 600).
+    q = Page(browser, _viewer_url(rep, f"#frame={after}&a=cassi-1.0")).ready()
+    assert q.frame() == after
+    same = np.abs(played.astype(int) - q.pixels().astype(int)).max(axis=-1) > 24
+    changed = np.abs(played.astype(int) - shot.astype(int)).max(axis=-1) > 24
+    assert same.sum() < 20 and changed.sum() > 5 * max(same.sum(), 10), \
+        "the canvas did not follow the frame while playing"
+    assert p.errors == [] and q.errors == []
+    q.page.close()
     p.page.close()
 
 

@@ -93,9 +93,15 @@ PROTRUSION_RAMP_MM = 8.0
 TONGUE_SPEED_MM_S = 400.0
 #: The first part of the tongue's way out (subject mm, at TONGUE_SPEED_MM_S) turns its front
 #: toward the gap; only then may it pass the teeth (and on the way back it is behind them before
-#: its front leaves the gap's height): 12 mm, about how far the station between T1 and T2 goes
-#: to where the tongue passes the teeth, so no part moves much faster than the tongue (~50 ms).
-TURN_MM = 12.0
+#: its front leaves the gap's height). Its length is how far the front point that moves most goes
+#: during the turn, so that no point moves faster than the tongue: the station between T1 and T2
+#: moves ~12 mm to where the tongue passes the teeth, and the blade's underside at T1, 8 mm below
+#: the dorsum (THICKNESS_T1_MM), swings a quarter turn with it, 8 * pi / 2 = 12.6 mm more: 24 mm
+#: (60 ms, 9 XRMB frames). 12 mm (the station alone) moved a point of the blade up to 5.3 mm in
+#: a frame (770 mm/s, JW18 task 118, whose fastest pellet moves 450 mm/s; 590 mm/s now) and shook
+#: the tongue by up to 1.8 mm as it turned back from the gap (plugins/cassi30/tools/shake.py:
+#: 19 frames above 1 mm on the default set, 2 now).
+TURN_MM = 24.0
 #: The gap between the incisor tips (less the margins) must be open by this much before the
 #: tongue heads out in full; a narrower gap lets it go part of the way (continuously), a shut
 #: one not at all. 1 mm, the collision margin.

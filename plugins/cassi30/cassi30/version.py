@@ -32,8 +32,8 @@ _PELLETS = ("T1", "T2", "T3", "T4")
 #: where those of a whole 20,000-frame task (hundreds of MB) ran at memory speed.
 BLOCK_FRAMES = 1024
 #: How far ahead the tongue looks for the jaw's gap shutting: 24 frames at XRMB's 146 Hz
-#: (164 ms) is longer than its way out takes to withdraw at TONGUE_SPEED_MM_S (the 12 mm turn
-#: and ~20 mm in front of the teeth in task 118: 80 ms).
+#: (164 ms) is longer than its way out takes to withdraw at TONGUE_SPEED_MM_S (the 24 mm turn
+#: and ~20 mm in front of the teeth in task 118: 110 ms).
 LOOKAHEAD_FRAMES = 24
 
 
