@@ -24,8 +24,8 @@ from cassi.common.errors import CassiInputError
 from cassi.data.corpus.profile import preprocess, read_lipthick, read_maxprotru
 from cassi.data.synth.corpus import (GENERATOR_VERSION, JW32_MNM_LOST_FROM_TASK, PROTECTED_TASKS,
                               TABLE_5_1_TASKS, default_corpus, generate_task, make_corpus)
-from cassi.data.corpus.stats import corpus_stats
-from cassi.data.synth.motion import KINEMATIC_TARGETS
+from cassi.data.corpus.stats import corpus_stats, recording_stats
+from cassi.data.synth.motion import KINEMATIC_TARGETS, REAL_RECORDING_TARGETS
 from cassi.data.synth.subjects import SUBJECTS
 from cassi.data.xrmb.files import PELLETS, read_head_measures, read_mis
 
@@ -286,6 +286,22 @@ def test_jw45_at_rest_is_like_the_real_excerpt(small, fixtures_dir):
     assert a.scalars["lip_mid_first"] == pytest.approx(b.scalars["lip_mid_first"], abs=0.3)
     assert a.scalars["ul_ll_first"] == pytest.approx(b.scalars["ul_ll_first"], abs=1.0)
     assert a.scalars["jaw_distance_mean"] == pytest.approx(b.scalars["jaw_distance_mean"], abs=0.3)
+
+
+def test_generated_files_match_the_real_recordings_figures(small, tmp_path):
+    """Issue 23: UL speed, T3 second difference and lip midpoint of the generated JW11 task 105
+    and JW45 task 13, read as the checks read them, within the factor (or mm) of the real
+    recordings' figures (REAL_RECORDING_TARGETS, sources in synth_motion)."""
+    jw11 = make_corpus(tmp_path / "jw11", subjects=["JW11"], seed=0, workers=1)
+    roots = {"JW11": jw11, "JW45": small}
+    for subject, task, figure, pellet, real, kind, tol in REAL_RECORDING_TARGETS:
+        rec = Corpus(roots[subject]).subject(subject).load(task, require_valid=False)
+        st = recording_stats([rec])
+        value = st.scalars[figure] if pellet is None else st.pellets.at[pellet, figure]
+        if kind == "factor":
+            assert real / tol <= value <= real * tol, (subject, task, figure, pellet, value)
+        else:
+            assert abs(value - real) <= tol, (subject, task, figure, value)
 
 
 def test_same_seed_same_stats(small, tmp_path):

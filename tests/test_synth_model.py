@@ -15,7 +15,7 @@ from cassi.data.corpus.profile import read_lipthick, read_maxprotru
 from cassi.data.synth.corpus import PERIOD_S, generate_task
 from cassi.data.synth.motion import (DIPHTHONGS, OMEGA, PHONE_SPECS, Anatomy, expand_phones, jaw_transform,
                                      pellets, segment_targets, smooth)
-from cassi.data.synth.subjects import (LOW_LIP_LIPTHICK, LOW_LIP_SUBJECTS, SUBJECTS, palate_y,
+from cassi.data.synth.subjects import (LIP_MID_BY_SEX, LIP_MID_REAL, SUBJECTS, palate_y,
                                       subject_figures)
 from cassi.data.synth.tasks import LEXICON, TASKS, word_phones
 from cassi.data.xrmb.files import read_pal, read_txy
@@ -128,26 +128,16 @@ def test_head_measures_vary_by_subject_and_long_faces_are_steeper():
     assert body[male].mean() > body[~male].mean()
 
 
-def test_only_the_low_lip_subjects_meet_the_cassi_2_1_criterion():
-    """Thesis 4.3.1, as cassi.versions applies it: with 2.0's equal lips (Thick = lipthick p / 2,
-    Parke units), the upper lip's inside edge starts more than 20 units below vertex 226 (the
-    incisor tip, where the XRMB origin maps). Checked on each subject's Table 5.1 files."""
-    from cassi.data.face.model import build_face
-    from cassi.data.synth.corpus import TABLE_5_1_TASKS
-    from cassi.versions.lips_thickness import is_low_lips, thick_from_lipthick
-
-    p = build_face().jaw_length
-    assert {n for n, f in SUBJECTS.items() if f.lipthick >= LOW_LIP_LIPTHICK} == \
-        set(LOW_LIP_SUBJECTS)
+def test_resting_lips_come_from_real_recordings_or_the_sex_norm():
+    """Issue 23: each subject's resting lip midpoint is its real recording's where one is known,
+    else the published norm for its sex (incisor display minus half the vermilion difference);
+    the generated first row puts it there."""
+    assert LIP_MID_BY_SEX == {"M": -0.7, "F": 0.8}
     for name, fig in SUBJECTS.items():
-        for task in TABLE_5_1_TASKS[name]:
-            _, xy = generate_task(fig, task)
-            d = np.hypot(*(xy[0, 6] - xy[0, 7]))
-            z61 = xy[0, 0, 1] * p / d - thick_from_lipthick(fig.lipthick, p)
-            low = is_low_lips(z61, 0.0)
-            assert low == (name in LOW_LIP_SUBJECTS), (name, task, z61)
-            # clear of the threshold: posture and noise cannot flip a subject
-            assert abs(-z61 - 20.0) > 4.0, (name, task, z61)
+        want = LIP_MID_REAL.get(name, LIP_MID_BY_SEX[fig.sex])
+        assert fig.lip_mid_y_mm == want, name
+        _, xy = generate_task(fig, 13)
+        assert 0.5 * (xy[0, 0, 1] + xy[0, 1, 1]) == pytest.approx(want, abs=0.3), name
 
 
 def test_unknown_subject_names_the_known_ones():

@@ -22,9 +22,10 @@ Whole-recording figures (:data:`SCALARS`):
 - ``jaw_distance_mean`` (mm) and ``jaw_distance_sd`` (mm): the MNI-MNM distance, mean over all
   valid rows, and its within-file standard deviation (root mean of the per-file variances): the
   jaw is rigid, so the SD is tracking noise;
-- ``lip_mid_first``, ``lip_mid_median``, ``lip_mid_p05`` (mm): height of the midpoint of the UL
-  and LL pellets relative to the incisor tip, at the first valid row (mean over files), and the
-  median and 5th percentile over all valid rows (where speech takes it);
+- ``lip_mid_first``, ``lip_mid_mean``, ``lip_mid_median``, ``lip_mid_p05`` (mm): height of the
+  midpoint of the UL and LL pellets relative to the incisor tip, at the first valid row (mean
+  over files), and the mean, median and 5th percentile over all valid rows (where speech takes
+  it);
 - ``ul_ll_first``, ``ul_ll_median``, ``ul_ll_p01`` (mm): the UL-LL distance at the first valid
   row (mean over files; thesis Figure 4.25 divides it by the jaw length), and its median and
   1st percentile over all rows.
@@ -46,8 +47,8 @@ __all__ = ["PELLET_COLUMNS", "SCALARS", "KinematicStats", "compare", "corpus_sta
            "recording_stats", "summarise"]
 
 PELLET_COLUMNS = ("speed_p50", "speed_p90", "speed_p99", "x_range", "y_range", "d2_rms_um")
-SCALARS = ("jaw_distance_mean", "jaw_distance_sd", "lip_mid_first", "lip_mid_median",
-           "lip_mid_p05", "ul_ll_first", "ul_ll_median", "ul_ll_p01")
+SCALARS = ("jaw_distance_mean", "jaw_distance_sd", "lip_mid_first", "lip_mid_mean",
+           "lip_mid_median", "lip_mid_p05", "ul_ll_first", "ul_ll_median", "ul_ll_p01")
 #: Units of every figure, for tables and JSON.
 UNITS = {"speed_p50": "mm/s", "speed_p90": "mm/s", "speed_p99": "mm/s", "x_range": "mm",
          "y_range": "mm", "d2_rms_um": "um", **{k: "mm" for k in SCALARS}}
@@ -162,6 +163,7 @@ def _figures(s: _Samples, label: str) -> KinematicStats:
         "jaw_distance_mean": stat(np.mean, jaw),
         "jaw_distance_sd": math.sqrt(float(np.mean(s.jaw_var))) if s.jaw_var else nan,
         "lip_mid_first": stat(np.mean, np.array(s.lip_mid_first)),
+        "lip_mid_mean": stat(np.mean, mid),
         "lip_mid_median": stat(np.median, mid),
         "lip_mid_p05": stat(np.percentile, mid, 5),
         "ul_ll_first": stat(np.mean, np.array(s.ul_ll_first)),

@@ -46,7 +46,9 @@ from cassi.data.xrmb.files import (NOMINAL_PERIOD_US, PELLETS, HeadMeasures, Mis
 #: corpus of an older version is never reused). 3: anatomical head measures (gonion above and
 #: behind the gnathion). 4: recalibrated kinematics (issue 10: fourth-order gestures, jaw opening
 #: per task type, per-pellet tracking noise, lower lip to the incisors in /f v/, lip heights).
-GENERATOR_VERSION = "4"
+#: 5: issue 23 (resting lips from real recordings and published norms, the upper lip rising with
+#: the jaw, mistracked stretches mostly 1000000 and a stuck pellet's report smooth).
+GENERATOR_VERSION = "5"
 DEFAULT_SEED = 0
 #: Tasks every subject keeps free of artifacts (section 5.3 uses 106 and 118; 13 is the
 #: thesis's Figure 3.9 example), unless the subject's story says otherwise (JW32, JW12).
@@ -251,7 +253,8 @@ def plan_subject(name: str, seed: int) -> list[TaskPlan]:
             continue
         for _ in range(int(rng.choice([1, 1, 1, 2, 2, 3]))):
             pel = str(rng.choice(_EPISODE_PELLETS, p=_EPISODE_WEIGHTS / _EPISODE_WEIGHTS.sum()))
-            kind = str(rng.choice(["hop", "stuck", "bad"], p=[0.35, 0.35, 0.3]))
+            # the bad value "is normally used when pellets are mistracked" (thesis 3.2.5)
+            kind = str(rng.choice(["hop", "stuck", "bad"], p=[0.15, 0.15, 0.7]))
             if kind == "hop" and pel not in _HOP_LETTER:
                 kind = "stuck"
             start = 0.0 if rng.random() < 0.3 else float(rng.uniform(0.05, 0.85))
@@ -275,6 +278,12 @@ def plan_subject(name: str, seed: int) -> list[TaskPlan]:
             again.lost = (7, 0.0)
         out.append(again)
     return out
+
+
+def _stuck_wobble(n: int, pel: int, rng: np.random.Generator) -> np.ndarray:
+    """(n, 2) mm: a stuck pellet's reported spot wanders like the pellet's tracking noise, not
+    from row to row (the files are resampled through smoothing splines, thesis 3.2.4)."""
+    return add_noise(np.zeros((n, len(PELLETS), 2)), rng)[:, pel]
 
 
 def apply_artifacts(plan: TaskPlan, xy: np.ndarray, rng: np.random.Generator
@@ -312,7 +321,7 @@ def apply_artifacts(plan: TaskPlan, xy: np.ndarray, rng: np.random.Generator
             note = f"{_HOP_LETTER[name]};{_HOP_LETTER[PELLETS[q]]}"
         elif kind == "stuck":
             # the tracker went back to where it first found the pellet and reports that spot
-            xy[f0:f1, pel] = xy[first_valid, pel] + rng.normal(0.0, 0.2, size=(f1 - f0, 2))
+            xy[f0:f1, pel] = xy[first_valid, pel] + _stuck_wobble(f1 - f0, pel, rng)
         else:
             valid[f0:f1, pel] = False
         onset = int(round(f0 * ms)) if start > 0 else 0
@@ -333,7 +342,7 @@ def apply_artifacts(plan: TaskPlan, xy: np.ndarray, rng: np.random.Generator
             q = PELLETS.index({v: k for k, v in _HOP_LETTER.items()}[note.split(";")[1]])
             xy[f0:f1, pel] = xy[f0:f1, q] + rng.normal(0.0, 0.3, size=2)
         elif kind == "stuck":
-            xy[f0:f1, pel] = xy[first_valid, pel] + rng.normal(0.0, 0.2, size=(f1 - f0, 2))
+            xy[f0:f1, pel] = xy[first_valid, pel] + _stuck_wobble(f1 - f0, pel, rng)
         else:
             valid[f0:f1, pel] = False
     if plan.logged_reference:

@@ -40,20 +40,21 @@ Sources of the columns
     within 12 mm of it front to back (the ramus hangs below the joint). That centre sits lower
     than the anatomical condyle (it also stands for the condyle's glide), so the distance is
     shorter than a condylion-gonion ramus height (about 50-55 mm).
-- ``lip_mid_y_mm`` (height of the resting lips' midpoint above the upper incisor tip): JW45 is
-  the real +0.9 mm of thesis Figure 3.9 (UL y 11.596, LL y -9.772 mm at the first valid row).
-  The thesis built CASSI 2.1 for "certain subjects whose lips were centered particularly low"
-  (4.3; its only named example is JW40, Figure 4.30): :data:`LOW_LIP_SUBJECTS` are the subjects
-  whose published lip thickness (Figure 4.25) is at least :data:`LOW_LIP_LIPTHICK` of the jaw
-  length, i.e. whose pellets are the farthest apart - JW40 and the three thicker-lipped JW11,
-  JW16, JW19. Where the UL-LL distance is long and the midpoint low, the lower lip is the thick
-  one, which is what 2.1's 1/3 : 2/3 split (4.3.2) models. Their midpoint sits 6.0-7.2 mm below
-  the incisor tip, so that, with 2.0's equal lips, the upper lip's inside edge starts about 27
-  Parke units below vertex 226 (criterion 4.3.1: more than 20). The other subjects' midpoints
-  are the earlier table's lowered by 1 mm (issue 10 reports real XRMB lips resting lower than
-  the earlier synthetic ones), -1.6 to +1.2 mm: their inside edge stays within 10 units of 226,
-  so CASSI 2.1 leaves them exactly as 2.0 does. Choice made from the thesis's tables alone, not
-  from rubric results.
+- ``lip_mid_y_mm`` (height of the resting lips' midpoint above the upper incisor tip, issue 23):
+  from real recordings where one is known, else from published norms, never from which
+  subjects CASSI 2.1 should change.
+
+  * JW45: +0.9 mm, the real JW45 task 13 (thesis Figure 3.9: UL y 11.596, LL y -9.772 mm at
+    the first valid row).
+  * JW11: -1.9 mm, the real JW11 task 105 at its first valid row (issue 23's measurement).
+  * the others, by sex (:data:`LIP_MID_BY_SEX`): with the lips together at rest the midpoint
+    of the vermilion-border pellets lies half the difference of the vermilion heights below
+    the lips' meeting line, which the resting incisor display puts above the incisor tip:
+    display (Vig & Brundo 1978, J. Prosthet. Dent. 39:502, "The kinetics of anterior tooth
+    display": 1.91 mm men, 3.40 mm women) minus (lower - upper vermilion height) / 2
+    (Pietruski & Majak 2022, Aesthet. Surg. J. 42:1130, men 11.15 - 5.9 mm; Pietruski et al.
+    2022, Aesthet. Plast. Surg., women 11.64 - 6.47 mm): -0.7 mm (M), +0.8 mm (F). The two real
+    male recordings (+0.9, -1.9) bracket the male figure.
 - ``min_ul``, ``min_ll`` (MIN UL, MIN LL of Figure 4.16): the lower lip reaches its minimum in
   /f v/, drawn back onto the upper incisors (``Anatomy.ll_floor_x`` of
   :mod:`cassi.data.synth.motion`): every subject's MIN LL is reproduced within 0.01. MIN UL is
@@ -74,10 +75,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: Subjects whose lips are "centered particularly low" (thesis 4.3): published lip thickness
-#: (Figure 4.25) at least this share of the jaw length (see the module docstring).
-LOW_LIP_LIPTHICK = 0.75
-LOW_LIP_SUBJECTS = ("JW11", "JW16", "JW19", "JW40")
+#: Resting lip midpoint above the incisor tip (mm) by sex, from published norms (see the module
+#: docstring): incisor display at rest minus half the vermilion-height difference.
+LIP_MID_BY_SEX = {"M": round(1.91 - (11.15 - 5.9) / 2, 1), "F": round(3.40 - (11.64 - 6.47) / 2, 1)}
+#: Resting lip midpoints measured on real recordings (module docstring).
+LIP_MID_REAL = {"JW45": 0.9, "JW11": -1.9}
 
 
 @dataclass(frozen=True)
@@ -210,63 +212,78 @@ SUBJECTS: dict[str, SubjectFigures] = {s.name: s for s in (
     _S("JW11", "M", 0.345274, 0.228690, 0.519758, 0.439836, 0.009925, 0.003348, 0.975998,
        jaw_length_mm=37.9, mni_mm=(-1.7, -7.6), jaw_slope_deg=2.7, condyle_mm=(-77.5, 15.6),
        palate=(-4.3, 8.1, 23.1, 12.9, 1.47, 0.09, -53.6, 12), pharynx_x_mm=(-89.8, -90.9),
-       gonion_mm=(-89.0, -17.1), gnathion_mm=(-5.3, -44.2), lip_mid_y_mm=-7.2, tongue_scale=0.99),
+       gonion_mm=(-89.0, -17.1), gnathion_mm=(-5.3, -44.2),
+       lip_mid_y_mm=LIP_MID_REAL["JW11"], tongue_scale=0.99),
     _S("JW12", "M", 0.541010, 0.390205, 0.730061, 0.485915, 0.011575, -0.102688, 0.629742,
        jaw_length_mm=37.4, mni_mm=(-0.6, -7.8), jaw_slope_deg=5.2, condyle_mm=(-81.4, 16.5),
        palate=(-5.0, 8.5, 19.73, 13.19, 1.55, 0.14, -53.1, 12), pharynx_x_mm=(-82.6, -93.1),
-       gonion_mm=(-84.7, -19.3), gnathion_mm=(-3.6, -43.0), lip_mid_y_mm=0.9, tongue_scale=1.05),
+       gonion_mm=(-84.7, -19.3), gnathion_mm=(-3.6, -43.0),
+       lip_mid_y_mm=LIP_MID_BY_SEX["M"], tongue_scale=1.05),
     _S("JW15", "M", 0.452623, 0.426632, 0.606981, 0.524212, 0.008840, 0.007371, 0.579452,
        jaw_length_mm=34.0, mni_mm=(0.5, -8.6), jaw_slope_deg=3.6, condyle_mm=(-78.1, 15.3),
        palate=(-4.4, 7.2, 20.4, 14.8, 1.5, 0.12, -54.2, 12), pharynx_x_mm=(-86.6, -85.1),
-       gonion_mm=(-82.9, -18.0), gnathion_mm=(-3.7, -45.4), lip_mid_y_mm=-0.3, tongue_scale=1.01),
+       gonion_mm=(-82.9, -18.0), gnathion_mm=(-3.7, -45.4),
+       lip_mid_y_mm=LIP_MID_BY_SEX["M"], tongue_scale=1.01),
     _S("JW16", "F", 0.431169, 0.399125, 0.600965, 0.572621, 0.008847, 0.008228, 0.823341,
        jaw_length_mm=31.5, mni_mm=(1.3, -7.2), jaw_slope_deg=4.2, condyle_mm=(-80.6, 18.7),
        palate=(-5.0, 9.3, 23.8, 15.5, 1.69, 0.09, -50.9, 14), pharynx_x_mm=(-79.7, -78.6),
-       gonion_mm=(-79.1, -15.2), gnathion_mm=(-5.8, -41.1), lip_mid_y_mm=-6.0, tongue_scale=0.92),
+       gonion_mm=(-79.1, -15.2), gnathion_mm=(-5.8, -41.1),
+       lip_mid_y_mm=LIP_MID_BY_SEX["F"], tongue_scale=0.92),
     _S("JW18", "M", 0.536166, 0.490561, 0.834940, 0.896159, 0.427359, 0.244083, 0.534753,
        jaw_length_mm=33.6, mni_mm=(-0.6, -7.4), jaw_slope_deg=3.7, condyle_mm=(-81.1, 16.0),
        palate=(-5.9, 10.5, 20.3, 12.9, 1.51, 0.19, -51.6, 13), pharynx_x_mm=(-80.7, -92.2),
-       gonion_mm=(-78.1, -16.9), gnathion_mm=(2.2, -42.5), lip_mid_y_mm=-1.3, tongue_scale=1.05),
+       gonion_mm=(-78.1, -16.9), gnathion_mm=(2.2, -42.5),
+       lip_mid_y_mm=LIP_MID_BY_SEX["M"], tongue_scale=1.05),
     _S("JW19", "M", 0.492486, 0.471077, 0.684463, 0.774152, 0.371975, 0.172287, 0.785441,
        jaw_length_mm=34.6, mni_mm=(-1.4, -8.4), jaw_slope_deg=3.7, condyle_mm=(-81.0, 16.6),
        palate=(-4.3, 8.0, 23.0, 14.9, 1.26, 0.15, -51.8, 16), pharynx_x_mm=(-83.5, -88.9),
-       gonion_mm=(-80.1, -24.6), gnathion_mm=(-1.8, -43.3), lip_mid_y_mm=-6.6, tongue_scale=0.99),
+       gonion_mm=(-80.1, -24.6), gnathion_mm=(-1.8, -43.3),
+       lip_mid_y_mm=LIP_MID_BY_SEX["M"], tongue_scale=0.99),
     _S("JW21", "F", 0.335453, 0.278352, 0.502530, 0.440367, 0.008934, 0.007164, 0.517419,
        jaw_length_mm=33.9, mni_mm=(-1.5, -7.4), jaw_slope_deg=3.1, condyle_mm=(-77.4, 16.6),
        palate=(-5.2, 9.0, 18.9, 15.1, 1.44, 0.17, -47.6, 10), pharynx_x_mm=(-82.0, -80.2),
-       gonion_mm=(-82.7, -16.5), gnathion_mm=(-5.3, -39.8), lip_mid_y_mm=0.1, tongue_scale=0.95),
+       gonion_mm=(-82.7, -16.5), gnathion_mm=(-5.3, -39.8),
+       lip_mid_y_mm=LIP_MID_BY_SEX["F"], tongue_scale=0.95),
     _S("JW24", "M", 0.365504, 0.409801, 0.621404, 0.600709, 0.007542, 0.008639, 0.604045,
        jaw_length_mm=34.9, mni_mm=(-1.0, -8.7), jaw_slope_deg=2.3, condyle_mm=(-84.8, 18.4),
        palate=(-4.3, 9.2, 17.7, 12.6, 1.66, 0.18, -54.0, 11), pharynx_x_mm=(-84.0, -89.2),
-       gonion_mm=(-86.1, -21.5), gnathion_mm=(-6.9, -44.0), lip_mid_y_mm=-1.6, tongue_scale=0.99),
+       gonion_mm=(-86.1, -21.5), gnathion_mm=(-6.9, -44.0),
+       lip_mid_y_mm=LIP_MID_BY_SEX["M"], tongue_scale=0.99),
     _S("JW25", "F", 0.363746, 0.404857, 0.668489, 0.787208, 0.007766, 0.008383, 0.414120,
        jaw_length_mm=32.0, mni_mm=(-1.5, -6.8), jaw_slope_deg=4.1, condyle_mm=(-79.9, 21.5),
        palate=(-4.4, 10.2, 19.5, 13.1, 1.64, 0.09, -46.3, 10), pharynx_x_mm=(-74.2, -81.4),
-       gonion_mm=(-78.4, -20.2), gnathion_mm=(-5.1, -39.8), lip_mid_y_mm=0.4, tongue_scale=0.88),
+       gonion_mm=(-78.4, -20.2), gnathion_mm=(-5.1, -39.8),
+       lip_mid_y_mm=LIP_MID_BY_SEX["F"], tongue_scale=0.88),
     _S("JW27", "F", 0.349867, 0.342236, 0.639942, 0.535901, 0.007401, 0.005606, 0.442891,
        jaw_length_mm=31.1, mni_mm=(-0.2, -6.5), jaw_slope_deg=6.0, condyle_mm=(-76.0, 16.9),
        palate=(-4.8, 8.7, 16.7, 13.7, 1.44, 0.17, -50.2, 14), pharynx_x_mm=(-80.0, -79.5),
-       gonion_mm=(-80.6, -17.2), gnathion_mm=(-6.8, -38.4), lip_mid_y_mm=0.4, tongue_scale=0.89),
+       gonion_mm=(-80.6, -17.2), gnathion_mm=(-6.8, -38.4),
+       lip_mid_y_mm=LIP_MID_BY_SEX["F"], tongue_scale=0.89),
     _S("JW32", "M", 0.445339, 0.441625, 0.621980, 0.609274, 0.284189, 0.259924, 0.503228,
        jaw_length_mm=38.2, mni_mm=(-0.5, -8.8), jaw_slope_deg=5.1, condyle_mm=(-81.5, 16.2),
        palate=(-4.6, 8.1, 21.0, 16.6, 1.42, 0.16, -56.3, 14), pharynx_x_mm=(-86.2, -90.9),
-       gonion_mm=(-85.9, -17.5), gnathion_mm=(-3.4, -45.1), lip_mid_y_mm=1.2, tongue_scale=1.03),
+       gonion_mm=(-85.9, -17.5), gnathion_mm=(-3.4, -45.1),
+       lip_mid_y_mm=LIP_MID_BY_SEX["M"], tongue_scale=1.03),
     _S("JW40", "M", 0.528038, 0.384745, 0.767303, 0.524264, 0.011705, 0.007449, 0.752903,
        jaw_length_mm=35.5, mni_mm=(-1.5, -6.4), jaw_slope_deg=6.8, condyle_mm=(-83.9, 17.6),
        palate=(-5.4, 8.6, 16.6, 14.3, 1.71, 0.11, -55.7, 13), pharynx_x_mm=(-86.0, -91.8),
-       gonion_mm=(-80.7, -19.0), gnathion_mm=(-1.0, -42.2), lip_mid_y_mm=-6.6, tongue_scale=0.95),
+       gonion_mm=(-80.7, -19.0), gnathion_mm=(-1.0, -42.2),
+       lip_mid_y_mm=LIP_MID_BY_SEX["M"], tongue_scale=0.95),
     _S("JW41", "M", 0.477164, 0.465303, 0.821385, 0.649093, 0.406428, 0.212140, 0.719188,
        jaw_length_mm=35.7, mni_mm=(-0.1, -8.5), jaw_slope_deg=1.2, condyle_mm=(-81.5, 19.8),
        palate=(-4.5, 8.3, 18.5, 15.0, 1.51, 0.05, -54.5, 13), pharynx_x_mm=(-86.6, -89.8),
-       gonion_mm=(-83.4, -21.4), gnathion_mm=(-2.5, -45.4), lip_mid_y_mm=-1.2, tongue_scale=1.0),
+       gonion_mm=(-83.4, -21.4), gnathion_mm=(-2.5, -45.4),
+       lip_mid_y_mm=LIP_MID_BY_SEX["M"], tongue_scale=1.0),
     _S("JW45", "M", 0.462957, 0.355955, 0.692150, 0.564495, 0.010773, 0.008101, 0.619474,
        jaw_length_mm=34.18, mni_mm=(-0.7, -7.45), jaw_slope_deg=4.04, condyle_mm=(-84.6, 17.0),
        palate=(-4.3, 8.8, 18.3, 14.3, 1.39, 0.12, -55.0, 16), pharynx_x_mm=(-85.6, -87.1),
-       gonion_mm=(-85.1, -18.0), gnathion_mm=(-6.9, -44.4), lip_mid_y_mm=0.9, tongue_scale=1.0),
+       gonion_mm=(-85.1, -18.0), gnathion_mm=(-6.9, -44.4),
+       lip_mid_y_mm=LIP_MID_REAL["JW45"], tongue_scale=1.0),
     _S("JW502", "F", 0.319526, 0.268207, 0.582271, 0.563677, 0.264849, -0.037349, 0.491017,
        jaw_length_mm=34.1, mni_mm=(-0.3, -7.4), jaw_slope_deg=2.6, condyle_mm=(-82.2, 20.8),
        palate=(-5.1, 7.3, 19.4, 13.4, 1.38, 0.08, -51.1, 13), pharynx_x_mm=(-81.4, -80.8),
-       gonion_mm=(-82.7, -12.6), gnathion_mm=(-5.7, -42.6), lip_mid_y_mm=-1.6, tongue_scale=0.91),
+       gonion_mm=(-82.7, -12.6), gnathion_mm=(-5.7, -42.6),
+       lip_mid_y_mm=LIP_MID_BY_SEX["F"], tongue_scale=0.91),
 )}
 del _S
 
