@@ -344,15 +344,60 @@ def _turn_figures(corpus, version, subject):
 @pytest.mark.parametrize("subject", ["JW16", "JW24"])
 def test_the_front_turns_no_faster_than_the_tongue(corpus, version, subject, monkeypatch):
     """The turn toward the gap and back is as long as the farthest its front moves (TURN_MM,
-    24 mm): no tongue vertex then steps more than 1.6 times the fastest pellet, and the tongue
-    shakes by under 1 mm beyond its pellets (1.34-1.38 and 0.87-0.95 mm when written). The
-    planted defect, the station's 12 mm alone, turned in 4 frames: 1.81-1.94 and 1.35-1.80 mm
-    (the 19 shaking frames of the default set, issue 23 section 6)."""
+    24 mm): no tongue vertex then steps more than 1.3 times the fastest pellet, and the tongue
+    shakes no more than 2.1's worst beyond its pellets (1.09-1.20 and 0.67-1.01 mm with the
+    way out settled; 1.34-1.38 and 0.87-0.95 mm before). The planted defect, the station's 12 mm
+    alone: 1.33-1.45 and 0.97-1.25 mm settled; 1.81-1.94 and 1.35-1.80 mm before, in 4 frames
+    (then the 19 shaking frames of the default set, issue 23 section 6)."""
     frames, ratio, shake = _turn_figures(corpus, version, subject)
-    assert frames > 0 and ratio < 1.6 and shake < 1.0
+    assert frames > 0 and ratio < 1.3 and shake < SHAKE_21_MM
     monkeypatch.setattr(K, "TURN_MM", 12.0)
-    _, ratio, shake = _turn_figures(corpus, version, subject)
-    assert ratio > 1.6 and shake > 1.0
+    _, ratio_12, shake_12 = _turn_figures(corpus, version, subject)
+    assert ratio_12 > 1.3 and shake_12 > shake
+
+
+#: cassi-2.1's worst tongue shake beyond its pellets on the default set (tools/shake.py): 3.0's
+#: may be no worse (issue 23 section 6).
+SHAKE_21_MM = 1.11
+
+
+def test_settle_rounds_a_ramps_corners_and_carries_over_chunks():
+    from cassi30.version import settle, slew
+
+    t = np.arange(60) / 145.6
+    ramp = slew(np.r_[np.zeros(10), np.ones(50)], t, 10.0, {}, "k")
+    out = settle(ramp, t, 0.015, {}, "k")
+    assert out[0] == 0.0 and abs(out[-1] - 1.0) < 1e-3 and np.all(np.diff(out) >= 0.0)
+    # the velocity changes by at most a fifth of the ramp's speed per frame, where the ramp's
+    # own changes in one frame
+    v_ramp, v = np.diff(ramp), np.diff(out)
+    assert np.abs(np.diff(v_ramp)).max() == pytest.approx(v_ramp.max())
+    assert np.abs(np.diff(v)).max() < v_ramp.max() / 5.0
+    carried: dict = {}
+    parts = [settle(ramp[a:a + 7], t[a:a + 7], 0.015, carried, "k") for a in range(0, 60, 7)]
+    np.testing.assert_allclose(np.concatenate(parts), out, rtol=0, atol=1e-15)
+
+
+def test_the_way_out_settles_where_it_reverses(corpus, version, monkeypatch):
+    """JW18 task 4: T1 comes up to the incisors and turns back, so the way out climbs and falls
+    at TONGUE_SPEED_MM_S; its corners rounded over SETTLE_S (4 x 15 ms, the jitter measure's
+    9 frames) the tongue shakes 0.56 mm beyond its pellets at most, where the bare rate limit
+    shook it by 1.25 mm (2.1's worst on the default set: 1.11 mm)."""
+    from cassi.harness.rubric.registry import JITTER_ORDER, JITTER_WINDOW
+
+    profile, face, rec = _inputs(corpus, "JW18", 4)
+    own = version_face(version, face)
+    rows = tongue_rows(own.vertex_count)
+    mm = G.mm_per_unit(face.vertices, profile.jaw_length_mm)
+
+    def worst():
+        pos = version.animate(profile, face, rec).positions.astype(np.float64)
+        return (G.excess_jitter(pos, rows, np.asarray(N.TONGUE_PELLETS) - 1,
+                                window=JITTER_WINDOW, order=JITTER_ORDER) * mm).max()
+
+    assert worst() < 0.8
+    monkeypatch.setattr(K, "SETTLE_S", 1e-9)
+    assert worst() > SHAKE_21_MM
 
 
 def test_the_projection_is_smooth_in_time():

@@ -102,6 +102,10 @@ TONGUE_SPEED_MM_S = 400.0
 #: the tongue by up to 1.8 mm as it turned back from the gap (plugins/cassi30/tools/shake.py:
 #: 19 frames above 1 mm on the default set, 2 now).
 TURN_MM = 24.0
+#: Time constant (s) of the two lags that round the way out's corners (version.settle): the
+#: rate limit alone starts and stops the turn within a frame, and the front of the tongue,
+#: swung by the turn, shook by up to 1.25 mm where it turned back (JW18 task 4).
+SETTLE_S = 0.015
 #: The gap between the incisor tips (less the margins) must be open by this much before the
 #: tongue heads out in full; a narrower gap lets it go part of the way (continuously), a shut
 #: one not at all. 1 mm, the collision margin.
