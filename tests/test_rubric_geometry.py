@@ -340,9 +340,9 @@ CASES = {
     "lip_shape_triangular": (106, p_diamond, [0.2, 1.0], [0, 1]),
     "lip_outline_angular": (106, p_hexagon, [0.2, 1.0], [0, 1]),
     "lower_lip_through_teeth": (106, p_lower_lip_through_lower, [-1.0, 2.0], [0, 1]),
-    "below_lip_cave_in": (106, p_below_cave, [0.5, 2.5], [0, 1]),
+    "below_lip_cave_in": (106, p_below_cave, [1.5, 4.0], [0, 1]),
     "corners_misplaced": (106, p_corner_up, [0.5, 2.5], [0, 1]),
-    "chin_cave_in": (106, p_chin_cave, [0.5, 3.0], [0, 1]),
+    "chin_cave_in": (106, p_chin_cave, [2.0, 5.0], [0, 1]),   # its chin bulges 3.2 mm
     "corner_jump_switch": (106, p_switch_jump, [0.3, 2.0], [0, 1]),
 }
 

@@ -375,8 +375,11 @@ def m_below_lip_cave(ctx):
 
 
 def m_chin_cave(ctx):
+    """The chin behind the chord of its neighbours: a hollow where the chin bulges. Not beyond
+    rest: a chin flatter than Parke's but still convex reads as a smaller chin, not a cave."""
     p = ctx.parts
-    return _cave(ctx, p.below_lip[0], p.chin, p.chin_low, "chin")
+    c = ctx.series(G.concavity, p.below_lip[0], p.chin, p.chin_low)
+    return _m_sustained(c * ctx.mm, detail="chin (24) behind the chord 41 - underside of the chin")
 
 
 def m_lips_into_nose(ctx):
