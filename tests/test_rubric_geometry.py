@@ -159,15 +159,16 @@ def p_palate_low(a, d):
 
 
 def _scale_jaw(a, sx, sz):
+    """The jaw scaled about the tip of the upper front teeth, which stays with the head."""
     j = P.jaw
-    c = a.positions[:, j].mean(axis=1, keepdims=True)
+    c = a.positions[:, P.upper_incisor_tip][:, None, :]
     a.positions[:, j, 0] = c[..., 0] + (a.positions[:, j, 0] - c[..., 0]) * sx
     a.positions[:, j, 2] = c[..., 2] + (a.positions[:, j, 2] - c[..., 2]) * sz
     return a
 
 
 def p_jaw_long(a, s):
-    return _scale_jaw(a, 1 + s, 1.0)
+    return _scale_jaw(a, 1.0, 1 + s)
 
 
 def p_jaw_large(a, s):
@@ -400,16 +401,16 @@ def test_crossing_the_version_handles_is_not_the_table_a_overlap():
     assert run(a, 5, checks=["lips_overlap"]).loc["lips_overlap", "negatives"] == 1
 
 
-def test_initial_jaw_rotation_is_not_an_unusual_jaw():
+def test_jaw_turned_down_at_initialization_reads_long_not_square():
+    # CASSI 1.0 turns Parke's jaw onto the head measures about a point far behind (4.1.3): the
+    # jaw keeps its shape (not squarer) but reaches further below the teeth (longer, larger)
     a = S.copy(BASE[5])
     j = P.jaw
-    c = a.positions[:, j].mean(axis=1, keepdims=True)
-    t = np.radians(12)
-    d = a.positions[:, j] - c
-    a.positions[:, j, 0] = c[..., 0] + d[..., 0] * np.cos(t) - d[..., 2] * np.sin(t)
-    a.positions[:, j, 2] = c[..., 2] + d[..., 0] * np.sin(t) + d[..., 2] * np.cos(t)
-    res = run(a, 5, checks=["jaw_long", "jaw_square", "jaw_large"])
-    assert np.allclose(res["value"], 1.0, atol=0.02), res["value"]
+    t = np.full(len(a.positions), np.radians(6.0))
+    a.positions[:, j] = S._rotate(a.positions[:, j], M.pivot, t)
+    res = run(a, 5, checks=["jaw_long", "jaw_square", "jaw_large"])["value"]
+    assert res["jaw_square"] == pytest.approx(1.0, abs=0.02), res
+    assert res["jaw_long"] > 1.05 and res["jaw_large"] > 1.05, res
 
 
 def test_tongue_two_mm_through_incisors_measures_two_mm():

@@ -310,11 +310,11 @@ def _jaw_shape(v: np.ndarray, jaw: np.ndarray) -> tuple[float, float, float]:
 
 
 def _jaw_ratio(ctx, i: int, what: str) -> Measurement:
+    """A shape figure of the jaw alone: the version's initial jaw rotation is no shape change."""
     jaw = ctx.parts.jaw
     if ctx.neutral is None or len(jaw) < 3 or ctx.neutral.shape[0] <= jaw.max():
         return Measurement(float("nan"), -1, "no neutral face to compare with")
-    # the version's initial jaw rotation is no shape change: align the jaw to the neutral one
-    # (rotation and translation in the side view, Kabsch) before measuring
+    # align the jaw to the neutral one (rotation and translation in the side view, Kabsch)
     a = ctx.frame(0)[jaw][:, [0, 2]]
     b = ctx.neutral[jaw][:, [0, 2]]
     ac, bc = a - a.mean(0), b - b.mean(0)
@@ -330,12 +330,40 @@ def _jaw_ratio(ctx, i: int, what: str) -> Measurement:
                        frame_value=float(r))
 
 
+def _lower_face(v: np.ndarray, jaw: np.ndarray, tip: int) -> tuple[float, float]:
+    """The lower face seen from the side, the head fixed: how far the jaw (14-43) reaches below
+    the tip of the upper front teeth (226), and the side-view area of the hull of the jaw and
+    that tip."""
+    from scipy.spatial import ConvexHull  # noqa: PLC0415 - only Table B needs it
+
+    p = v[jaw][:, [0, 2]]
+    t = v[tip, [0, 2]]
+    height = float(t[1] - p[:, 1].min())
+    try:
+        area = float(ConvexHull(np.vstack([p, t])).volume)
+    except Exception:  # degenerate (collinear) jaw: no area to compare
+        area = float("nan")
+    return height, area
+
+
+def _lower_face_ratio(ctx, i: int, what: str) -> Measurement:
+    """A figure of the jaw where the version put it, against Parke's neutral face: CASSI 1.0's
+    initialisation turns Parke's jaw onto the head measures (4.1.3), and a jaw turned down or
+    pushed forward reads, beside the head, as a longer or larger lower face."""
+    jaw, tip = ctx.parts.jaw, ctx.parts.upper_incisor_tip
+    if ctx.neutral is None or len(jaw) < 3 or ctx.neutral.shape[0] <= max(jaw.max(), tip):
+        return Measurement(float("nan"), -1, "no neutral face to compare with")
+    r = _lower_face(ctx.frame(0), jaw, tip)[i] / _lower_face(ctx.neutral, jaw, tip)[i]
+    return Measurement(float(r), 0, f"{what} at initialization over Parke's neutral face",
+                       frame_value=float(r))
+
+
 def m_jaw_long(ctx):
-    return _jaw_ratio(ctx, 0, "length (vertices 14-43, x extent)")
+    return _lower_face_ratio(ctx, 0, "lowest point of the jaw below the upper incisor tip (226)")
 
 
 def m_jaw_large(ctx):
-    return _jaw_ratio(ctx, 1, "side-view area")
+    return _lower_face_ratio(ctx, 1, "side-view area of the lower face (hull of the jaw and 226)")
 
 
 def m_jaw_square(ctx):

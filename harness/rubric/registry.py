@@ -508,11 +508,17 @@ _ALL: list[Check] = [
           view="side",
           unit="ratio",
           frames="initialization",
-          description="jaw length (vertices 14-43, x extent) over Parke's neutral face",
+          description="how far the jaw (14-43) reaches below the upper incisor tip (226), "
+                      "where the version put it, over Parke's neutral face",
           thresholds=(1.15,),
           negatives=(1,),
           direction="higher",
-          reason="15 % longer than Parke's average face reads as 'very long'",
+          reason="CASSI 1.0 turns Parke's jaw onto the head measures (4.1.3), so the jaw is "
+                 "judged where it sits under the head, as the side render shows it (it was "
+                 "measured after undoing that turn, which hid it). 15 % lower than Parke's reads "
+                 "as 'very long' on the side renders of the first frame (final preset): "
+                 "cassi-1.0 JW15 1.21, JW16 1.18, JW45 1.17 show the jaw line a step below the "
+                 "neutral face's; JW27, JW502 at 1.12 read as Parke's jaw",
           text="unusual jaw: very long",
           kind="geometry",
           measure="measures:m_jaw_long"),
@@ -536,11 +542,15 @@ _ALL: list[Check] = [
           view="side",
           unit="ratio",
           frames="initialization",
-          description="jaw side-view area over Parke's neutral face",
+          description="side-view area of the lower face (hull of the jaw 14-43 and the upper "
+                      "incisor tip 226), where the version put it, over Parke's neutral face",
           thresholds=(1.25,),
           negatives=(1,),
           direction="higher",
-          reason="a quarter larger than Parke's reads as 'too large seen from the side'",
+          reason="a quarter larger than Parke's reads as 'too large seen from the side'; read "
+                 "where the jaw sits under the head, as jaw_long (on the first frames of the "
+                 "default corpus the lower face is at most 16 % larger: JW15, and the render "
+                 "shows a longer, not a bigger, jaw)",
           text="unusual jaw: too large seen from the side",
           kind="geometry",
           measure="measures:m_jaw_large"),
