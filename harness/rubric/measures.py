@@ -295,22 +295,25 @@ def m_palate_below_incisor(ctx):
     return Measurement(d, 0, "lowest palate vertex below vertex 226 at initialization", frame_value=d)
 
 
-def _jaw_shape(v: np.ndarray, jaw: np.ndarray) -> tuple[float, float, float]:
-    """Length (x extent), side-view hull area and extent (area / box) of the jaw (14-43)."""
+def _hull_area(p: np.ndarray) -> float:
+    """Area of the convex hull of side-view points (N, 2); NaN when they are collinear."""
     from scipy.spatial import ConvexHull  # noqa: PLC0415 - only Table B needs it
 
-    p = v[jaw][:, [0, 2]]
-    length = float(np.ptp(p[:, 0]))
     try:
-        area = float(ConvexHull(p).volume)
-    except Exception:  # degenerate (collinear) jaw: no area to compare
-        return length, float("nan"), float("nan")
+        return float(ConvexHull(p).volume)
+    except Exception:  # degenerate (collinear) points: no area to compare
+        return float("nan")
+
+
+def _jaw_squareness(v: np.ndarray, jaw: np.ndarray) -> float:
+    """Extent of the jaw (14-43) seen from the side: hull area over its bounding box."""
+    p = v[jaw][:, [0, 2]]
     box = float(np.ptp(p[:, 0]) * np.ptp(p[:, 1]))
-    return length, area, area / box if box > 0 else float("nan")
+    return _hull_area(p) / box if box > 0 else float("nan")
 
 
-def _jaw_ratio(ctx, i: int, what: str) -> Measurement:
-    """A shape figure of the jaw alone: the version's initial jaw rotation is no shape change."""
+def m_jaw_square(ctx):
+    """Squareness of the jaw alone: the version's initial jaw rotation is no shape change."""
     jaw = ctx.parts.jaw
     if ctx.neutral is None or len(jaw) < 3 or ctx.neutral.shape[0] <= jaw.max():
         return Measurement(float("nan"), -1, "no neutral face to compare with")
@@ -325,8 +328,9 @@ def _jaw_ratio(ctx, i: int, what: str) -> Measurement:
     aligned[:, [0, 2]] = ac @ rot + b.mean(0)
     full = ctx.neutral.copy()
     full[jaw] = aligned
-    r = _jaw_shape(full, jaw)[i] / _jaw_shape(ctx.neutral, jaw)[i]
-    return Measurement(float(r), 0, f"jaw {what} at initialization over Parke's neutral face",
+    r = _jaw_squareness(full, jaw) / _jaw_squareness(ctx.neutral, jaw)
+    return Measurement(float(r), 0, "jaw squareness (hull area / bounding box) at "
+                       "initialization over Parke's neutral face",
                        frame_value=float(r))
 
 
@@ -334,16 +338,9 @@ def _lower_face(v: np.ndarray, jaw: np.ndarray, tip: int) -> tuple[float, float]
     """The lower face seen from the side, the head fixed: how far the jaw (14-43) reaches below
     the tip of the upper front teeth (226), and the side-view area of the hull of the jaw and
     that tip."""
-    from scipy.spatial import ConvexHull  # noqa: PLC0415 - only Table B needs it
-
     p = v[jaw][:, [0, 2]]
     t = v[tip, [0, 2]]
-    height = float(t[1] - p[:, 1].min())
-    try:
-        area = float(ConvexHull(np.vstack([p, t])).volume)
-    except Exception:  # degenerate (collinear) jaw: no area to compare
-        area = float("nan")
-    return height, area
+    return float(t[1] - p[:, 1].min()), _hull_area(np.vstack([p, t]))
 
 
 def _lower_face_ratio(ctx, i: int, what: str) -> Measurement:
@@ -365,9 +362,6 @@ def m_jaw_long(ctx):
 def m_jaw_large(ctx):
     return _lower_face_ratio(ctx, 1, "side-view area of the lower face (hull of the jaw and 226)")
 
-
-def m_jaw_square(ctx):
-    return _jaw_ratio(ctx, 2, "squareness (hull area / bounding box)")
 
 
 def m_no_rounding(ctx):
