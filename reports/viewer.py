@@ -9,8 +9,9 @@ the frame-to-frame vertex changes deflated (the page inflates them with the brow
 DecompressionStream). Strings from data files reach the page only inside that JSON and are
 set as text by the script, never as HTML.
 
-The address's fragment selects what opens: ``#frame=ROW&a=VERSION&b=VERSION&check=NAME``
-(:func:`viewer_href`); a subject page's negatives link there, at the frame that earned them.
+The address's fragment selects what opens: ``#frame=ROW&a=VERSION&b=VERSION&check=NAME&view=VIEW``
+(:func:`viewer_href`); a subject page's negatives link there, at the frame that earned them and
+in the view the check is judged from (its registry ``view``).
 """
 from __future__ import annotations
 
@@ -54,11 +55,14 @@ def viewer_page(subject_slug: str, task: int, rep: int) -> str:
 
 def viewer_href(subject_slug: str, task: int, rep: int, *, frame: int | None = None,
                 a: str | None = None, b: str | None = None, check: str | None = None,
-                base: str = "") -> str:
-    """A link to the viewer page, opening at ``frame`` with versions ``a`` (and ``b``) and
-    ``check``'s event highlighted; ``base``: the linking page's way to the report's root."""
-    params = {k: v for k, v in (("frame", frame), ("a", a), ("b", b), ("check", check))
-              if v is not None}
+                view: str | None = None, base: str = "") -> str:
+    """A link to the viewer page, opening at ``frame`` with versions ``a`` (and ``b``),
+    ``check``'s event highlighted, in ``view`` (default: the view ``check`` is judged from);
+    ``base``: the linking page's way to the report's root."""
+    if view is None and check in CHECKS:
+        view = CHECKS[check].view
+    params = {k: v for k, v in (("frame", frame), ("a", a), ("b", b), ("check", check),
+                                ("view", view)) if v is not None}
     frag = urllib.parse.urlencode(params, quote_via=urllib.parse.quote)
     return base + viewer_page(subject_slug, task, rep) + (f"#{frag}" if frag else "")
 

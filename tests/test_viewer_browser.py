@@ -17,6 +17,7 @@ import pandas as pd
 import pytest
 
 from cassi.harness.cli import main as cli_main
+from cassi.harness.rubric import CHECKS
 from cassi.renderer.compare import compare_images
 from cassi.reports.report import write_report
 
@@ -140,7 +141,28 @@ def test_a_negative_in_the_subject_page_opens_the_viewer_at_its_first_frame(repo
     hl = p.page.locator("#events li.hl")
     assert hl.count() == 1 and hl.get_attribute("data-check") == check
     assert p.page.input_value("#va") == version
+    # it opens in the view the check is judged from
+    view = CHECKS[check].view
+    assert p.page.evaluate("window.cassiViewer.state.view") == view
+    assert p.page.get_attribute(f"button[data-view='{view}']", "class") == "on"
     assert p.errors == []
+    p.page.close()
+
+
+def test_the_address_names_the_view_it_opens_in(report, browser):
+    _, rep = report
+    p = Page(browser, _viewer_url(rep, "#frame=1023&a=cassi-1.0&view=side")).ready()
+    side = p.page.evaluate("window.cassiViewer.camera()")
+    p.page.click("button[data-view='front']")
+    front = p.page.evaluate("window.cassiViewer.camera()")
+    assert side["position"] != front["position"]
+    p.page.click("button[data-view='side']")
+    assert p.page.evaluate("window.cassiViewer.camera()")["position"] == side["position"]
+    # a view the viewer does not have is ignored: the default front view opens
+    q = Page(browser, _viewer_url(rep, "#frame=1023&a=cassi-1.0&view=%3Cx%3E")).ready()
+    assert q.page.evaluate("window.cassiViewer.state.view") == "front"
+    assert p.errors == [] and q.errors == []
+    q.page.close()
     p.page.close()
 
 

@@ -81,6 +81,15 @@ def test_viewer_links_quote_what_they_carry():
     assert viewer_href("JW11", 5, 2) == "viewer/JW11/005_2.html"
 
 
+def test_a_viewer_link_opens_in_the_view_its_check_is_judged_from():
+    from cassi.harness.rubric import CHECKS
+    assert CHECKS["jaw_long"].view == "side"
+    assert viewer_href("JW15", 9, 1, frame=4, check="jaw_long").endswith("&check=jaw_long&view=side")
+    # a view given wins; an unknown check names no view
+    assert viewer_href("JW15", 9, 1, check="jaw_long", view="top").endswith("view=top")
+    assert "view=" not in viewer_href("JW15", 9, 1, check="no-such-check")
+
+
 def test_the_page_escapes_what_it_is_given():
     html = _env().get_template("viewer.html.j2").render(
         subject="<script>alert(1)</script>", task=1, rep=1, synthetic=True,

@@ -412,6 +412,8 @@
     if (a && D.versions.includes(a)) va.value = a;
     if (b && D.versions.includes(b)) vb.value = b;
     S.check = params.get("check");
+    // open in the view the check is judged from (the link says which)
+    if (params.has("view") && Object.prototype.hasOwnProperty.call(D.views, params.get("view"))) S.view = params.get("view");
     D.pellets.forEach((name, i) => { const o = document.createElement("option"); o.value = String(i); o.text = name; $("pellet").appendChild(o); });
     $("pellet").value = String(S.pellet);
     S.measured = await decode(D.measured); S.measuredFrames = await decode(D.measured_frames);
