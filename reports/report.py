@@ -25,7 +25,7 @@ from cassi.harness.evaluation.frames import COMPARISON_VIEW, VIDEO_VIEWS
 from cassi.harness.evaluation.stages import MASKS_OUTPUT
 from cassi.harness.rubric import (AGGREGATION_RULES, CHECKS, RATINGS, component_ratings,
                                   file_verdicts, rating_counts, table_c_rule, table_title,
-                                  version_comparisons)
+                                  shown_beside, version_comparisons)
 from cassi.harness.rubric.paired import (BOOTSTRAP_N, BOOTSTRAP_SEED, TIE_TOLERANCE,
                                          paired_comparisons, paired_sentence)
 from cassi.reports.tables import markdown_table
@@ -199,6 +199,7 @@ def _first_faults(run: Run, fv: pd.DataFrame, viewers: dict) -> dict[tuple, str]
     """(subject, version, table, component) -> the task viewer at the first frame of the
     cell's worst fault, its event highlighted (relative to the report)."""
     evidence = _evidence_frames(run.results)
+    present = set(fv["version"])
     out: dict[tuple, str] = {}
     for r in _worst_first(fv[fv["raw_negatives"] > 0]).itertuples(index=False):
         key = (r.subject, r.version, r.table, r.component)
@@ -207,7 +208,7 @@ def _first_faults(run: Run, fv: pd.DataFrame, viewers: dict) -> dict[tuple, str]
         if key in out or frame is None or file not in viewers:
             continue
         out[key] = viewer_href(slug(r.subject), *file[1:], frame=frame, a=r.version,
-                               check=r.check)
+                               b=shown_beside(r.table, r.version, present), check=r.check)
     return out
 
 
@@ -285,6 +286,7 @@ def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
     evidence = _evidence_frames(run.results[run.results["subject"] == subject])
     rend = run.renders[run.renders["subject"] == subject] if len(run.renders) else run.renders
     mine = fv[fv["subject"] == subject]
+    present = set(mine["version"])
     versions = []
     for version in order_versions(mine["version"].unique()):
         tables = []
@@ -304,9 +306,10 @@ def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
                     if frame is not None:
                         item["frame"] = frame
                         if (subject, int(r.task), int(r.rep)) in (viewers or {}):
-                            item["viewer"] = viewer_href(slug(subject), int(r.task), int(r.rep),
-                                                         frame=frame, a=version, check=r.check,
-                                                         base="../")
+                            item["viewer"] = viewer_href(
+                                slug(subject), int(r.task), int(r.rep), frame=frame, a=version,
+                                b=shown_beside(table, version, present), check=r.check,
+                                base="../")
                         if sheets < MAX_SHEETS_PER_VERSION:
                             near, item["images"] = _views_at(run, rend, subject, int(r.task),
                                                              int(r.rep), version, frame, out)

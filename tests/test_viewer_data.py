@@ -174,3 +174,16 @@ def test_a_corpus_with_sound_and_an_alignment_gives_the_timeline_both(tmp_path):
     assert [w[2] for w in data["labels"]["words"] if w[2]] == ["sa", "<b>x</b>"]
     assert [p[2] for p in data["labels"]["phones"] if p[2]] == ["s", "aa"]
     assert "<b>x</b>" not in page.read_text()   # labels reach the page only as JSON text
+
+
+def test_a_table_b_verdict_opens_beside_parkes_face():
+    from cassi.harness.rubric import shown_beside
+    run = {"parke-1974", "cassi-1.0", "cassi-2.1"}
+    # Table B's figures are ratios over Parke's neutral face: shown beside it when the run has it
+    assert shown_beside("B", "cassi-1.0", run) == "parke-1974"
+    assert shown_beside("B", "parke-1974", run) is None
+    assert shown_beside("B", "cassi-1.0", {"cassi-1.0", "cassi-2.1"}) is None
+    assert shown_beside("C", "cassi-1.0", run) is None
+    href = viewer_href("JW15", 9, 1, frame=4, a="cassi-1.0",
+                       b=shown_beside("B", "cassi-1.0", run), check="jaw_long")
+    assert href.endswith("#frame=4&a=cassi-1.0&b=parke-1974&check=jaw_long&view=side")

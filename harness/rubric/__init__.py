@@ -14,7 +14,7 @@ Modules by role:
 - :mod:`.tables` -- the one aggregation into the thesis's tables.
 """
 from cassi.harness.rubric.model import (GOOD_RATINGS, RATINGS, TABLE_TOPICS, TABLES, VERSION_ORDER, Check,
-                    Measurement, rate, table_title)
+                    Measurement, rate, shown_beside, table_title)
 from cassi.harness.rubric.registry import (AGGREGATION_RULES, CHECKS, MIN_FRAMES, checks_for, get_check,
                        registry_table)
 from cassi.harness.rubric.measures import DIAGNOSTICS_READ
@@ -25,7 +25,7 @@ from cassi.harness.rubric.tables import (RATING_COLUMNS, component_ratings, rati
 
 __all__ = [
     "Check", "Measurement", "CHECKS", "TABLES", "TABLE_TOPICS", "RATINGS", "GOOD_RATINGS",
-    "VERSION_ORDER", "MIN_FRAMES", "AGGREGATION_RULES", "rate", "table_title", "get_check",
+    "VERSION_ORDER", "shown_beside", "MIN_FRAMES", "AGGREGATION_RULES", "rate", "table_title", "get_check",
     "checks_for", "registry_table", "DIAGNOSTICS_READ", "run_geometry_checks",
     "run_image_checks", "file_verdicts",
     "verdicts", "table_c_rule", "component_ratings", "rating_counts", "version_totals",

@@ -36,8 +36,19 @@ TABLE_TOPICS = {"A": "teeth, lips and tongue", "B": "face shape", "C": "lip plac
                 "D": "maximum lip protrusion", "E": "jaw wagging", "F": "fidelity to the recording",
                 "G": "the lips and tongue between the pellets"}
 
+#: The version that keeps Parke's face: Table B's figures are ratios over its neutral face, so a
+#: reviewer sees a Table B verdict beside it.
+PARKE_VERSION = "parke-1974"
 #: Versions in the order the thesis compares them (Table C: "compared with the previous version").
-VERSION_ORDER = ("parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1")
+VERSION_ORDER = (PARKE_VERSION, "cassi-1.0", "cassi-2.0", "cassi-2.1")
+
+
+def shown_beside(check_table: str, version: str, versions) -> str | None:
+    """The version a verdict's viewer link shows beside ``version``: Parke's face for Table B
+    (its figures are ratios over Parke's neutral face), when the run has it; else none."""
+    if check_table == "B" and version != PARKE_VERSION and PARKE_VERSION in set(versions):
+        return PARKE_VERSION
+    return None
 
 
 def rate(negatives: int) -> str:
