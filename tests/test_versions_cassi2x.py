@@ -383,3 +383,13 @@ def test_real_face_jw45_task_13_fires_under_the_results_reading(real_face):
     assert text["thickness_rule"].iloc[0] == "equal" and text["low_lips_margin"].iloc[0] < 0
     # one decision per task: the same values in every frame
     assert res["low_lips_margin"].nunique() == 1 and (res["low_lips_reading"] == "results").all()
+
+
+def test_the_corner_reading_is_a_documented_option_of_2_0_and_2_1():
+    from cassi.versions.lips import CornerReading
+    assert Cassi20().corner is CornerReading.RESULTS
+    assert Cassi20(corner="text").corner is CornerReading.TEXT
+    assert Cassi21(corner="text").lip_stage().corner is CornerReading.TEXT
+    assert Cassi21(reading="text").lip_stage().corner is CornerReading.RESULTS
+    with pytest.raises(ValueError):
+        Cassi20(corner="diamond")

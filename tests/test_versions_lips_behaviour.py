@@ -239,6 +239,32 @@ def test_ellipse_switch_without_jumps_on_jaw_wagging():
     assert {"3a", "3b", "3c-ii"} <= branches
 
 
+def test_the_texts_corner_moves_out_on_a_vertical_ellipse():
+    """Section 4.2.1's words as an option (CornerReading.TEXT): vertex 70 beyond a as c grows on
+    a vertical ellipse too; by default (RESULTS) it stays at a there. Horizontal frames are the
+    same either way, and neither reading jumps at the switch (c = 0 there)."""
+    ul, ll = jaw_wagging_trajectory()
+    default = lip_frames(ul, ll, REST, SUBJECT)
+    text = lip_frames(ul, ll, REST, SUBJECT, corner="text")
+    d = default.diagnostics
+    vertical = d["ellipse"] == "vertical"
+    assert vertical.sum() > 50 and (~vertical).sum() > 50
+    beyond_default = default.vertex(70)[:, 1] - d["a"]
+    beyond_text = text.vertex(70)[:, 1] - d["a"]
+    np.testing.assert_allclose(beyond_default[vertical], 0.0, atol=1e-9)
+    np.testing.assert_allclose(beyond_text, K.CORNER_STRETCH_AT_REST * (d["c"] / 65.0) ** 2,
+                               atol=1e-9)
+    assert beyond_text[vertical].max() > 2.0  # the corner moves out on the wide opening
+    np.testing.assert_allclose(text.xyz[~vertical], default.xyz[~vertical], atol=1e-9)
+    switches = np.nonzero(d["ellipse"][1:] != d["ellipse"][:-1])[0]
+    data_step = max(np.linalg.norm(np.diff(p, axis=0), axis=1).max() for p in (ul, ll))
+    step = np.linalg.norm(np.diff(text.xyz, axis=0), axis=-1).max(axis=1)
+    assert step[switches].max() <= data_step
+    assert corner_stretch(40.0, True, "text") == pytest.approx(8.0 * (40 / 65) ** 2)
+    with pytest.raises(ValueError):
+        corner_stretch(40.0, True, "prose")
+
+
 def test_outer_state_limits_and_diagnostics():
     ul, ll = jaw_wagging_trajectory(400)
     d = lip_frames(ul, ll, REST, SUBJECT).diagnostics

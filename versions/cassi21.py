@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from cassi.versions import lips_constants as K
 from cassi.versions.cassi20 import Cassi20
-from cassi.versions.lips import LowLipsThicknessPolicy, ThicknessPolicy
+from cassi.versions.lips import CornerReading, LowLipsThicknessPolicy, ThicknessPolicy
 from cassi.versions.lips_ellipse import OuterAbcParams
 from cassi.versions.lips_thickness import LowLipsReading
 
@@ -32,6 +32,8 @@ class Cassi21(Cassi20):
         As for :class:`~cassi.versions.cassi20.Cassi20`.
     reading : LowLipsReading or str, optional
         Which side of vertex 226 the 20-unit threshold lies on (default :attr:`reading`).
+    corner : CornerReading or str, optional
+        As for :class:`~cassi.versions.cassi20.Cassi20`.
     """
 
     name = "cassi-2.1"
@@ -39,8 +41,9 @@ class Cassi21(Cassi20):
     reading: LowLipsReading = LowLipsReading(K.LOW_LIPS_READING)
 
     def __init__(self, *, params: OuterAbcParams | None = None,
-                 reading: LowLipsReading | str | None = None):
-        super().__init__(params=params)
+                 reading: LowLipsReading | str | None = None,
+                 corner: CornerReading | str | None = None):
+        super().__init__(params=params, corner=corner)
         if reading is not None:
             self.reading = LowLipsReading(reading)
 

@@ -27,6 +27,7 @@ inner outline 61, 62, 63 / 58, 59, 60 with corner 287. Around the lips 71-73 fol
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import Enum
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -74,6 +75,7 @@ __all__ = [
     "EqualThicknessPolicy",
     "LowLipsThicknessPolicy",
     "corner_stretch",
+    "CornerReading",
     "inside_edge_start",
     "lip_frames",
     "lip_subject",
@@ -255,6 +257,7 @@ def lip_frames(
     blend_inner_corner: bool = False,
     params: OuterAbcParams | None = None,
     state: OuterAbcState | None = None,
+    corner: CornerReading | str = K.CORNER_READING,
 ) -> LipFrames:
     """Algorithm LIP MOVEMENT (Figure 4.28) for F frames at once.
 
@@ -272,6 +275,8 @@ def lip_frames(
     params : OuterAbcParams, optional
     state : OuterAbcState, optional
         OUTER_ABC_CALC's carried state (NewSubject when omitted).
+    corner : CornerReading or str
+        Where vertex 70 sits on a vertical ellipse (:class:`CornerReading`).
 
     Returns
     -------
@@ -319,7 +324,7 @@ def lip_frames(
         y = frac * a
         put(vu, track_x(y, x67), y, ellipse_z(y, a, b_signed, k, upper=True))
         put(vl, track_x(y, x49), y, ellipse_z(y, a, b_signed, k, upper=False))
-    y70 = a + corner_stretch(c, vertical)
+    y70 = a + corner_stretch(c, vertical, corner)
     x70 = track_x(y70, 0.5 * (x67 + x49)) + rest.corner_dx
     put(V_CORNER, x70, y70, k)
 
@@ -413,11 +418,27 @@ def inside_edge_start(ul0, subject: LipSubject) -> float:
     return float(ul0[0, 1] - current_thickness(subject.thick, cp)[0])
 
 
-def corner_stretch(c, vertical) -> np.ndarray:
-    """How far beyond a vertex 70 sits (section 4.2.1): 0 at c = 0 or for a vertical ellipse,
-    growing with c for a horizontal one (``CORNER_STRETCH_AT_REST * (c / c_rest)^2``)."""
+class CornerReading(str, Enum):
+    """Where vertex 70 sits on a vertical ellipse (section 4.2.1's words and the judges differ).
+
+    TEXT: "increasingly far from a as c becomes larger", whatever the ellipse.
+    RESULTS: at a on a vertical ellipse, where c measures height (the default; see
+    ``lips_constants.CORNER_READING``).
+    """
+
+    TEXT = "text"
+    RESULTS = "results"
+
+
+def corner_stretch(c, vertical, reading: CornerReading | str = K.CORNER_READING) -> np.ndarray:
+    """How far beyond a vertex 70 sits (section 4.2.1): 0 at c = 0, growing with c
+    (``CORNER_STRETCH_AT_REST * (c / c_rest)^2``) on a horizontal ellipse, and on a vertical
+    one only in the text's reading."""
     c = np.asarray(c, dtype=np.float64)
-    return np.where(vertical, 0.0, K.CORNER_STRETCH_AT_REST * (c / K.C_REST) ** 2)
+    stretch = K.CORNER_STRETCH_AT_REST * (c / K.C_REST) ** 2
+    if CornerReading(reading) is CornerReading.TEXT:
+        return stretch
+    return np.where(vertical, 0.0, stretch)
 
 
 # --- thickness policies: what differs between 2.0 and 2.1 -----------------------------------
@@ -592,6 +613,7 @@ class LipMovementStage:
 
     policy: ThicknessPolicy = field(default_factory=EqualThicknessPolicy)
     params: OuterAbcParams = field(default_factory=OuterAbcParams)
+    corner: CornerReading = CornerReading(K.CORNER_READING)
     name: str = "lips"
 
     def _setup(self, ctx: "TaskContext") -> dict:
@@ -611,7 +633,8 @@ class LipMovementStage:
 
     def _frames(self, plan: dict, ul, ll, state: OuterAbcState | None = None) -> LipFrames:
         return lip_frames(ul, ll, plan["rest"], plan["subject"], rule=plan["rule"],
-                          blend_inner_corner=plan["blend"], params=self.params, state=state)
+                          blend_inner_corner=plan["blend"], params=self.params, state=state,
+                          corner=self.corner)
 
     def initialise(self, ctx: "TaskContext") -> None:
         plan = self._setup(ctx)

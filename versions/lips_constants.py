@@ -111,10 +111,22 @@ C_LIMIT: float = C_MAX
 #: without a beak. Quadratic, not linear, in c because c = sqrt(a^2 - b^2) changes infinitely
 #: fast as the ellipse nears the switch (b -> a) while c^2 changes smoothly: on jaw-wagging
 #: tasks on the face model (12-28 degrees) a linear rule (0.15 c) made the lips step up to 1.23
-#: times the lip pellets' largest step per row at the switch, the quadratic one at most 1.0. For a vertical ellipse c measures height, not stretch, so the corner stays
-#: at a (a stretched corner on a wide open mouth is the "diamond-shaped lips" fault of thesis
-#: Table 5.9); both rules give a at c = 0, the switch, so the corner does not jump there.
+#: times the lip pellets' largest step per row at the switch, the quadratic one at most 1.0.
+#: On a vertical ellipse: CORNER_READING.
 CORNER_STRETCH_AT_REST: float = 8.0
+
+#: CHOSEN: on a vertical ellipse (mouth open taller than wide) vertex 70 stays at a ("results"),
+#: where 4.2.1's words move it out with c whatever the ellipse ("text"). There c is Eq. 4.14's
+#: sqrt(b^2 - a^2), a height, not a stretch; the text's corner sharpens as the jaw opens, toward
+#: the "diamond-shaped lips, especially when opened wide" that thesis Table 5.9 charges to CASSI
+#: 1.0 and not to 2.0. Measured on synthetic task 106 (JW11, JW19, JW24, JW40, JW45, JW502;
+#: final-preset front renders of JW11 row 644 and JW24 row 957, the widest openings): the text
+#: puts the outer corner up to 5 units (1.5 mm) further out, the opening keeps its shape
+#: (lip_shape_triangular 0.729 both, lip_outline_angular within 0.8 deg) and the corner's step at
+#: the switch doubles (corner_jump_switch 0.05-0.13 -> 0.11-0.26 mm, threshold 1): no Table E
+#: verdict changes, so the default follows the judges (no diamond in 2.0). Both readings give a
+#: at c = 0, the switch itself.
+CORNER_READING: str = "results"
 
 #: Middle outline (section 4.2.1): the lower-lip pairs 55/52, 56/53, 57/54 sit at equal
 #: distance either side of the ellipse, the distance shrinking toward the corner, 57/54
