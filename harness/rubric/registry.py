@@ -518,7 +518,8 @@ _ALL: list[Check] = [
                  "measured after undoing that turn, which hid it). 15 % lower than Parke's reads "
                  "as 'very long' on the side renders of the first frame (final preset): "
                  "cassi-1.0 JW15 1.21, JW16 1.18, JW45 1.17 show the jaw line a step below the "
-                 "neutral face's; JW27, JW502 at 1.12 read as Parke's jaw",
+                 "neutral face's; JW27, JW502 at 1.12 sit only slightly below it and read as "
+                 "an ordinary jaw",
           text="unusual jaw: very long",
           kind="geometry",
           measure="measures:m_jaw_long"),
