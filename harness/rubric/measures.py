@@ -295,6 +295,18 @@ def m_palate_below_incisor(ctx):
     return Measurement(d, 0, "lowest palate vertex below vertex 226 at initialization", frame_value=d)
 
 
+#: Table B's figures without Parke's neutral face to take them over.
+_NO_NEUTRAL = Measurement(float("nan"), -1, "no neutral face to compare with")
+
+
+def _has_neutral(ctx, *also: int) -> bool:
+    """Whether Table B has Parke's neutral face to compare with: a jaw of at least three
+    vertices, and the jaw's and ``also``'s vertices in it."""
+    jaw = ctx.parts.jaw
+    return (ctx.neutral is not None and len(jaw) >= 3
+            and ctx.neutral.shape[0] > max((int(jaw.max()), *also)))
+
+
 def _hull_area(p: np.ndarray) -> float:
     """Area of the convex hull of side-view points (N, 2); NaN when they are collinear."""
     from scipy.spatial import ConvexHull  # noqa: PLC0415 - only Table B needs it
@@ -315,8 +327,8 @@ def _jaw_squareness(v: np.ndarray, jaw: np.ndarray) -> float:
 def m_jaw_square(ctx):
     """Squareness of the jaw alone: the version's initial jaw rotation is no shape change."""
     jaw = ctx.parts.jaw
-    if ctx.neutral is None or len(jaw) < 3 or ctx.neutral.shape[0] <= jaw.max():
-        return Measurement(float("nan"), -1, "no neutral face to compare with")
+    if not _has_neutral(ctx):
+        return _NO_NEUTRAL
     # align the jaw to the neutral one (rotation and translation in the side view, Kabsch)
     a = ctx.frame(0)[jaw][:, [0, 2]]
     b = ctx.neutral[jaw][:, [0, 2]]
@@ -334,33 +346,37 @@ def m_jaw_square(ctx):
                        frame_value=float(r))
 
 
-def _lower_face(v: np.ndarray, jaw: np.ndarray, tip: int) -> tuple[float, float]:
-    """The lower face seen from the side, the head fixed: how far the jaw (14-43) reaches below
-    the tip of the upper front teeth (226), and the side-view area of the hull of the jaw and
-    that tip."""
-    p = v[jaw][:, [0, 2]]
-    t = v[tip, [0, 2]]
-    return float(t[1] - p[:, 1].min()), _hull_area(np.vstack([p, t]))
+def _jaw_reach(v: np.ndarray, jaw: np.ndarray, tip: int) -> float:
+    """How far the jaw (14-43) reaches below the tip of the upper front teeth (226), side view."""
+    return float(v[tip, 2] - v[jaw, 2].min())
 
 
-def _lower_face_ratio(ctx, i: int, what: str) -> Measurement:
-    """A figure of the jaw where the version put it, against Parke's neutral face: CASSI 1.0's
-    initialisation turns Parke's jaw onto the head measures (4.1.3), and a jaw turned down or
-    pushed forward reads, beside the head, as a longer or larger lower face."""
+def _lower_face_area(v: np.ndarray, jaw: np.ndarray, tip: int) -> float:
+    """Side-view area of the hull of the jaw (14-43) and the upper front teeth's tip (226)."""
+    return _hull_area(v[np.append(jaw, tip)][:, [0, 2]])
+
+
+def _lower_face_ratio(ctx, figure, what: str) -> Measurement:
+    """A figure of the lower face, the head fixed, where the version put the jaw, over Parke's
+    neutral face: CASSI 1.0's initialisation turns Parke's jaw onto the head measures (4.1.3),
+    and a jaw turned down or pushed forward reads, beside the head, as a longer or larger
+    lower face."""
     jaw, tip = ctx.parts.jaw, ctx.parts.upper_incisor_tip
-    if ctx.neutral is None or len(jaw) < 3 or ctx.neutral.shape[0] <= max(jaw.max(), tip):
-        return Measurement(float("nan"), -1, "no neutral face to compare with")
-    r = _lower_face(ctx.frame(0), jaw, tip)[i] / _lower_face(ctx.neutral, jaw, tip)[i]
+    if not _has_neutral(ctx, tip):
+        return _NO_NEUTRAL
+    r = figure(ctx.frame(0), jaw, tip) / figure(ctx.neutral, jaw, tip)
     return Measurement(float(r), 0, f"{what} at initialization over Parke's neutral face",
                        frame_value=float(r))
 
 
 def m_jaw_long(ctx):
-    return _lower_face_ratio(ctx, 0, "lowest point of the jaw below the upper incisor tip (226)")
+    return _lower_face_ratio(ctx, _jaw_reach,
+                             "lowest point of the jaw below the upper incisor tip (226)")
 
 
 def m_jaw_large(ctx):
-    return _lower_face_ratio(ctx, 1, "side-view area of the lower face (hull of the jaw and 226)")
+    return _lower_face_ratio(ctx, _lower_face_area,
+                             "side-view area of the lower face (hull of the jaw and 226)")
 
 
 
