@@ -120,11 +120,12 @@ CORNER_STRETCH_AT_REST: float = 8.0
 #: sqrt(b^2 - a^2), a height, not a stretch; the text's corner sharpens as the jaw opens, toward
 #: the "diamond-shaped lips, especially when opened wide" that thesis Table 5.9 charges to CASSI
 #: 1.0 and not to 2.0. Measured on synthetic task 106 (JW11, JW19, JW24, JW40, JW45, JW502;
-#: final-preset front renders of JW11 row 644 and JW24 row 957, the widest openings): the text
-#: puts the outer corner up to 5 units (1.5 mm) further out, the opening keeps its shape
-#: (lip_shape_triangular 0.729 both, lip_outline_angular within 0.8 deg) and the corner's step at
-#: the switch doubles (corner_jump_switch 0.05-0.13 -> 0.11-0.26 mm, threshold 1): no Table E
-#: verdict changes, so the default follows the judges (no diamond in 2.0). Both readings give a
+#: final-preset renders of the widest openings, JW11 row 644 and JW40 row 364 in all four views,
+#: JW24 row 957 front): the text moves vertex 70 alone, on vertical-ellipse frames only, at most
+#: 1.0-3.7 mm further out over the task (JW24 to JW40; the rubric's mm per unit), the opening keeps
+#: its shape (lip_shape_triangular 0.729 both, lip_outline_angular within 0.8 deg) and the corner's
+#: step at the switch doubles (corner_jump_switch 0.05-0.13 -> 0.11-0.26 mm, threshold 1): no Table
+#: E verdict changes, so the default follows the judges (no diamond in 2.0). Both readings give a
 #: at c = 0, the switch itself.
 CORNER_READING: str = "results"
 
