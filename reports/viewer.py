@@ -33,6 +33,7 @@ from cassi.harness.evaluation.viewerdata import read_viewer_blob
 from cassi.harness.rubric import CHECKS
 from cassi.harness.rubric.fidelity import PELLETS
 from cassi.harness.rubric.image import FrameMasks, mouth_opening
+from cassi.harness.rubric.tables import file_verdicts
 from cassi.renderer.gltf import AXES
 from cassi.renderer.views import VIEWS, material_for
 from cassi.reports.runio import Run, order_versions
@@ -127,10 +128,15 @@ def _version_payload(data, events: list[dict], renders: list[dict]) -> dict:
 
 def _events(results: pd.DataFrame) -> dict[tuple, list[dict]]:
     """(subject, task, rep, version) -> every check of the rubric that holds a frame there: its
-    table, negatives (the whole-task row's) and every frame the results point at for it."""
+    table, negatives as the report charges them for the file (:func:`file_verdicts`: one fault,
+    one charge), the check's own negatives and the note when another check charges the fault,
+    and every frame the results point at for it."""
     r = results[results["table"].notna() & (results["view"] != "trace")]
     keys = ["subject", "task", "rep", "version", "check"]
-    whole = r[r["frame"] < 0].groupby(keys)["negatives"].max().to_dict()
+    fv = file_verdicts(results)
+    fv = fv[fv["table"] == fv["own_table"]].sort_values("raw_negatives")  # the most wins
+    whole = {(s, int(t), int(p), v, c): (int(n), int(raw), str(note)) for s, t, p, v, c, n, raw, note
+             in fv[[*keys, "negatives", "raw_negatives", "note"]].itertuples(index=False, name=None)}
     found: dict[tuple, dict[str, dict]] = {}
     ev = r[r["frame"] >= 0]
     for row in ev[[*keys, "table", "component", "frame", "value", "unit", "negatives"]] \
@@ -140,18 +146,21 @@ def _events(results: pd.DataFrame) -> dict[tuple, list[dict]]:
         e = found.setdefault(file, {}).get(check)
         if e is None:
             c = CHECKS.get(check)
+            charged, raw, note = whole.get((*file, check), (int(neg), int(neg), ""))
             e = found[file][check] = {
+                "negatives": charged, "raw_negatives": raw, "note": note,
                 "check": str(check), "table": str(table),
                 "component": "" if pd.isna(component) else str(component),
                 "text": c.text if c else str(check),
-                "negatives": int(whole.get((*file, check), neg)), "frames": set(),
+                "frames": set(),
                 "value": None if pd.isna(value) else float(value),
                 "unit": "" if pd.isna(unit) else str(unit)}
         e["frames"].add(int(frame))
     out = {}
     for file, checks in found.items():
         events = [{**e, "frames": sorted(e["frames"])} for e in checks.values()]
-        events.sort(key=lambda e: (-e["negatives"], e["table"], e["frames"][0], e["check"]))
+        events.sort(key=lambda e: (-e["negatives"], -e["raw_negatives"], e["table"], e["frames"][0],
+                                   e["check"]))
         out[file] = events
     return out
 

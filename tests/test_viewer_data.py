@@ -17,7 +17,7 @@ from cassi.harness.evaluation.viewerdata import (STEP_UNITS, read_viewer_blob, v
 from cassi.harness.rubric.fidelity import virtual_pellets
 from cassi.reports.report import _env, write_report
 from cassi.reports.runio import load_run
-from cassi.reports.viewer import viewer_href
+from cassi.reports.viewer import _events, viewer_href
 from cassi.versions.mapping import XrmbToParke
 
 
@@ -88,6 +88,27 @@ def test_a_viewer_link_opens_in_the_view_its_check_is_judged_from():
     # a view given wins; an unknown check names no view
     assert viewer_href("JW15", 9, 1, check="jaw_long", view="top").endswith("view=top")
     assert "view=" not in viewer_href("JW15", 9, 1, check="no-such-check")
+
+
+def test_the_viewer_charges_a_fault_once_as_the_report_does():
+    # lips_apart_at_start is charged with lips_never_touch (registry): the viewer lists both,
+    # the second with no negative of its own and the report's note saying why
+    def rows(check, neg, frame):
+        base = dict(subject="JW11", task=106, rep=1, version="cassi-1.0", view="geometry",
+                    table="A", component="lips", check=check, value=5.0, unit="mm",
+                    threshold=1.5, detail="", synthetic=True)
+        return [{**base, "frame": -1, "negatives": neg}, {**base, "frame": frame, "negatives": neg}]
+    res = pd.DataFrame(rows("lips_never_touch", 2, 40) + rows("lips_apart_at_start", 1, 0)
+                       + rows("lips_pressed", 0, 7))
+    ev = {e["check"]: e for e in _events(res)[("JW11", 106, 1, "cassi-1.0")]}
+    assert (ev["lips_never_touch"]["negatives"], ev["lips_never_touch"]["note"]) == (2, "")
+    apart = ev["lips_apart_at_start"]
+    assert (apart["negatives"], apart["raw_negatives"]) == (0, 1)
+    assert "lips_never_touch" in apart["note"]
+    assert (ev["lips_pressed"]["negatives"], ev["lips_pressed"]["raw_negatives"]) == (0, 0)
+    # fired first, by what is charged
+    assert [e["check"] for e in _events(res)[("JW11", 106, 1, "cassi-1.0")]] == [
+        "lips_never_touch", "lips_apart_at_start", "lips_pressed"]
 
 
 def test_the_page_escapes_what_it_is_given():

@@ -61,16 +61,8 @@ def file_verdicts(results: pd.DataFrame) -> pd.DataFrame:
     lip_a["table"] = "C"
     df = pd.concat([df, lip_a], ignore_index=True)
     df["note"] = ""
-    # one fault, one charge, within the file and the table (as _charge_once across files)
-    hit = df[df["raw_negatives"] > 0]
-    fired = set(zip(hit["version"], hit["table"], hit["subject"], hit["file"], hit["check"]))
-    for i, r in hit.iterrows():
-        c = CHECKS.get(r["check"])
-        if c is not None and c.charged_with and (r["version"], r["table"], r["subject"], r["file"],
-                                                 c.charged_with) in fired:
-            df.at[i, "negatives"] = 0
-            df.at[i, "note"] = f"not charged again: {c.charged_with} charges the same fault"
     df["negatives"] = df["negatives"].astype(int)
+    df = _charge_once(df, ("version", "table", "subject", "file"))  # within the file and table
     return df[cols].reset_index(drop=True)
 
 
@@ -165,14 +157,20 @@ def table_c_rule(results: pd.DataFrame, *, fv: pd.DataFrame | None = None,
                            else s, kind="mergesort").reset_index(drop=True)
 
 
-def _charge_once(out: pd.DataFrame) -> pd.DataFrame:
-    """Rule 2 across a subject's files: a check ``charged_with`` another that fired for the same
-    version, table and subject earns nothing (``note`` says why when the column exists)."""
+#: How the comparison sentences name the good ratings ("VERY GOOD/EXCELLENT").
+_GOOD = "/".join(reversed(GOOD_RATINGS))
+
+
+def _charge_once(out: pd.DataFrame,
+                 within: Sequence[str] = ("version", "table", "subject")) -> pd.DataFrame:
+    """Rule 2: a check ``charged_with`` another that fired in the same ``within`` group (by
+    default the version, table and subject: across the subject's files) earns nothing (``note``
+    says why when the column exists)."""
     hit = out[out["negatives"] > 0]
-    charged = set(zip(hit["version"], hit["table"], hit["subject"], hit["check"]))
+    charged = set(zip(*(hit[k] for k in within), hit["check"]))
     for i, r in hit.iterrows():
         c = CHECKS.get(r["check"])
-        if c is not None and c.charged_with and (r["version"], r["table"], r["subject"],
+        if c is not None and c.charged_with and (*(r[k] for k in within),
                                                  c.charged_with) in charged:
             out.at[i, "negatives"] = 0
             if "note" in out:
@@ -375,7 +373,7 @@ def version_comparisons(results: pd.DataFrame) -> list[tuple[str, str]]:
                         else "worsens (same ratings, more negatives)")
             else:
                 verb = "matches"
-            out.append((table, f"{cur} {verb} {topic} over {prev}: {gb} VERY GOOD/EXCELLENT cells "
+            out.append((table, f"{cur} {verb} {topic} over {prev}: {gb} {_GOOD} cells "
                                f"against {ga}, {_n(nb)} against {na}{note}; "
                                f"{_deciding(both)}"))
         if table == "F" and len(names) > 1:

@@ -377,7 +377,7 @@
     li.appendChild(sw);
     const t = document.createElement("span");
     t.textContent = e.version + " · Table " + e.table + " · " + e.text + " (" + e.check + ", " + e.component + "): "
-      + e.negatives + " negative" + (e.negatives === 1 ? "" : "s")
+      + e.negatives + " negative" + (e.negatives === 1 ? "" : "s") + (e.note ? " (" + e.note + ")" : "")
       + (e.value !== null ? ", value " + e.value.toPrecision(4) + " " + e.unit : "") + "; frame" + (e.frames.length === 1 ? " " : "s ");
     li.appendChild(t);
     for (const f of e.frames) {
@@ -390,7 +390,8 @@
 
   function drawEvents() {
     const ul = $("events"); ul.replaceChildren();
-    const evs = allEvents(), fired = evs.filter((e) => e.negatives > 0), silent = evs.filter((e) => e.negatives <= 0);
+    const evs = allEvents(), fired = evs.filter((e) => e.negatives > 0 || e.raw_negatives > 0),
+      silent = evs.filter((e) => e.negatives <= 0 && !(e.raw_negatives > 0));
     if (!fired.length) { const li = document.createElement("li"); li.textContent = "No check earned negatives on this task file."; ul.appendChild(li); }
     for (const e of fired) ul.appendChild(eventItem(e));
     if (silent.length) {
