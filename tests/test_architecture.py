@@ -23,7 +23,7 @@ ALLOWED = {
     "reports": {"common", "data", "versions", "renderer", "harness"},
 }
 #: Modules reports must never import: the farm runs jobs, reports read what a run wrote.
-REPORTS_NEVER = ("cassi.harness.evaluation.run.executors", "cassi.harness.farm.executors")
+REPORTS_NEVER = ("cassi.harness.farm.executors", "cassi.harness.farm.workers")
 MAX_LOCAL_CASSI_IMPORTS = 20
 
 if not (ROOT / "harness").is_dir():

@@ -29,6 +29,7 @@ from typing import ClassVar
 import numpy as np
 
 from cassi.data.face import numbering as N
+from cassi.data.face.model import jaw_pellet_sites
 from cassi.common.errors import CassiInputError
 from cassi.versions import constants as K
 from cassi.versions.jaw import apply_zones, solve_jaw_motion
@@ -83,11 +84,6 @@ def _vertex_xz(vertices: np.ndarray, number) -> np.ndarray:
     return vertices[idx][:, _XZ].mean(axis=0)
 
 
-def _mandible_points(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Model (x, z) of the MANi site (258) and the MANm site (midpoint of 281 and 286)."""
-    return _vertex_xz(vertices, K.V_MANI), _vertex_xz(vertices, K.V_MANM_PAIR)
-
-
 @dataclass
 class JawStage:
     """Jaw rotation of 4.1.3 with Table 4.3's zones (initialisation and animation phases)."""
@@ -101,7 +97,7 @@ class JawStage:
         teeth = tuple(z for z in self.zones if set(z.vertices) <= teeth_set)
         others = tuple(z for z in self.zones if not set(z.vertices) <= teeth_set)
         # Teeth: Parke's placement -> the first valid row's jaw pellets.
-        mani, manm = _mandible_points(ctx.neutral)
+        mani, manm = jaw_pellet_sites(ctx.neutral)
         motion = solve_jaw_motion(mani, manm, ctx.pellet("MNI")[:1], ctx.pellet("MNM")[:1])
         ctx.start[:] = apply_zones(ctx.start, motion, teeth)[0]
         ctx.state["init_teeth_theta"] = float(motion.theta[0])

@@ -14,24 +14,22 @@ import numpy as np
 
 from cassi.common.errors import CassiInputError
 from cassi.data.face import numbering as N
-from cassi.data.face.model import FaceModel, build_face
+from cassi.data.face.model import FaceModel, build_face, jaw_length_units
 from cassi.versions import constants as K
 
 __all__ = ["XrmbToParke", "model_jaw_length", "subject_face"]
 
 
 def model_jaw_length(vertices: np.ndarray) -> float:
-    """p: distance from vertex 258 (MANi) to the midpoint of 281 and 286 (MANm), x-z plane.
+    """p: distance from vertex 258 (MANi) to the midpoint of 281 and 286 (MANm), x-z plane
+    (:func:`cassi.data.face.model.jaw_length_units`).
 
     Parameters
     ----------
     vertices : float (V, 3)
         Parke vertices (row i = vertex i + 1), Parke units.
     """
-    v = np.asarray(vertices, dtype=np.float64)
-    mani = v[K.V_MANI - 1, [0, 2]]
-    manm = 0.5 * (v[K.V_MANM_PAIR[0] - 1, [0, 2]] + v[K.V_MANM_PAIR[1] - 1, [0, 2]])
-    return float(np.hypot(*(mani - manm)))
+    return jaw_length_units(vertices)
 
 
 @dataclass(frozen=True)

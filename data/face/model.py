@@ -30,7 +30,23 @@ from cassi.data.face.topology import RenderTopology, render_topology  # noqa: F4
 from cassi.common.atomic import atomic_write_text
 
 __all__ = ["FaceModel", "Material", "build_face", "parke_parameters", "RenderTopology",
-           "render_topology", "default_gaze_target"]
+           "render_topology", "default_gaze_target", "jaw_pellet_sites", "jaw_length_units"]
+
+
+def jaw_pellet_sites(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where the face carries the jaw pellets (thesis 4.1.1): (x, z) of MANi (vertex 258) and of
+    the MANm site (the midpoint of 281 and 286), each float (..., 2) for vertices (..., V, 3)."""
+    v = np.asarray(vertices, np.float64)
+    mani = v[..., N.MANI - 1, :][..., [0, 2]]
+    a, b = (v[..., n - 1, :][..., [0, 2]] for n in N.MANM_PAIR)
+    return mani, 0.5 * (a + b)
+
+
+def jaw_length_units(vertices: np.ndarray) -> float:
+    """Parke's jaw distance p (4.1.1): MANi to the MANm site in the x-z plane, as the XRMB
+    pellets are measured; Parke units, for vertices (V, 3)."""
+    mani, manm = jaw_pellet_sites(vertices)
+    return float(np.hypot(*(mani - manm)))
 
 
 def parke_parameters(face: "FaceModel", values: dict[int, float] | None = None, *,
@@ -139,9 +155,7 @@ class FaceModel:
     def jaw_length(self) -> float:
         """Parke's jaw distance p (4.1.1): from MANi (258) to the MANm site (midpoint of 281 and
         286), measured in the x-z plane as the XRMB pellets are."""
-        a = self.vertex(N.MANI)[[0, 2]]
-        b = 0.5 * (self.vertex(N.MANM_PAIR[0]) + self.vertex(N.MANM_PAIR[1]))[[0, 2]]
-        return float(np.linalg.norm(a - b))
+        return jaw_length_units(self.vertices)
 
     # --- files ------------------------------------------------------------------------------
     def write(self, directory: str | PathLike, *, st1_name="st1.pts", st2_name="st2.pts",

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cassi.data.face import numbering as N
+from cassi.data.face.model import jaw_pellet_sites
 from cassi.common.errors import CassiInputError
 
 from cassi.harness.rubric.frames import Frames
@@ -55,10 +56,10 @@ def virtual_pellets(positions: np.ndarray, mapping) -> np.ndarray:
         x forward, y up, mm, pellets in :data:`PELLETS` order.
     """
     pos = np.asarray(positions, np.float64)
-    rows = [N.UL, N.LL, *N.TONGUE_PELLETS, N.MANI]
-    xz = pos[:, [r - 1 for r in rows]][..., [0, 2]]
-    a, b = (pos[:, r - 1][:, [0, 2]] for r in N.MANM_PAIR)
-    xz = np.concatenate([xz, (0.5 * (a + b))[:, None]], axis=1)
+    rows = [N.UL, N.LL, *N.TONGUE_PELLETS]
+    mani, manm = jaw_pellet_sites(pos)
+    xz = np.concatenate([pos[:, [r - 1 for r in rows]][..., [0, 2]], mani[:, None], manm[:, None]],
+                        axis=1)
     return mapping.to_xrmb(xz)
 
 
