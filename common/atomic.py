@@ -7,11 +7,14 @@ a temporary file, and an OS error names the file it was about.
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import shutil
 import tempfile
 from pathlib import Path
 from typing import IO, Iterator
+
+from cassi.common.errors import CassiInputError
 
 
 def current_umask() -> int:
@@ -136,3 +139,21 @@ def link_or_copy(src: str | os.PathLike, dest: str | os.PathLike) -> Path:
             tmp.unlink()
     return dest
 
+
+
+def writable_dir(path: str | os.PathLike, what: str = "output directory") -> Path:
+    """Create ``path`` (with its parents) and prove it a writable directory before any work is
+    done; otherwise a :class:`CassiInputError` naming it and why (the CLI's exit 2)."""
+    root = Path(path)
+    if root.exists() and not root.is_dir():
+        raise CassiInputError(f"{what} exists and is not a directory", path=root)
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        probe = root / f".write-probe-{os.getpid()}"
+        probe.write_bytes(b"ok")
+        probe.unlink()
+    except OSError as err:
+        why = "no space left on the device" if err.errno == errno.ENOSPC else (
+            err.strerror or str(err))
+        raise CassiInputError(f"{what} is not writable: {why}", path=root) from err
+    return root

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cassi.common.atomic import atomic_open
+from cassi.common.atomic import atomic_open, writable_dir
 from cassi.common.errors import CassiInputError
 from cassi.data.commands import EXIT_BAD_INPUT, EXIT_OK
 from cassi.data.corpus import profile
@@ -141,8 +141,7 @@ def cmd_preprocess(args) -> int:
         print(f"warning: {msg}", file=sys.stderr)
     if not profiles:
         raise CassiInputError("no subject could be preprocessed", path=args.corpus)
-    out: Path = args.out
-    out.mkdir(parents=True, exist_ok=True)
+    out: Path = writable_dir(args.out)
     write_maxprotru(out / "maxprotru.txt", profiles)
     write_lipthick(out / "lipthick.txt", profiles)
     with atomic_open(out / "selected_files.csv", "w", newline="") as fh:

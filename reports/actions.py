@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import errno
 from functools import partial
 from pathlib import Path
 
+from cassi.common.atomic import writable_dir
 from cassi.common.errors import CassiInputError
-from cassi.harness.evaluation.config import RunConfig
+from cassi.harness.evaluation.config import validate
 from cassi.harness.evaluation.nightly import nightly
 from cassi.reports.gates import gate, update_golden
 from cassi.reports.nightly import review_night
@@ -19,21 +19,8 @@ from cassi.reports.report import evidence_href, write_report
 from cassi.reports.runio import load_run
 
 
-def _writable(out: Path) -> None:
-    """Prove the report directory writable before any work, as ``cassi run`` does (exit 2)."""
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        probe = out / ".write-probe"
-        probe.write_bytes(b"ok")
-        probe.unlink()
-    except OSError as err:
-        why = "no space left on the device" if err.errno == errno.ENOSPC else (
-            err.strerror or str(err))
-        raise CassiInputError(f"report directory is not writable: {why}", path=out) from err
-
-
 def cmd_report(args: argparse.Namespace) -> int:
-    _writable(args.out)
+    writable_dir(args.out, "report directory")
     index = write_report(args.run, args.out, compare=args.compare, ratings=args.ratings)
     print(index)
     return 0
@@ -43,7 +30,7 @@ def cmd_agree(args: argparse.Namespace) -> int:
     run = load_run(args.run)
     result = agreement(run, args.ratings, evidence_href)
     out = args.out or args.run
-    _writable(out)
+    writable_dir(out, "report directory")
     paths = write_agreement(result, out)
     for g in result["groups"]:
         kappa = "undefined" if g["kappa"] != g["kappa"] else (
@@ -66,9 +53,10 @@ def video_versions_arg(text: str) -> tuple[str, ...] | None:
 
 
 def cmd_nightly(args: argparse.Namespace) -> int:
-    cfg = RunConfig(workers=args.workers, stride=args.stride, extremes=args.extremes,
-                    animate_stride=args.animate_stride,
-                    video_versions=video_versions_arg(args.video_versions))
+    # the same checks as `cassi run`'s settings (validate: exit 2 naming the setting)
+    cfg = validate(dict(workers=args.workers, stride=args.stride, extremes=args.extremes,
+                        animate_stride=args.animate_stride)).replace(
+        video_versions=video_versions_arg(args.video_versions))
     passed, index = nightly(args.out, corpus=args.corpus, config=cfg, progress=not args.quiet,
                             review=partial(review_night, common_only=args.common_only))
     gate = json.loads((Path(args.out) / "runs" / index.parent.name / "gate.json").read_text())

@@ -19,6 +19,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import re
 from pathlib import Path
 from typing import Callable
 
@@ -119,7 +120,7 @@ def read_human_ratings(path: str | os.PathLike, run: Run,
             task = v["task"]
             if task:
                 parts = task.split("_")
-                if not all(p.isdigit() for p in parts) or len(parts) > 2:
+                if not all(re.fullmatch(r"[0-9]{1,4}", p) for p in parts) or len(parts) > 2:
                     raise bad(f"task {task!r} is not a task number (21) or task_repetition (21_2)")
                 task = str(int(parts[0])) if len(parts) == 1 or int(parts[1]) == 1 else \
                     f"{int(parts[0])}_{int(parts[1])}"

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from cassi.common.atomic import atomic_tmp_path, atomic_write_text
+from cassi.common.atomic import atomic_tmp_path, atomic_write_text, writable_dir
 from cassi.common.errors import CassiInputError
 from cassi.harness.farm.store import sha256_file
 from cassi.reports.media import read_rgb8
@@ -489,7 +489,7 @@ def update_golden(run_dir: str | os.PathLike, golden_dir: str | os.PathLike) -> 
         raise IncompleteRun("a run with failed or missing jobs cannot be the golden baseline: "
                             + _fmt_list(failed + missing) + " (rerun it to completion first)",
                             path=run.root)
-    golden = Path(golden_dir)
+    golden = writable_dir(golden_dir, "golden directory")
     n = 0
     for _, row in run.renders.iterrows():
         if not str(row["path"]).endswith(".png"):

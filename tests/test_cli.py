@@ -61,3 +61,20 @@ def test_console_script_is_installed():
                          capture_output=True, text=True, timeout=120)
     assert out.returncode == 0 and out.stdout.split() == sorted(out.stdout.split())
     assert {"parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1"} <= set(out.stdout.split())
+
+
+def test_an_output_that_is_a_file_or_a_bad_night_setting_exits_2(tmp_path, capsys):
+    from cassi.common.atomic import writable_dir
+    from cassi.common.errors import CassiInputError
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    with pytest.raises(CassiInputError, match="exists and is not a directory") as info:
+        writable_dir(afile, "golden directory")
+    assert info.value.path == str(afile) and "golden directory" in str(info.value)
+    assert writable_dir(tmp_path / "a" / "b").is_dir()
+    assert main(["report", str(tmp_path), "--out", str(afile)]) == 2
+    assert "report directory exists and is not a directory" in capsys.readouterr().err
+    assert main(["nightly", "--out", str(tmp_path / "n"), "--workers", "0"]) == 2
+    err = capsys.readouterr().err
+    assert "workers: must be at least 1" in err
+    assert not (tmp_path / "n").exists()      # refused before any work

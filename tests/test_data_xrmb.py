@@ -172,6 +172,27 @@ def test_malformed_outlines(text, line, reason):
     assert reason in info.value.reason and info.value.line == line
 
 
+def test_a_palate_too_short_for_a_face_is_refused_where_it_is_read(tmp_path):
+    # two points 0.1 mm apart parse as an outline, but no face can take them: the error names
+    # the file at once (corpus check), not a later face build without it
+    (tmp_path / "PAL.DAT").write_text("1000 2000\n1100 2000\n")
+    with pytest.raises(CassiInputError, match="shorter than the 5 mm") as info:
+        read_pal(tmp_path / "PAL.DAT")
+    assert info.value.path == str(tmp_path / "PAL.DAT")
+    assert read_pal(FIXTURES / "xrmb" / "JW12" / "PAL.DAT").shape[0] > 2
+
+
+def test_textgrid_tiers_whose_entries_are_not_intervals(tmp_path):
+    from cassi.data.xrmb.alignment import parse_alignment
+    tier = '{{"name":"phone","class":"IntervalTier","xmin":0,"xmax":1,"entries":{}}}'
+    word = '{"name":"word","class":"IntervalTier","xmin":0,"xmax":1,"entries":[]}'
+    for entries, reason in (("5", "entries are not a list"), ("[5]", "not an interval tier")):
+        text = '{"xmin":0,"xmax":1,"tiers":[' + tier.format(entries) + "," + word + "]}"
+        with pytest.raises(CassiInputError, match=reason) as info:
+            parse_alignment(text, path="tp003.TextGrid")
+        assert info.value.path == "tp003.TextGrid"
+
+
 # ----------------------------------------------------------------------------- Mis.dat
 def test_jw12_mis_dat(tmp_path):
     """Thesis Figure 3.10: 49 entries; codes with a space; -1 = to the end; raster-hop notes."""

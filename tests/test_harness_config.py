@@ -56,6 +56,15 @@ def test_bad_settings_name_file_and_line(tmp_path, text, match, line):
         assert err.value.line == line
 
 
+@pytest.mark.parametrize("key", ["1", "true", "null"])
+def test_a_yaml_key_that_is_not_text_is_an_unknown_setting(tmp_path, key):
+    path = tmp_path / "run.yaml"
+    path.write_text(f"out: o\n{key}: x\n")
+    with pytest.raises(CassiInputError, match="unknown setting") as err:
+        C.load_config(path)
+    assert err.value.path == str(path) and err.value.line == 2
+
+
 def test_bad_yaml_and_suffix(tmp_path):
     (tmp_path / "r.yaml").write_text("out: [unclosed\n")
     with pytest.raises(CassiInputError, match="not valid YAML"):

@@ -72,6 +72,7 @@ def test_agree_on_a_good_file(run, tmp_path, capsys):
     ("JW11,,cassi-2.0,A,nose,GOOD", "unknown component 'nose'"),
     ("JW11,,cassi-2.0,A,lips,", "no rating"),
     ("JW11,19,cassi-2.0,A,tongue,POOR", "duplicate of line 4"),
+    ("JW11,\u00b2,cassi-2.0,A,lips,GOOD", "is not a task number"),   # a digit int() refuses
 ])
 def test_bad_lines_exit_2_naming_the_file_and_line(run, tmp_path, capsys, line, problem):
     ratings = tmp_path / "bad.csv"

@@ -11,6 +11,7 @@ import sys
 
 from cassi.common.errors import CassiInputError
 from cassi.data.face.preview import preview_png
+from cassi.common.atomic import writable_dir
 from cassi.data.xrmb.files import read_pal
 from cassi.versions.mapping import subject_face
 
@@ -24,6 +25,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--preview", help="also write a PNG preview here")
     args = ap.parse_args(argv)
     try:
+        writable_dir(args.out_dir)
         palate = read_pal(args.palate) if args.palate else None
         face = subject_face(palate_mm=palate, jaw_length_mm=args.jaw_length)
         paths = face.write(args.out_dir)

@@ -15,6 +15,7 @@ import numpy as np
 from cassi.common.errors import CassiInputError
 from cassi.data.face import numbering as N
 from cassi.data.face.model import FaceModel, build_face, jaw_length_units
+from cassi.data.xrmb.files import check_palate_length
 from cassi.versions import constants as K
 
 __all__ = ["XrmbToParke", "model_jaw_length", "subject_face"]
@@ -96,13 +97,14 @@ def subject_face(*, palate_mm: np.ndarray | None = None, jaw_length_mm: float | 
     head_measures : optional
         Kept on the face for the versions' chin and jaw adjustment.
     """
+    if jaw_length_mm is not None and not (np.isfinite(jaw_length_mm) and jaw_length_mm > 0):
+        raise CassiInputError(f"jaw length must be a positive number of mm, not {jaw_length_mm!r}")
     if palate_mm is None:
         return build_face(head_measures=head_measures)
     pal = np.asarray(palate_mm, dtype=np.float64)
     if pal.ndim != 2 or pal.shape[1] != 2 or len(pal) < 2 or not np.isfinite(pal).all():
         raise CassiInputError("palate_mm must be a finite (P >= 2, 2) array of x, y mm")
-    if np.hypot(*np.diff(pal, axis=0).T).sum() < 5.0:
-        raise CassiInputError("the palate outline is shorter than 5 mm")
+    check_palate_length(pal)
     if pal[0, 0] < pal[-1, 0]:
         pal = pal[::-1].copy()  # given back to front: PAL.DAT runs front to back
     neutral = build_face().vertices
@@ -110,7 +112,5 @@ def subject_face(*, palate_mm: np.ndarray | None = None, jaw_length_mm: float | 
         mapping = XrmbToParke(scale=N.UNITS_PER_MM,
                               origin=neutral[K.V_UPPER_INCISOR_TIP - 1, [0, 2]].copy())
     else:
-        if not (np.isfinite(jaw_length_mm) and jaw_length_mm > 0):
-            raise CassiInputError(f"jaw_length_mm must be positive, got {jaw_length_mm}")
         mapping = XrmbToParke.from_face(neutral, jaw_length_mm)
     return build_face(palate_mm=pal, palate_xz=mapping.to_parke(pal), head_measures=head_measures)

@@ -57,8 +57,11 @@ def _decode(data: bytes, path) -> str:
 def _tier_frame(tier: dict, *, path) -> pd.DataFrame:
     rows = []
     prev_end = -math.inf
-    for entry in tier.get("entries", []):
-        if len(entry) != 3:
+    entries = tier.get("entries", [])
+    if not isinstance(entries, (list, tuple)):
+        raise CassiInputError(f"tier {tier.get('name')!r}: its entries are not a list", path=path)
+    for entry in entries:
+        if not isinstance(entry, (list, tuple)) or len(entry) != 3:
             raise CassiInputError(f"tier {tier.get('name')!r}: not an interval tier", path=path)
         start, end, label = entry
         try:

@@ -44,7 +44,8 @@ from cassi.data.xrmb.textlines import (decode_ascii, numbered_rows, parse_int, p
 __all__ = [
     "PELLETS", "BAD_VALUE", "NOMINAL_PERIOD_US", "N_COLUMNS", "COLUMN_NAMES", "TaskRecording",
     "parse_task_name", "task_file_name", "parse_txy", "read_txy", "format_txy", "write_txy",
-    "parse_outline", "format_outline", "read_pal", "write_pal", "read_pha", "write_pha",
+    "parse_outline", "format_outline", "read_pal", "write_pal", "check_palate_length",
+    "MIN_PALATE_LENGTH_MM", "read_pha", "write_pha",
     "MistrackEntry", "MISTRACK_PELLET_CODES", "parse_mis", "read_mis", "format_mis", "write_mis",
     "HeadMeasures", "parse_head_measures", "read_head_measures", "format_head_measures",
     "write_head_measures",
@@ -398,9 +399,26 @@ def format_outline(points_mm: np.ndarray) -> str:
     return "".join(f"{x} {y}\n" for x, y in um.tolist())
 
 
+#: The shortest palatal outline a face can be given (mm along the outline): two points or an
+#: outline shorter than this cannot place the palate (the real outlines run 50-60 mm).
+MIN_PALATE_LENGTH_MM = 5.0
+
+
+def check_palate_length(points_mm: np.ndarray, *, path: str | os.PathLike | None = None) -> None:
+    """:class:`CassiInputError` (naming ``path``) unless the outline has two points or more and
+    runs at least :data:`MIN_PALATE_LENGTH_MM`."""
+    pts = np.asarray(points_mm, dtype=np.float64)
+    length = float(np.hypot(*np.diff(pts, axis=0).T).sum()) if len(pts) > 1 else 0.0
+    if length < MIN_PALATE_LENGTH_MM:
+        raise CassiInputError(f"the palate outline runs {length:.2f} mm over {len(pts)} point(s), "
+                              f"shorter than the {MIN_PALATE_LENGTH_MM:g} mm a face needs", path=path)
+
+
 def read_pal(path: str | os.PathLike) -> np.ndarray:
     """Palatal outline ``PAL.DAT``: float64 (P, 2) mm, front to back (thesis Figure 3.11)."""
-    return parse_outline(read_bytes(path), path=path, what="palate outline")
+    pts = parse_outline(read_bytes(path), path=path, what="palate outline")
+    check_palate_length(pts, path=path)
+    return pts
 
 
 def write_pal(path: str | os.PathLike, points_mm: np.ndarray) -> None:

@@ -118,7 +118,11 @@ def _line_of(text: str | None, key: str) -> int | None:
     """The line where ``key`` is set in a TOML/YAML text (for error messages)."""
     if not text:
         return None
-    pat = re.compile(rf"^\s*[\"']?{re.escape(key)}[\"']?\s*[=:]")
+    # a YAML key that is not text (1, true, null) is looked for as the file spells it
+    names = [str(key)] + (["null", "~"] if key is None else [])
+    alt = "|".join(re.escape(n) for n in names)
+    pat = re.compile(rf"^\s*[\"']?(?:{alt})[\"']?\s*[=:]",
+                     0 if isinstance(key, str) else re.IGNORECASE)
     for i, line in enumerate(text.splitlines(), 1):
         if pat.match(line):
             return i
@@ -152,7 +156,7 @@ def validate(raw: Mapping[str, Any], *, source: str | Path | None = None,
     values: dict[str, Any] = {}
     for key, value in raw.items():
         where = {"path": source, "line": _line_of(text, key)} if source else {}
-        if key not in FIELDS:
+        if not isinstance(key, str) or key not in FIELDS:
             raise CassiInputError(f"unknown setting {key!r}{_did_you_mean(key, FIELDS)}; valid "
                                   f"settings: {', '.join(FIELDS)}", **where)
         if value is None:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import collections
 import multiprocessing as mp
 import os
+import re
 import socket
 from dataclasses import dataclass
 from multiprocessing.connection import wait as mp_wait
@@ -346,7 +347,7 @@ def probe_address(address: str, timeout: float) -> None:
     if address in ("auto", "local"):
         return
     host, _, port = address.split("://", 1)[-1].rpartition(":")
-    if not host or not port.isdigit():
+    if not host or not re.fullmatch(r"[0-9]{1,5}", port):
         raise CassiInputError(f"--address {address!r}: expected host:port, ray://host:port "
                               f"or auto")
     try:

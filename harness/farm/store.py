@@ -29,7 +29,6 @@ at-least-once) idempotent.
 from __future__ import annotations
 
 import contextlib
-import errno
 import fcntl
 import hashlib
 import json
@@ -38,7 +37,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, Mapping
 
-from cassi.common.atomic import atomic_write_bytes, atomic_write_text, link_or_copy
+from cassi.common.atomic import atomic_write_bytes, atomic_write_text, link_or_copy, writable_dir
 from cassi.common.errors import CassiInputError
 
 LOCK_NAME = ".cassi-run.lock"
@@ -136,23 +135,12 @@ class OutputStore:
     # -- set-up -------------------------------------------------------------------------------
     def prepare(self) -> None:
         """Create the directory and prove it writable; a clear :class:`CassiInputError` if not."""
-        try:
-            self.root.mkdir(parents=True, exist_ok=True)
-            for sub in ("objects", "jobs", "logs"):
-                (self.root / sub).mkdir(exist_ok=True)
-            if self.cache is not None:
-                for sub in ("objects", "manifests"):
-                    (self.cache / sub).mkdir(parents=True, exist_ok=True)
-            probe = self.root / f".write-probe-{os.getpid()}"
-            probe.write_bytes(b"ok")
-            probe.unlink()
-        except OSError as err:
-            why = "no space left on the device" if err.errno == errno.ENOSPC else (
-                err.strerror or str(err))
-            raise CassiInputError(f"output directory is not writable: {why}",
-                                  path=self.root) from err
-        if not self.root.is_dir():
-            raise CassiInputError("output path is not a directory", path=self.root)
+        writable_dir(self.root)
+        for sub in ("objects", "jobs", "logs"):
+            writable_dir(self.root / sub)
+        if self.cache is not None:
+            for sub in ("objects", "manifests"):
+                writable_dir(self.cache / sub, "cache directory")
 
     @contextlib.contextmanager
     def lock(self) -> Iterator[None]:
