@@ -106,6 +106,19 @@ def atomic_tmp_path(path: str | os.PathLike) -> Path:
     return Path(tmp)
 
 
+@contextlib.contextmanager
+def replacing(path: str | os.PathLike) -> Iterator[Path]:
+    """A temporary path beside ``path`` for a writer that needs a file name; renamed onto
+    ``path`` when the block ends, removed when it raises (no ``.tmp`` file is left behind)."""
+    tmp = atomic_tmp_path(path)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
 def link_or_copy(src: str | os.PathLike, dest: str | os.PathLike) -> Path:
     """Put the file ``src`` at ``dest`` atomically: a hard link (no bytes copied, no disk used)
     where both lie on one file system, else a copy. Only for files nobody writes into again

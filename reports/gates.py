@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from cassi.common.atomic import atomic_tmp_path, atomic_write_text, writable_dir
+from cassi.common.atomic import atomic_write_text, replacing, writable_dir
 from cassi.common.errors import CassiInputError
 from cassi.harness.farm.store import sha256_file
 from cassi.reports.media import read_rgb8
@@ -122,9 +122,8 @@ def _write_gate_images(out: Path, stem: Path, rendered: np.ndarray, reference: n
     for name, img in images.items():
         dest = out / GATE_IMAGES / stem.parent / f"{stem.stem}.{name}.png"
         dest.parent.mkdir(parents=True, exist_ok=True)
-        tmp = atomic_tmp_path(dest)
-        iio.imwrite(tmp, np.ascontiguousarray(img[..., :3], np.uint8), extension=".png")
-        os.replace(tmp, dest)
+        with replacing(dest) as tmp:
+            iio.imwrite(tmp, np.ascontiguousarray(img[..., :3], np.uint8), extension=".png")
         written.append(dest.relative_to(out).as_posix())
     return written
 
@@ -496,13 +495,11 @@ def update_golden(run_dir: str | os.PathLike, golden_dir: str | os.PathLike) -> 
             continue
         dest = golden / golden_key(row)
         dest.parent.mkdir(parents=True, exist_ok=True)
-        tmp = atomic_tmp_path(dest)
-        shutil.copyfile(row["path"], tmp)
-        os.replace(tmp, dest)
+        with replacing(dest) as tmp:
+            shutil.copyfile(row["path"], tmp)
         n += 1
-    tmp = atomic_tmp_path(golden / "results.parquet")
-    run.results.to_parquet(tmp, index=False)
-    os.replace(tmp, golden / "results.parquet")
+    with replacing(golden / "results.parquet") as tmp:
+        run.results.to_parquet(tmp, index=False)
     scope = {k: run.meta.get(k) for k in ("tasks_resolved", "versions_resolved",
                                           "views_resolved", "preset")}
     atomic_write_text(golden / GOLDEN_MARK, json.dumps(

@@ -16,7 +16,7 @@ import imageio.v3 as iio
 import numpy as np
 import pandas as pd
 
-from cassi.common.atomic import atomic_tmp_path, link_or_copy
+from cassi.common.atomic import link_or_copy, replacing
 from cassi.harness.farm.store import sha256_file
 from cassi.renderer import animate, images
 from cassi.data.xrmb.files import NOMINAL_PERIOD_US
@@ -42,11 +42,10 @@ def read_rgb8(path) -> np.ndarray:
 def contact_sheet(paths: list[str], dest: Path, *, columns: int = 4) -> Path:
     """One PNG with the given renders in a grid (e.g. the four views at a check's frame)."""
     dest.parent.mkdir(parents=True, exist_ok=True)
-    tmp = atomic_tmp_path(dest)
     sheet = tile([read_rgb8(p) for p in paths], columns=columns, gap=4,
                  background=(255, 255, 255), border=False)
-    iio.imwrite(tmp, sheet, extension=".png")
-    os.replace(tmp, dest)
+    with replacing(dest) as tmp:
+        iio.imwrite(tmp, sheet, extension=".png")
     return dest
 
 

@@ -11,7 +11,7 @@ matplotlib.use("Agg")  # reports run headless (nightly jobs, CI)
 import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from cassi.common.atomic import atomic_tmp_path  # noqa: E402
+from cassi.common.atomic import replacing  # noqa: E402
 from cassi.harness.rubric import CHECKS, RATINGS  # noqa: E402
 
 #: One colour per rating, green (EXCELLENT) to red (UNACCEPTABLE).
@@ -19,10 +19,11 @@ RATING_COLOURS = ("#1a9850", "#66bd63", "#a6d96a", "#fee08b", "#fdae61", "#f46d4
 
 
 def _save(fig, path: Path) -> Path:
-    tmp = atomic_tmp_path(path)
-    fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png")
-    plt.close(fig)
-    os.replace(tmp, path)
+    try:
+        with replacing(path) as tmp:
+            fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png")
+    finally:
+        plt.close(fig)
     return path
 
 

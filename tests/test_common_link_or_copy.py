@@ -1,5 +1,6 @@
 """``link_or_copy``: a new name is a hard link made in one step, an existing one is replaced
-atomically, a missing folder is made, and a missing source is an error, not a new folder."""
+atomically, a missing folder is made, and a missing source is an error, not a new folder.
+``replacing``: a named writer's temporary file becomes the target, or vanishes if it fails."""
 from __future__ import annotations
 
 import os
@@ -32,3 +33,19 @@ def test_a_missing_source_is_an_error(tmp_path):
         link_or_copy(tmp_path / "none.bin", tmp_path / "b.bin")
     with pytest.raises(FileNotFoundError):
         link_or_copy(tmp_path / "none.bin", tmp_path / "new" / "b.bin")
+
+
+def test_replacing_renames_on_success_and_leaves_nothing_when_the_writer_fails(tmp_path):
+    from cassi.common.atomic import replacing
+    dest = tmp_path / "plot.png"
+    dest.write_bytes(b"old")
+    with replacing(dest) as tmp:
+        assert tmp.parent == tmp_path and tmp != dest
+        tmp.write_bytes(b"new")
+    assert dest.read_bytes() == b"new"
+    with pytest.raises(RuntimeError):
+        with replacing(dest) as tmp:
+            tmp.write_bytes(b"half")
+            raise RuntimeError("writer failed")
+    assert dest.read_bytes() == b"new"                       # the old file intact
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plot.png"]   # no .tmp left

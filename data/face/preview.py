@@ -7,13 +7,12 @@ winding stands out), except in the half view, which looks into the head and is t
 """
 from __future__ import annotations
 
-import os
 import sys
 from os import PathLike
 
 import numpy as np
 
-from cassi.common.atomic import atomic_tmp_path
+from cassi.common.atomic import replacing
 from cassi.data.face.model import build_face
 from cassi.data.face.topology import render_topology
 
@@ -97,14 +96,11 @@ def preview_png(face, path: str | PathLike, *, positions=None, dpi: int = 110,
         # the cut shows the inside of the head: shade it two-sided like the renderer
         _draw(ax, topo, pos, parts=parts, title=title, view=view, two_sided=topo.half)
     fig.tight_layout()
-    tmp = atomic_tmp_path(path)
     try:
-        fig.savefig(tmp, dpi=dpi, format="png")
-        os.replace(tmp, path)
+        with replacing(path) as tmp:
+            fig.savefig(tmp, dpi=dpi, format="png")
     finally:
         plt.close(fig)
-        if os.path.exists(tmp):
-            os.unlink(tmp)
 
 
 def main(argv=None) -> int:

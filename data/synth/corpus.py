@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cassi.common.atomic import atomic_tmp_path, atomic_write_text
+from cassi.common.atomic import atomic_write_text, replacing
 from cassi.common.errors import CassiInputError
 from cassi.data.synth.motion import PERIOD_S, Anatomy, add_noise, expand_phones, pellets, \
     segment_targets, smooth
@@ -374,13 +374,8 @@ def _write_task(path: Path, rec: TaskRecording) -> None:
     generation time): the corpus is complete, and durable, once ``corpus.json`` is written
     (fsynced) last; :func:`default_corpus` builds in a temporary directory renamed at the end.
     """
-    tmp = atomic_tmp_path(path)
-    try:
+    with replacing(path) as tmp:
         tmp.write_text(format_txy(rec), encoding="ascii")
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
 
 
 def make_subject(out_dir: Path, name: str, seed: int = DEFAULT_SEED,
