@@ -39,12 +39,11 @@ from cassi.data.corpus.disk import SUBJECT_FILES, Corpus, SubjectData, natural_k
 from cassi.common.errors import CassiInputError
 from cassi.data.xrmb.headmeasures import HeadMeasures
 from cassi.data.xrmb.textlines import decode_ascii, numbered_rows, parse_num, read_bytes
-from cassi.data.xrmb.files import PELLETS, TaskRecording
+from cassi.data.xrmb.files import MAX_PROTRUSION_TASK, PELLETS, TaskRecording
 
 log = logging.getLogger(__name__)
 
 MAX_FILES = 20
-MAX_PROTRUSION_TASK = 118
 MAXPROTRU_COLUMNS = ("REST_UL", "REST_LL", "MAX_UL", "MAX_LL", "MIN_UL", "MIN_LL")
 _UL, _LL, _MNI, _MNM = (PELLETS.index(p) for p in ("UL", "LL", "MNI", "MNM"))
 

@@ -42,7 +42,7 @@ from cassi.data.xrmb.textlines import (decode_ascii, numbered_rows, parse_int, p
                                   split_lines, tokens)
 
 __all__ = [
-    "PELLETS", "BAD_VALUE", "NOMINAL_PERIOD_US", "N_COLUMNS", "COLUMN_NAMES", "TaskRecording",
+    "PELLETS", "BAD_VALUE", "NOMINAL_PERIOD_US", "JAW_WAGGING_TASK", "MAX_PROTRUSION_TASK", "N_COLUMNS", "COLUMN_NAMES", "TaskRecording",
     "parse_task_name", "task_file_name", "parse_txy", "read_txy", "format_txy", "write_txy",
     "parse_outline", "format_outline", "read_pal", "write_pal", "check_palate_length",
     "MIN_PALATE_LENGTH_MM", "read_pha", "write_pha",
@@ -54,6 +54,10 @@ __all__ = [
 PELLETS = ("UL", "LL", "T1", "T2", "T3", "T4", "MNI", "MNM")
 BAD_VALUE = 1000000
 NOMINAL_PERIOD_US = 6866
+#: The two oral-motor tasks the thesis evaluates on their own (section 5.3): jaw wagging (its
+#: Table 5.9) and maximum lip protrusion (Table 5.8, and the file 2.x's rounding is read from).
+JAW_WAGGING_TASK = 106
+MAX_PROTRUSION_TASK = 118
 N_COLUMNS = 1 + 2 * len(PELLETS)
 COLUMN_NAMES = ("time",) + tuple(f"{p}{c}" for p in PELLETS for c in "xy")
 

@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from cassi.data.xrmb.files import JAW_WAGGING_TASK, MAX_PROTRUSION_TASK
 from cassi.harness.evaluation.config import DEFAULT_EXTREMES
 from cassi.harness.farm.jobs import select_frames
 from cassi.harness.rubric import checks_for
@@ -34,7 +35,7 @@ from cassi.harness.rubric import checks_for
 #: rendered at that stride (views a run leaves out are not rendered).
 VIDEO_VIEWS = ("front", "side", "half", "top")
 #: Tasks whose versions are compared side by side (front view) in the nightly report.
-COMPARED_TASKS = (106, 118)
+COMPARED_TASKS = (JAW_WAGGING_TASK, MAX_PROTRUSION_TASK)
 COMPARISON_VIEW = "front"
 
 
