@@ -27,11 +27,11 @@ import pandas as pd
 
 from cassi.common.atomic import atomic_write_bytes, atomic_write_text, link_or_copy
 from cassi.data.corpus.disk import Corpus
+from cassi.data.xrmb.files import PELLETS
 from cassi.harness.evaluation.frames import VIEWER_STRIDE
 from cassi.harness.evaluation.stages import read_masks_blob
 from cassi.harness.evaluation.viewerdata import read_viewer_blob
 from cassi.harness.rubric import CHECKS
-from cassi.harness.rubric.fidelity import PELLETS
 from cassi.harness.rubric.image import FrameMasks, mouth_opening
 from cassi.harness.rubric.tables import file_verdicts
 from cassi.renderer.gltf import AXES

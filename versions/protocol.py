@@ -29,6 +29,7 @@ import pandas as pd
 from cassi.common.errors import CassiInputError
 from cassi.versions.mapping import XrmbToParke
 from cassi.data.face import numbering
+from cassi.data.xrmb.files import PELLETS
 
 if TYPE_CHECKING:  # only for annotations: the data layer owns these types
     from cassi.data.face.model import FaceModel
@@ -48,7 +49,7 @@ __all__ = [
 ]
 
 #: Column of each pellet in ``TaskRecording.xy_mm`` (order of ``cassi.data.xrmb.files.PELLETS``).
-PELLET_INDEX = {"UL": 0, "LL": 1, "T1": 2, "T2": 3, "T3": 4, "T4": 5, "MNI": 6, "MNM": 7}
+PELLET_INDEX = {name: i for i, name in enumerate(PELLETS)}
 
 
 @dataclass(frozen=True, eq=False)

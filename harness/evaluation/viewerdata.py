@@ -17,7 +17,7 @@ job (subject, task file, version), a deterministic ``.npz``:
   sign[w]);
 - ``measured``, ``model`` float32 (K, 8, 2): the recorded pellets (NaN where not valid) and the
   model's pellet sites (:func:`cassi.harness.rubric.fidelity.virtual_pellets`), XRMB frame, mm,
-  pellets in :data:`cassi.harness.rubric.fidelity.PELLETS` order.
+  pellets in :data:`cassi.data.xrmb.files.PELLETS` order.
 
 The large arrays (:data:`DEFLATED`: ``dq``, ``triangles``, ``measured``, ``model``) are
 stored as zlib streams of their little-endian bytes (``<name>_z`` uint8, ``<name>_shape``), made
@@ -34,8 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from cassi.data.face.topology import render_topology
+from cassi.data.xrmb.files import PELLETS
 from cassi.harness.farm.jobs import npz_bytes
-from cassi.harness.rubric.fidelity import PELLETS, virtual_pellets
+from cassi.harness.rubric.fidelity import virtual_pellets
 from cassi.versions.mapping import XrmbToParke
 
 __all__ = ["VIEWER_FORMAT", "STEP_UNITS", "DEFLATED", "ViewerData", "viewer_blob",

@@ -20,6 +20,7 @@ import numpy as np
 
 from cassi.data.face import numbering as N
 from cassi.data.face.model import jaw_pellet_sites
+from cassi.data.xrmb.files import PELLETS
 from cassi.common.errors import CassiInputError
 
 from cassi.harness.rubric.frames import Frames
@@ -31,8 +32,6 @@ __all__ = ["ARTICULATORS", "TRACT_VARIABLES", "FidelityContext", "virtual_pellet
            "m_lip_aperture_range", "m_lip_protrusion", "m_jaw_opening", "m_jaw_opening_range",
            "m_lip_aperture_reach", "m_jaw_opening_reach"]
 
-#: Pellets in the order of ``cassi.data.xrmb.files.PELLETS``.
-PELLETS = ("UL", "LL", "T1", "T2", "T3", "T4", "MNI", "MNM")
 #: Which pellets make each articulator of Table F.
 ARTICULATORS = {"lips": ("UL", "LL"), "tongue": ("T1", "T2", "T3", "T4"), "jaw": ("MNI", "MNM")}
 #: Tract variables (XRMB frame, mm): name -> description.
