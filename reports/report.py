@@ -22,6 +22,7 @@ from cassi.reports.agree import agreement, write_agreement
 from cassi.reports import media, plots
 from cassi.reports.runio import Run, load_run, order_versions
 from cassi.harness.evaluation.frames import COMPARISON_VIEW, VIDEO_VIEWS
+from cassi.harness.evaluation.provenance import rubric_digest
 from cassi.harness.evaluation.stages import MASKS_OUTPUT
 from cassi.harness.rubric import (AGGREGATION_RULES, CHECKS, RATINGS, component_ratings,
                                   file_verdicts, rating_counts, table_c_rule, table_title,
@@ -493,6 +494,30 @@ def _meta_items(run: Run) -> list[tuple[str, str]]:
     return [(k, str(run.meta[k])) for k in keys if run.meta.get(k) not in (None, "")]
 
 
+def _rescored(run: Run, cr: pd.DataFrame) -> list[str]:
+    """Why the tables below may not be what the run itself concluded: the rubric registry
+    changed since the run (its check values and negatives come from the old one, their
+    aggregation from today's), or the run's ratings file differs from today's aggregation of
+    its results. Empty when the run and today agree."""
+    notes = []
+    then = (run.meta.get("provenance") or {}).get("rubric_digest")
+    if then and then != rubric_digest():
+        notes.append("the rubric registry (thresholds, negatives, windows) changed since this run: "
+                     "its values and negatives are the run's, the aggregation and texts today's; "
+                     "rerun `cassi run` into the same --out to rescore (only the affected jobs "
+                     "run again)")
+    if run.ratings is not None and len(run.ratings):
+        key = ["version", "table", "subject", "component"]
+        both = run.ratings.merge(cr, on=key, how="outer", suffixes=("_run", "_now"), indicator=True)
+        differ = int(((both["_merge"] != "both")
+                      | (both["negatives_run"] != both["negatives_now"])
+                      | (both["rating_run"] != both["rating_now"])).sum())
+        if differ:
+            notes.append(f"{differ} cell(s) of the run's ratings.parquet differ from today's "
+                         "aggregation of its results (rubric.tables): the tables below are today's")
+    return notes
+
+
 def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
                 encoding: "_Encoding") -> str:
     """Subject pages, tables and plots, then index.html's text (the videos awaited last)."""
@@ -520,7 +545,7 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
         summaries=_summaries(run), paired=_paired(run, out), agreement=agree,
         comparison=_comparison(run, previous, out),
         tables=_table_sections(run, cr, out, _first_faults(run, fv, viewers)),
-        criterion=_criterion(run, out),
+        criterion=_criterion(run, out), rescored=_rescored(run, cr),
         videos=encoding.videos(),
         rules=AGGREGATION_RULES,
         subjects=subject_links, trend=trend, gate=gate,

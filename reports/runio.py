@@ -28,7 +28,9 @@ class Run:
     results : DataFrame
         The long results table (cassi.harness.farm.results.COLUMNS).
     ratings : DataFrame
-        Per task file, version, table and component: negatives and rating.
+        The run's ``ratings.parquet`` as the run aggregated it (:func:`cassi.harness.rubric.
+        ratings_table`: per version, table, subject and component, negatives and rating). The
+        report aggregates ``results`` again with today's rubric and says where the two differ.
     meta : dict
         The run's ``run.json`` (resolved config, package version, git revision, ...).
     renders : DataFrame

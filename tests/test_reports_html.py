@@ -111,3 +111,32 @@ def test_versions_compared_states_the_paired_comparisons(tmp_path):
     same = table[(table["a"] == "cassi-2.1") & (table["b"] == "cassi-1.0")]
     assert set(same["measure"]) == {"tongue_through_teeth", "lower_lip_below_teeth"}
     assert (same["ties"] == 4).all() and (same["p"] == 1.0).all()
+
+
+def test_a_run_scored_under_another_rubric_says_its_tables_are_rescored(tmp_path):
+    import json
+    from cassi.harness.evaluation.provenance import rubric_digest
+    from cassi.harness.farm.tableset import write_table_set
+    from reports_fixtures import ratings
+    run = _run(tmp_path, "run", {("cassi-1.0", "JW11", "lip_gap_start"): 2})
+    meta = json.loads((run / "run.json").read_text())
+    res = pd.read_parquet(run / "results.parquet")
+    renders = pd.read_parquet(run / "renders.parquet")
+    summary = json.loads((run / "summary.json").read_text())
+
+    def rewrite(provenance, rated):  # run.json first, then its tables, as a run writes them
+        (run / "run.json").write_text(json.dumps({**meta, "provenance": provenance}))
+        write_table_set(run, {"results": res, "ratings": rated, "renders": renders}, summary)
+
+    rewrite({"rubric_digest": rubric_digest()}, ratings(res))
+    assert "Rescored with today" not in write_report(run, tmp_path / "r1").read_text()
+    # the registry changed since the run
+    rewrite({"rubric_digest": "0" * 64}, ratings(res))
+    html = write_report(run, tmp_path / "r2").read_text()
+    assert "Rescored with today" in html and "rubric registry" in html
+    # the run's own ratings file disagrees with today's aggregation of its results
+    old = ratings(res)
+    old.loc[0, "negatives"] += 1
+    rewrite({}, old)
+    html = write_report(run, tmp_path / "r3").read_text()
+    assert "1 cell(s) of the run" in html and "rubric registry" not in html
