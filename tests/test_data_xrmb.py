@@ -186,6 +186,9 @@ def test_textgrid_tiers_whose_entries_are_not_intervals(tmp_path):
     from cassi.data.xrmb.alignment import parse_alignment
     tier = '{{"name":"phone","class":"IntervalTier","xmin":0,"xmax":1,"entries":{}}}'
     word = '{"name":"word","class":"IntervalTier","xmin":0,"xmax":1,"entries":[]}'
+    bad_span = '{"xmin":0,"xmax":1e400,"tiers":[' + tier.format("[]") + "," + word + "]}"
+    with pytest.raises(CassiInputError, match="not a finite span"):
+        parse_alignment(bad_span, path="tp003.TextGrid")
     for entries, reason in (("5", "entries are not a list"), ("[5]", "not an interval tier")):
         text = '{"xmin":0,"xmax":1,"tiers":[' + tier.format(entries) + "," + word + "]}"
         with pytest.raises(CassiInputError, match=reason) as info:

@@ -100,6 +100,9 @@ def parse_alignment(data: bytes | str, *, path: str | os.PathLike | None = None)
     except Exception as err:  # noqa: BLE001 - praatio raises many kinds on malformed text
         raise CassiInputError(f"not a readable TextGrid ({type(err).__name__}: "
                               f"{str(err)[:120]})", path=path) from None
+    if not (math.isfinite(xmin) and math.isfinite(xmax)) or xmax < xmin:
+        raise CassiInputError(f"the grid's time range {xmin}..{xmax} s is not a finite span",
+                              path=path)
 
     def pick(names):
         for n in names:
