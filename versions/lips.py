@@ -96,9 +96,9 @@ LIP_VERTICES: tuple[int, ...] = (
 )
 _COL = {v: i for i, v in enumerate(LIP_VERTICES)}
 #: Vertices around the lips and the lip vertex each follows (section 4.2.1, last paragraph).
-ABOVE_LIP = ((71, 67), (72, 68), (73, 69))
-BELOW_LIP = ((41, 49), (42, 50), (43, 51))
-V_CHEEK = 44
+ABOVE_LIP = tuple(zip(N.ABOVE_LIP, N.UPPER_OUTER))     # (71, 67), (72, 68), (73, 69)
+BELOW_LIP = tuple(zip(N.BELOW_LIP, N.LOWER_OUTER))     # (41, 49), (42, 50), (43, 51)
+V_CHEEK = N.CHEEK_BY_CORNER                            # 44
 
 
 @dataclass(frozen=True)
