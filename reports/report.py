@@ -506,8 +506,9 @@ def _rescored(run: Run, cr: pd.DataFrame) -> list[str]:
                      "its values and negatives are the run's, the aggregation and texts today's; "
                      "rerun `cassi run` into the same --out to rescore (only the affected jobs "
                      "run again)")
-    if run.ratings is not None and len(run.ratings):
-        key = ["version", "table", "subject", "component"]
+    key = ["version", "table", "subject", "component"]
+    if run.ratings is not None and len(run.ratings) and {*key, "negatives", "rating"} <= set(
+            run.ratings.columns):
         both = run.ratings.merge(cr, on=key, how="outer", suffixes=("_run", "_now"), indicator=True)
         differ = int(((both["_merge"] != "both")
                       | (both["negatives_run"] != both["negatives_now"])

@@ -29,3 +29,16 @@ def test_preview_of_a_moved_face(tmp_path):
     moved[:, 2] += 5.0
     preview_png(face, tmp_path / "moved.png", positions=moved, dpi=40)
     assert (tmp_path / "moved.png").stat().st_size > 5_000
+
+
+def test_the_face_cli_refuses_bad_inputs_before_making_anything(tmp_path, capsys):
+    out = tmp_path / "face"
+    for bad in ("-5", "nan"):
+        assert main([str(out), "--jaw-length", bad]) == 2
+        assert "jaw length must be a positive number" in capsys.readouterr().err
+    assert main([str(out), "--palate", str(tmp_path / "missing.dat")]) == 2
+    assert not out.exists()                      # nothing made for a bad input
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    assert main([str(afile)]) == 2
+    assert "exists and is not a directory" in capsys.readouterr().err

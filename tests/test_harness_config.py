@@ -56,7 +56,7 @@ def test_bad_settings_name_file_and_line(tmp_path, text, match, line):
         assert err.value.line == line
 
 
-@pytest.mark.parametrize("key", ["1", "true", "null"])
+@pytest.mark.parametrize("key", ["1", "true", "null", "yes"])
 def test_a_yaml_key_that_is_not_text_is_an_unknown_setting(tmp_path, key):
     path = tmp_path / "run.yaml"
     path.write_text(f"out: o\n{key}: x\n")

@@ -140,3 +140,6 @@ def test_a_run_scored_under_another_rubric_says_its_tables_are_rescored(tmp_path
     rewrite({}, old)
     html = write_report(run, tmp_path / "r3").read_text()
     assert "1 cell(s) of the run" in html and "rubric registry" not in html
+    # a pipeline's own ratings table (no rubric columns) is not compared, and breaks nothing
+    rewrite({}, pd.DataFrame({"subject": ["JW11"], "score": [0.5]}))
+    assert "Rescored with today" not in write_report(run, tmp_path / "r4").read_text()

@@ -25,9 +25,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--preview", help="also write a PNG preview here")
     args = ap.parse_args(argv)
     try:
-        writable_dir(args.out_dir)
         palate = read_pal(args.palate) if args.palate else None
         face = subject_face(palate_mm=palate, jaw_length_mm=args.jaw_length)
+        writable_dir(args.out_dir)  # only once the inputs are good: nothing made for a bad one
         paths = face.write(args.out_dir)
         if args.preview:
             preview_png(face, args.preview)

@@ -97,8 +97,13 @@ def subject_face(*, palate_mm: np.ndarray | None = None, jaw_length_mm: float | 
     head_measures : optional
         Kept on the face for the versions' chin and jaw adjustment.
     """
-    if jaw_length_mm is not None and not (np.isfinite(jaw_length_mm) and jaw_length_mm > 0):
-        raise CassiInputError(f"jaw length must be a positive number of mm, not {jaw_length_mm!r}")
+    if jaw_length_mm is not None:
+        try:
+            ok = bool(np.isfinite(jaw_length_mm) and jaw_length_mm > 0)
+        except TypeError:
+            ok = False
+        if not ok:
+            raise CassiInputError(f"jaw length must be a positive number of mm, not {jaw_length_mm!r}")
     if palate_mm is None:
         return build_face(head_measures=head_measures)
     pal = np.asarray(palate_mm, dtype=np.float64)

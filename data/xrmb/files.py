@@ -413,7 +413,7 @@ def check_palate_length(points_mm: np.ndarray, *, path: str | os.PathLike | None
     runs at least :data:`MIN_PALATE_LENGTH_MM`."""
     pts = np.asarray(points_mm, dtype=np.float64)
     length = float(np.hypot(*np.diff(pts, axis=0).T).sum()) if len(pts) > 1 else 0.0
-    if length < MIN_PALATE_LENGTH_MM:
+    if not length >= MIN_PALATE_LENGTH_MM:  # NaN too
         raise CassiInputError(f"the palate outline runs {length:.2f} mm over {len(pts)} point(s), "
                               f"shorter than the {MIN_PALATE_LENGTH_MM:g} mm a face needs", path=path)
 

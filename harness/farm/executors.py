@@ -347,7 +347,7 @@ def probe_address(address: str, timeout: float) -> None:
     if address in ("auto", "local"):
         return
     host, _, port = address.split("://", 1)[-1].rpartition(":")
-    if not host or not re.fullmatch(r"[0-9]{1,5}", port):
+    if not host or not re.fullmatch(r"[0-9]{1,5}", port) or not 0 < int(port) < 65536:
         raise CassiInputError(f"--address {address!r}: expected host:port, ray://host:port "
                               f"or auto")
     try:
