@@ -258,6 +258,16 @@ def test_unwritable_out_dir_is_a_clear_error(tmp_path):
         OutputStore(blocker / "out").prepare()
 
 
+def test_an_unusable_cache_is_named_as_the_cache(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a directory")
+    with pytest.raises(CassiInputError, match="cache directory") as info:
+        OutputStore(tmp_path / "out", cache=blocker / "cache").prepare()
+    assert str(blocker) in str(info.value.path)
+    with pytest.raises(CassiInputError, match="output directory exists and is not a directory"):
+        OutputStore(blocker).prepare()
+
+
 def test_results_normalize_folds_extra_columns_into_detail():
     df = R.normalize([{"check": "x", "value": 1, "where": "UL"}], subject="S", task=1, rep=1)
     assert df.loc[0, "detail"] == "where=UL"
