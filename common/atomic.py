@@ -153,15 +153,18 @@ def link_or_copy(src: str | os.PathLike, dest: str | os.PathLike) -> Path:
     return dest
 
 
-
-def writable_dir(path: str | os.PathLike, what: str = "output directory") -> Path:
-    """Create ``path`` (with its parents) and prove it a writable directory before any work is
-    done; otherwise a :class:`CassiInputError` naming it and why (the CLI's exit 2)."""
+def writable_dir(path: str | os.PathLike, what: str = "output directory",
+                 subdirs: tuple[str, ...] = ()) -> Path:
+    """Create ``path`` (with its parents and ``subdirs``) and prove it a writable directory
+    before any work is done; otherwise a :class:`CassiInputError` naming it and why (the CLI's
+    exit 2)."""
     root = Path(path)
     if root.exists() and not root.is_dir():
         raise CassiInputError(f"{what} exists and is not a directory", path=root)
     try:
         root.mkdir(parents=True, exist_ok=True)
+        for sub in subdirs:
+            (root / sub).mkdir(exist_ok=True)
         probe = root / f".write-probe-{os.getpid()}"
         probe.write_bytes(b"ok")
         probe.unlink()

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cassi.common.atomic import atomic_tmp_path, atomic_write_bytes, atomic_write_text
+from cassi.common.atomic import atomic_write_bytes, atomic_write_text, replacing
 from cassi.common.errors import CassiInputError
 
 __all__ = ["srgb_encode", "srgb_decode", "to_srgb8", "png_bytes", "write_exr", "write_png",
@@ -69,8 +69,7 @@ def _write(path: Path, pixels: np.ndarray, spec) -> None:
     import OpenImageIO as oiio
 
     path = Path(path)
-    tmp = atomic_tmp_path(path)
-    try:
+    with replacing(path) as tmp:
         out = oiio.ImageOutput.create(str(tmp))
         if out is None:
             raise OSError(f"OpenImageIO cannot write {path.suffix} files: {oiio.geterror()}")
@@ -81,10 +80,6 @@ def _write(path: Path, pixels: np.ndarray, spec) -> None:
         if not ok:
             raise OSError(f"cannot write {path}: {out.geterror()}")
         os.chmod(tmp, FILE_MODE)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
 
 
 def _check_rgb(rgb: np.ndarray) -> np.ndarray:

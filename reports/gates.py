@@ -121,7 +121,6 @@ def _write_gate_images(out: Path, stem: Path, rendered: np.ndarray, reference: n
     written = []
     for name, img in images.items():
         dest = out / GATE_IMAGES / stem.parent / f"{stem.stem}.{name}.png"
-        dest.parent.mkdir(parents=True, exist_ok=True)
         with replacing(dest) as tmp:
             iio.imwrite(tmp, np.ascontiguousarray(img[..., :3], np.uint8), extension=".png")
         written.append(dest.relative_to(out).as_posix())
@@ -494,7 +493,6 @@ def update_golden(run_dir: str | os.PathLike, golden_dir: str | os.PathLike) -> 
         if not str(row["path"]).endswith(".png"):
             continue
         dest = golden / golden_key(row)
-        dest.parent.mkdir(parents=True, exist_ok=True)
         with replacing(dest) as tmp:
             shutil.copyfile(row["path"], tmp)
         n += 1

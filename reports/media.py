@@ -41,7 +41,6 @@ def read_rgb8(path) -> np.ndarray:
 
 def contact_sheet(paths: list[str], dest: Path, *, columns: int = 4) -> Path:
     """One PNG with the given renders in a grid (e.g. the four views at a check's frame)."""
-    dest.parent.mkdir(parents=True, exist_ok=True)
     sheet = tile([read_rgb8(p) for p in paths], columns=columns, gap=4,
                  background=(255, 255, 255), border=False)
     with replacing(dest) as tmp:

@@ -42,7 +42,8 @@ from cassi.data.xrmb.textlines import (decode_ascii, numbered_rows, parse_int, p
                                   split_lines, tokens)
 
 __all__ = [
-    "PELLETS", "BAD_VALUE", "NOMINAL_PERIOD_US", "JAW_WAGGING_TASK", "MAX_PROTRUSION_TASK", "N_COLUMNS", "COLUMN_NAMES", "TaskRecording",
+    "PELLETS", "BAD_VALUE", "NOMINAL_PERIOD_US", "JAW_WAGGING_TASK", "MAX_PROTRUSION_TASK",
+    "N_COLUMNS", "COLUMN_NAMES", "TaskRecording",
     "parse_task_name", "task_file_name", "parse_txy", "read_txy", "format_txy", "write_txy",
     "parse_outline", "format_outline", "read_pal", "write_pal", "check_palate_length",
     "MIN_PALATE_LENGTH_MM", "read_pha", "write_pha",

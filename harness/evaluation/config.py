@@ -119,8 +119,13 @@ def _line_of(text: str | None, key: str) -> int | None:
     if not text:
         return None
     # a YAML key that is not text (1, true, null) is looked for as the file spells it
-    spellings = {None: ["null", "~"], True: ["yes", "on", "y"], False: ["no", "off", "n"]}
-    names = [str(key)] + (spellings.get(key, []) if key is None or isinstance(key, bool) else [])
+    names = [str(key)]
+    if key is None:
+        names += ["null", "~"]
+    elif key is True:
+        names += ["yes", "on", "y"]
+    elif key is False:
+        names += ["no", "off", "n"]
     alt = "|".join(re.escape(n) for n in names)
     pat = re.compile(rf"^\s*[\"']?(?:{alt})[\"']?\s*[=:]",
                      0 if isinstance(key, str) else re.IGNORECASE)

@@ -135,12 +135,9 @@ class OutputStore:
     # -- set-up -------------------------------------------------------------------------------
     def prepare(self) -> None:
         """Create the directory and prove it writable; a clear :class:`CassiInputError` if not."""
-        writable_dir(self.root)
-        for sub in ("objects", "jobs", "logs"):
-            writable_dir(self.root / sub)
+        writable_dir(self.root, subdirs=("objects", "jobs", "logs"))
         if self.cache is not None:
-            for sub in ("objects", "manifests"):
-                writable_dir(self.cache / sub, "cache directory")
+            writable_dir(self.cache, "cache directory", subdirs=("objects", "manifests"))
 
     @contextlib.contextmanager
     def lock(self) -> Iterator[None]:

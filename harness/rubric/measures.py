@@ -379,7 +379,6 @@ def m_jaw_large(ctx):
                              "side-view area of the lower face (hull of the jaw and 226)")
 
 
-
 def m_no_rounding(ctx):
     f = ctx.max_protrusion
     r = G.lip_rounding_at(ctx.frame(0), ctx.frame(f), ctx.parts)
