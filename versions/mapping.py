@@ -33,6 +33,18 @@ def model_jaw_length(vertices: np.ndarray) -> float:
     return jaw_length_units(vertices)
 
 
+def _jaw_length_d(jaw_length_mm) -> float:
+    """The subject's jaw length d (MNI-MNM, mm) as a float; :class:`CassiInputError` unless it
+    is a positive number."""
+    try:
+        d = float(jaw_length_mm)
+    except (TypeError, ValueError):
+        d = float("nan")
+    if not np.isfinite(d) or d <= 0:
+        raise CassiInputError(f"jaw length must be a positive number of mm, got {jaw_length_mm!r}")
+    return d
+
+
 @dataclass(frozen=True)
 class XrmbToParke:
     """The affine map XRMB (x, y) mm -> Parke (x, z) units.
@@ -51,9 +63,7 @@ class XrmbToParke:
     @classmethod
     def from_face(cls, vertices: np.ndarray, jaw_length_mm: float) -> "XrmbToParke":
         """Build the map from the model's vertices (V, 3) and the subject's jaw length d (mm)."""
-        d = float(jaw_length_mm)
-        if not np.isfinite(d) or d <= 0:
-            raise CassiInputError(f"jaw length must be a positive number of mm, got {jaw_length_mm!r}")
+        d = _jaw_length_d(jaw_length_mm)
         v = np.asarray(vertices, dtype=np.float64)
         p = model_jaw_length(v)
         if not np.isfinite(p) or p <= 0:
@@ -98,12 +108,7 @@ def subject_face(*, palate_mm: np.ndarray | None = None, jaw_length_mm: float | 
         Kept on the face for the versions' chin and jaw adjustment.
     """
     if jaw_length_mm is not None:
-        try:
-            ok = bool(np.isfinite(jaw_length_mm) and jaw_length_mm > 0)
-        except TypeError:
-            ok = False
-        if not ok:
-            raise CassiInputError(f"jaw length must be a positive number of mm, not {jaw_length_mm!r}")
+        _jaw_length_d(jaw_length_mm)  # refused even where no palate needs it
     if palate_mm is None:
         return build_face(head_measures=head_measures)
     pal = np.asarray(palate_mm, dtype=np.float64)
