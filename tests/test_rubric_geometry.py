@@ -578,3 +578,18 @@ def test_a_flat_topped_hexagon_is_angular_though_it_fills_its_box():
     assert r.loc["lip_shape_triangular", "value"] > np.pi / 4
     assert r.loc["lip_outline_angular", "negatives"] == 1
     assert r.loc["lip_outline_angular", "value"] < 125.0
+
+
+def test_front_teeth_are_the_incisors_and_canines():
+    """The registry's FRONT_TEETH_SHARE / FRONT_TEETH_MIN_NX keep, on the model's own sets,
+    triangles of the incisors and canines (teeth 0-2 of each set) and nothing behind the first
+    premolars: the teeth a line along x meets from the front."""
+    from cassi.data.face import numbering as N
+    from cassi.data.face.model import build_face
+    face = build_face()
+    parts = G.mouth_parts(face)
+    for tris, tooth in ((parts.upper_teeth_tris, N.upper_tooth), (parts.lower_teeth_tris, N.lower_tooth)):
+        kept = set(G.front_triangles(face.vertices, tris).ravel() + 1)
+        owner = {n: k for k in range(N.TEETH_PER_SET) for n in tooth(k)}
+        teeth = {owner[n] for n in kept if n in owner}
+        assert {0, 1, 2} <= teeth and max(teeth) <= 3, teeth

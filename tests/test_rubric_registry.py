@@ -122,6 +122,12 @@ def test_thresholds_live_only_in_the_registry():
     # the image side reads its windows from the registry, not from literals of its own
     image = Path(R.__file__).with_name("image.py").read_text()
     assert ">= 5 " not in image and "0.7 *" not in image
+    # ... and so do the depth and front-teeth windows (percentiles, step factors, shares)
+    for module in ("image.py", "geometry.py"):
+        src = re.sub(r'""".*?"""', "", Path(R.__file__).with_name(module).read_text(), flags=re.S)
+        assert not re.search(r"percentile\([^()]*,\s*\d", src), module
+        assert not re.search(r"\b(?!0\.5 )\d+\.\d+ \* ", src), module  # 0.5: midpoints
+        assert not re.search(r"(share|nx)\w*: float = \d", src), module
 
 
 def test_registry_table_lists_every_check_once():

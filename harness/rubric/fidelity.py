@@ -25,7 +25,7 @@ from cassi.common.errors import CassiInputError
 
 from cassi.harness.rubric.frames import Frames
 from cassi.harness.rubric.model import Measurement
-from cassi.harness.rubric.registry import FIDELITY_MIN_RANGE_MM
+from cassi.harness.rubric.registry import FIDELITY_MIN_RANGE_MM, RANGE_PERCENTILES
 
 __all__ = ["ARTICULATORS", "TRACT_VARIABLES", "FidelityContext", "virtual_pellets",
            "tract_variables", "traces", "m_lips_error", "m_tongue_error", "m_jaw_error", "m_lip_aperture",
@@ -158,7 +158,11 @@ def _both(ctx: FidelityContext, name: str) -> tuple[np.ndarray, np.ndarray, np.n
 
 
 def _spread(x: np.ndarray) -> float:
-    return float(np.percentile(x, 95) - np.percentile(x, 5)) if x.size else 0.0
+    """The range of ``x`` (``RANGE_PERCENTILES``), 0 when empty."""
+    if not x.size:
+        return 0.0
+    lo, hi = np.percentile(x, RANGE_PERCENTILES)
+    return float(hi - lo)
 
 
 def tract_correlation(ctx: FidelityContext, name: str) -> Measurement:

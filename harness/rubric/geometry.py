@@ -24,6 +24,8 @@ from cassi.data.face.build import MATERIAL_NAMES
 from cassi.data.face import numbering as N
 from cassi.versions.mapping import XrmbToParke
 
+from cassi.harness.rubric.registry import FRONT_TEETH_MIN_NX, FRONT_TEETH_SHARE
+
 __all__ = [
     "MouthParts", "mouth_parts", "mm_per_unit", "surface_hits", "front_triangles",
     "tongue_teeth_penetration", "tongue_palate_penetration", "lip_teeth_penetration",
@@ -298,14 +300,15 @@ def surface_hits(points: np.ndarray, tri_pos: np.ndarray, *, axis: int = 0,
     return lo, hi
 
 
-def front_triangles(rest: np.ndarray, tris: np.ndarray, *, front_share: float = 0.35,
-                    min_nx: float = 0.5) -> np.ndarray:
+def front_triangles(rest: np.ndarray, tris: np.ndarray, *, front_share: float = FRONT_TEETH_SHARE,
+                    min_nx: float = FRONT_TEETH_MIN_NX) -> np.ndarray:
     """The triangles of a teeth set that face forward or backward at the front of the arch.
 
     The thesis judged the tongue poking "through the upper or the lower front teeth" from the
     front view; a line along x through a point only meets the front teeth sensibly (the side
     teeth run along x). Kept: triangles whose centroid lies in the front ``front_share`` of the
-    set's x range and whose unit normal has ``|n_x| >= min_nx``.
+    set's x range and whose unit normal has ``|n_x| >= min_nx`` (the registry's
+    ``FRONT_TEETH_SHARE`` and ``FRONT_TEETH_MIN_NX``, with their reasons).
 
     Parameters
     ----------

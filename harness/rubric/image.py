@@ -24,8 +24,10 @@ from scipy import ndimage
 from skimage import measure
 
 from cassi.harness.rubric.model import Measurement
-from cassi.harness.rubric.registry import (CENTERING_OPEN_SHARE, LOWER_TEETH_MIN_PIXELS, OPEN_MIN_HEIGHT,
-                       OPEN_MIN_PIXELS, TEETH_MIN_PIXELS, TONGUE_MIN_PIXELS, WIDE_OPEN_SHARE)
+from cassi.harness.rubric.registry import (CENTERING_OPEN_SHARE, INCISAL_STEP_FACTOR, LOWER_TEETH_MIN_PIXELS,
+                                           OPEN_MIN_HEIGHT, OPEN_MIN_PIXELS, TEETH_DEPTH_MARGIN_SHARE,
+                                           TEETH_FRONT_DEPTH_PERCENTILE, TEETH_MIN_PIXELS, TONGUE_MIN_PIXELS,
+                                           WIDE_OPEN_SHARE)
 
 __all__ = ["FrameMasks", "FrameStats", "ImageContext", "depth_read", "mouth_opening", "teeth_split",
            "opening_extent",
@@ -143,7 +145,7 @@ def _depth_cut(comp: np.ndarray, depth: np.ndarray) -> int | None:
     """The incisal line of touching teeth: the row of the largest depth step down each central
     column of the region (the upper incisors stand in front of the lower ones, so the depth
     jumps where one set gives way to the other), median over the columns; None if no column
-    shows a clear step (more than three times the column's typical step)."""
+    shows a clear step (more than ``INCISAL_STEP_FACTOR`` times the column's typical step)."""
     cols = np.flatnonzero(comp.any(axis=0))
     q = len(cols) // 4
     central = cols[q:len(cols) - q] if len(cols) - 2 * q >= 1 else cols
@@ -158,7 +160,7 @@ def _depth_cut(comp: np.ndarray, depth: np.ndarray) -> int | None:
         steps = np.abs(np.diff(d))
         k = int(np.argmax(steps))
         typical = float(np.median(steps))
-        if steps[k] > 3.0 * typical and steps[k] > 1e-6:
+        if steps[k] > INCISAL_STEP_FACTOR * typical and steps[k] > 1e-6:
             cuts.append(int(rr[k + 1]))
     return int(np.median(cuts)) if cuts else None
 
@@ -336,9 +338,10 @@ def m_tongue_in_front(ctx: ImageContext) -> Measurement:
 def _tongue_in_front(f: FrameMasks) -> int:
     """Tongue pixels of one frame nearer the camera than the front teeth around them.
 
-    The front teeth's depth is the 10th percentile of the teeth pixels' depth; a tongue pixel is
-    in front of the teeth when it is nearer than that by more than a tenth of the teeth pixels'
-    depth spread (so a tongue seen between the teeth, behind them, never counts).
+    The front teeth's depth is the ``TEETH_FRONT_DEPTH_PERCENTILE``-th percentile of the teeth
+    pixels' depth; a tongue pixel is in front of the teeth when it is nearer than that by more
+    than ``TEETH_DEPTH_MARGIN_SHARE`` of the teeth pixels' depth spread (the registry gives the
+    reasons).
     """
     if not f.tongue.any() or not f.teeth.any():
         return 0
@@ -346,8 +349,8 @@ def _tongue_in_front(f: FrameMasks) -> int:
     td = td[np.isfinite(td)]
     if td.size == 0:
         return 0
-    front = float(np.percentile(td, 10))
-    margin = 0.1 * float(np.ptp(td)) + 1e-6
+    front = float(np.percentile(td, TEETH_FRONT_DEPTH_PERCENTILE))
+    margin = TEETH_DEPTH_MARGIN_SHARE * float(np.ptp(td)) + 1e-6
     # only where the tongue is inside the teeth's horizontal span (the front teeth region)
     cols = np.flatnonzero(f.teeth.any(axis=0))
     span = np.zeros_like(f.tongue)

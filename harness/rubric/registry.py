@@ -96,6 +96,30 @@ LOWER_TEETH_MIN_PIXELS = 5
 #: does not read as the tongue; 6 px (~10 mm^2) is a visible patch.
 TONGUE_MIN_PIXELS = 6
 
+#: The front teeth, where a line along x (the depth of the side view) meets the teeth sensibly:
+#: the tongue's and the lips' pass-through tests use the triangles of a set whose centroid lies in
+#: its front FRONT_TEETH_SHARE of the set's x range (the incisors and canines: on the model's sets
+#: their centroids lie 0.02-0.26 of that range behind the front, the first premolars from 0.33-0.39
+#: on) and whose unit normal is at least FRONT_TEETH_MIN_NX along x (60 degrees off straight
+#: ahead; the side teeth run along x, so a line along x would graze them). The same |n_x| as
+#: CASSI 1.0's arch front (versions.constants TONGUE_ARCH_FRONT_NX), but the rubric's own.
+FRONT_TEETH_SHARE = 0.35
+FRONT_TEETH_MIN_NX = 0.5
+#: Tongue in front of the teeth (front view, from the depth pass): the front teeth's depth is this
+#: percentile of the teeth pixels' depth (the nearest teeth, robust to a stray pixel at a gap),
+#: and a tongue pixel is in front of them when nearer by more than TEETH_DEPTH_MARGIN_SHARE of the
+#: teeth pixels' depth spread, so a tongue seen between or behind the teeth never counts.
+TEETH_FRONT_DEPTH_PERCENTILE = 10
+TEETH_DEPTH_MARGIN_SHARE = 0.1
+#: Touching teeth are split at the incisal line, the row where the depth steps from the upper
+#: incisors to the lower ones behind them; a column shows that step when its largest
+#: row-to-row depth change is more than this many times its median change (a clear edge, not the
+#: curvature of one tooth's face); else the split falls back to the narrowest row.
+INCISAL_STEP_FACTOR = 3.0
+#: A tract variable's range in the recording and in the model: 5th to 95th percentile, so a
+#: mistracked frame or two (XRMB pellets are lost and found again) does not make the range.
+RANGE_PERCENTILES = (5, 95)
+
 #: Table F: a tract variable that moves less than this in the recording (5th to 95th percentile)
 #: gives nothing to follow; its correlation would be the correlation of noise (XRMB pellets are
 #: accurate to ~0.5 mm), so it is not measured for that file.
