@@ -12,6 +12,15 @@ def test_builtin_names():
     assert {"parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1"} <= set(R.available_versions())
 
 
+def test_the_thesis_order_is_the_registry_s_own():
+    """The rubric's version order (Table C compares each version with the previous one) is the
+    registry's built-ins in their order, and each built-in's class carries its registered name."""
+    from cassi.harness.rubric.model import PARKE_VERSION, VERSION_ORDER
+    assert VERSION_ORDER == tuple(R.BUILT_IN_VERSIONS) == ("parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1")
+    assert PARKE_VERSION == "parke-1974"
+    assert [R.get_version(n).name for n in VERSION_ORDER] == list(VERSION_ORDER)
+
+
 @pytest.mark.parametrize("name", ["parke-1974", "cassi-1.0"])
 def test_get_version_returns_a_protocol_instance(name):
     v = R.get_version(name)

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import argparse
 
-from cassi.versions.registry import available_versions, get_version
+from cassi.versions.registry import BUILT_IN_VERSIONS, available_versions, get_version
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -19,9 +19,9 @@ def _run(args: argparse.Namespace) -> int:
 def register(sub) -> None:
     """Add the ``versions`` subcommand to the ``cassi`` subparsers."""
     parser = sub.add_parser("versions", help="list the registered CASSI versions, one a line",
-                            description="List the registered versions: parke-1974, cassi-1.0, "
-                                        "cassi-2.0, cassi-2.1 and any from the 'cassi.versions' "
-                                        "entry point group.")
+                            description=f"List the registered versions: "
+                                        f"{', '.join(BUILT_IN_VERSIONS)} and any from the "
+                                        f"'cassi.versions' entry point group.")
     parser.add_argument("--check", action="store_true",
                         help="load every version first (fails on one that cannot be imported)")
     parser.set_defaults(func=_run)

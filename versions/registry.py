@@ -20,7 +20,7 @@ from typing import Any, Generic, Iterator, TypeVar
 from cassi.common.errors import CassiInputError
 from cassi.common.lazy import resolve
 
-__all__ = ["Registry", "VERSIONS", "get_version", "available_versions", "register_version"]
+__all__ = ["Registry", "VERSIONS", "BUILT_IN_VERSIONS", "get_version", "available_versions", "register_version"]
 
 T = TypeVar("T")
 
@@ -146,12 +146,17 @@ class Registry(Generic[T]):
         return f"unknown {self.kind} {name!r}.{hint} Known: {', '.join(known) or '(none)'}."
 
 
+#: The built-in versions, in the order the thesis compares them (Table C: "compared with the
+#: previous version"): Parke's own face first, then CASSI 1.0, 2.0 and 2.1.
+BUILT_IN_VERSIONS = {"parke-1974": "cassi.versions.parke1974:Parke1974",
+                     "cassi-1.0": "cassi.versions.cassi10:Cassi10",
+                     "cassi-2.0": "cassi.versions.cassi20:Cassi20",
+                     "cassi-2.1": "cassi.versions.cassi21:Cassi21"}
+
 #: The version registry: built-ins here, third-party ones from the ``cassi.versions`` group.
 VERSIONS: Registry[Any] = Registry("version", entry_point_group="cassi.versions")
-VERSIONS.register("parke-1974", lazy="cassi.versions.parke1974:Parke1974")
-VERSIONS.register("cassi-1.0", lazy="cassi.versions.cassi10:Cassi10")
-VERSIONS.register("cassi-2.0", lazy="cassi.versions.cassi20:Cassi20")
-VERSIONS.register("cassi-2.1", lazy="cassi.versions.cassi21:Cassi21")
+for _name, _target in BUILT_IN_VERSIONS.items():
+    VERSIONS.register(_name, lazy=_target)
 
 
 def register_version(name: str, obj: Any = None, *, lazy: str | None = None,

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cassi.common.errors import CassiInputError
+from cassi.versions.registry import BUILT_IN_VERSIONS
 
 __all__ = ["RATINGS", "GOOD_RATINGS", "TABLES", "TABLE_TOPICS", "VERSION_ORDER", "rate",
            "table_title", "Measurement", "Check"]
@@ -36,11 +37,12 @@ TABLE_TOPICS = {"A": "teeth, lips and tongue", "B": "face shape", "C": "lip plac
                 "D": "maximum lip protrusion", "E": "jaw wagging", "F": "fidelity to the recording",
                 "G": "the lips and tongue between the pellets"}
 
-#: The version that keeps Parke's face: Table B's figures are ratios over its neutral face, so a
-#: reviewer sees a Table B verdict beside it.
-PARKE_VERSION = "parke-1974"
-#: Versions in the order the thesis compares them (Table C: "compared with the previous version").
-VERSION_ORDER = (PARKE_VERSION, "cassi-1.0", "cassi-2.0", "cassi-2.1")
+#: Versions in the order the thesis compares them (Table C: "compared with the previous
+#: version"): the version registry's built-ins, in its order.
+VERSION_ORDER = tuple(BUILT_IN_VERSIONS)
+#: The version that keeps Parke's face (the first built-in): Table B's figures are ratios over
+#: its neutral face, so a reviewer sees a Table B verdict beside it.
+PARKE_VERSION = VERSION_ORDER[0]
 
 
 def shown_beside(check_table: str, version: str, versions) -> str | None:
