@@ -196,6 +196,37 @@ def test_textgrid_tiers_whose_entries_are_not_intervals(tmp_path):
         assert info.value.path == "tp003.TextGrid"
 
 
+@pytest.mark.parametrize("form", ["long_textgrid", "short_textgrid"])
+def test_textgrid_interval_errors_name_their_line(tmp_path, form):
+    """A bad interval is refused with the line it starts on, in Praat's long and short text
+    forms (praatio's parser gives no lines): the long form's ``intervals [k]:`` line, the short
+    form's xmin line."""
+    from praatio import textgrid
+    from cassi.data.xrmb.alignment import parse_alignment
+    tg = textgrid.Textgrid()
+    for name, ivs in (("phone", [(0.0, 0.2, "sp"), (0.2, 0.3, "S"), (0.3, 0.5, "AH"), (0.5, 1.0, "sp")]),
+                      ("word", [(0.0, 0.2, "sp"), (0.2, 0.5, "SA"), (0.5, 1.0, "sp")])):
+        tg.addTier(textgrid.IntervalTier(name, ivs, 0.0, 1.0))
+    tg.save(str(tmp_path / "tp105.TextGrid"), format=form, includeBlankSpaces=True)
+    good = (tmp_path / "tp105.TextGrid").read_text()
+    assert len(parse_alignment(good).phones) == 4
+    lines = good.splitlines()
+    for tier, k, start in (("phone", 3, "0.3"), ("word", 2, "0.2")):
+        # interval k (1-based) of the tier ends before it starts: its xmax line becomes 0.1
+        first = next(i for i, ln in enumerate(lines) if ln.strip() in (f'name = "{tier}"', f'"{tier}"'))
+        if form == "long_textgrid":
+            head = next(i for i in range(first, len(lines)) if lines[i].strip() == f"intervals [{k}]:")
+            j, new = head + 2, "xmax = 0.1"
+        else:  # name, xmin, xmax, size, then xmin / xmax / text per interval
+            j, new = first + 4 + 3 * (k - 1) + 1, "0.1"
+        assert lines[j - 1].strip().endswith(start)
+        bad = lines[:j] + [lines[j].replace(lines[j].strip(), new)] + lines[j + 1:]
+        with pytest.raises(CassiInputError, match=f"tier '{tier}', interval {k}: bad interval") as info:
+            parse_alignment("\n".join(bad) + "\n", path="tp105.TextGrid")
+        hit = bad[info.value.line - 1].strip()
+        assert hit == (f"intervals [{k}]:" if form == "long_textgrid" else start), (info.value, hit)
+
+
 # ----------------------------------------------------------------------------- Mis.dat
 def test_jw12_mis_dat(tmp_path):
     """Thesis Figure 3.10: 49 entries; codes with a space; -1 = to the end; raster-hop notes."""

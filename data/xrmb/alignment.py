@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -54,26 +55,55 @@ def _decode(data: bytes, path) -> str:
         raise CassiInputError("not valid UTF-8 text", path=path, line=line) from None
 
 
-def _tier_frame(tier: dict, *, path) -> pd.DataFrame:
+_LONG_NAME = re.compile(r'^\s*name\s*=\s*"(?P<name>(?:[^"]|"")*)"\s*$', re.M)
+_LONG_INTERVAL = re.compile(r"^\s*intervals\s*\[\d+\]\s*:?\s*$", re.M)
+_LONG_ITEM = re.compile(r"^\s*item\s*\[\d+\]\s*:?\s*$", re.M)
+
+
+def _interval_line(text: str | None, tier: str, index: int) -> int | None:
+    """The 1-based line where interval ``index`` (0-based) of ``tier`` starts in TextGrid
+    ``text``: its ``intervals [k]:`` line (long form) or its xmin line (short form); None when
+    the text is not laid out so (praatio's parser gives no lines)."""
+    if text is None:
+        return None
+    want = tier.lower()
+    for m in _LONG_NAME.finditer(text):
+        if m.group("name").replace('""', '"').lower() != want:
+            continue
+        nxt = _LONG_ITEM.search(text, m.end())
+        end = nxt.start() if nxt else len(text)
+        starts = [i.start() for i in _LONG_INTERVAL.finditer(text, m.end(), end)]
+        return text.count("\n", 0, starts[index]) + 1 if index < len(starts) else None
+    lines = text.splitlines()
+    for i in range(len(lines) - 1):  # short form: "IntervalTier", "name", xmin, xmax, size
+        if lines[i].strip() == '"IntervalTier"' and lines[i + 1].strip().strip('"').lower() == want:
+            line = i + 6 + 3 * index
+            return line if line <= len(lines) else None
+    return None
+
+
+def _tier_frame(tier: dict, *, path, text: str | None = None) -> pd.DataFrame:
     rows = []
     prev_end = -math.inf
+    name = tier.get("name")
     entries = tier.get("entries", [])
     if not isinstance(entries, (list, tuple)):
-        raise CassiInputError(f"tier {tier.get('name')!r}: its entries are not a list", path=path)
-    for entry in entries:
+        raise CassiInputError(f"tier {name!r}: its entries are not a list", path=path)
+    for k, entry in enumerate(entries):
+        def refuse(reason: str) -> CassiInputError:
+            return CassiInputError(f"tier {name!r}, interval {k + 1}: {reason}", path=path,
+                                   line=_interval_line(text, str(name), k))
         if not isinstance(entry, (list, tuple)) or len(entry) != 3:
-            raise CassiInputError(f"tier {tier.get('name')!r}: not an interval tier", path=path)
+            raise CassiInputError(f"tier {name!r}: not an interval tier", path=path)
         start, end, label = entry
         try:
             start, end = float(start), float(end)
         except (TypeError, ValueError):
-            raise CassiInputError(f"tier {tier.get('name')!r}: non-numeric time", path=path) from None
+            raise refuse("non-numeric time") from None
         if not (math.isfinite(start) and math.isfinite(end)) or end < start:
-            raise CassiInputError(f"tier {tier.get('name')!r}: bad interval {start}..{end}",
-                                  path=path)
+            raise refuse(f"bad interval {start}..{end}")
         if start < prev_end - 1e-9:
-            raise CassiInputError(f"tier {tier.get('name')!r}: overlapping intervals at {start} s",
-                                  path=path)
+            raise refuse(f"overlaps the one before: starts at {start} s, before {prev_end} s")
         prev_end = end
         rows.append((start, end, str(label)))
     return pd.DataFrame(rows, columns=_COLUMNS).astype({"start_s": "float64", "end_s": "float64",
@@ -111,8 +141,8 @@ def parse_alignment(data: bytes | str, *, path: str | os.PathLike | None = None)
         raise CassiInputError(f"no {names[0]!r} tier (tiers: {', '.join(sorted(tiers)) or 'none'})",
                               path=path)
 
-    return Alignment(phones=_tier_frame(pick(PHONE_TIERS), path=path),
-                     words=_tier_frame(pick(WORD_TIERS), path=path),
+    return Alignment(phones=_tier_frame(pick(PHONE_TIERS), path=path, text=text),
+                     words=_tier_frame(pick(WORD_TIERS), path=path, text=text),
                      xmin_s=xmin, xmax_s=xmax, path=None if path is None else Path(path))
 
 
