@@ -71,6 +71,21 @@ def test_mapping_gives_equal_jaw_lengths(d):
     assert np.hypot(*(m.to_parke(mni) - m.to_parke(mnm))) == pytest.approx(model_jaw_length(v))
 
 
+def test_a_subject_face_knows_its_scale():
+    """subject_face keeps the jaw length d on the face, and the face's units per mm is the
+    mapping's p / d, with or without a palate; the neutral face keeps the model's nominal scale."""
+    from cassi.data.face import numbering as N
+    from cassi.data.face.model import build_face
+    from cassi.versions.mapping import subject_face
+    assert build_face().units_per_mm == N.UNITS_PER_MM
+    pal = np.array([[-5.0, 8.5], [-20.0, 14.0], [-35.0, 16.0], [-53.0, 21.0]])
+    for palate in (None, pal):
+        face = subject_face(palate_mm=palate, jaw_length_mm=73.0)
+        assert face.jaw_length_mm == 73.0
+        assert face.units_per_mm == pytest.approx(XrmbToParke.from_face(face.vertices, 73.0).scale)
+        assert face.units_per_mm != pytest.approx(N.UNITS_PER_MM, rel=1e-3)
+
+
 def test_mapping_rejects_bad_jaw_length():
     with pytest.raises(CassiInputError):
         XrmbToParke.from_face(toy_vertices(), 0.0)

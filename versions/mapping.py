@@ -107,10 +107,10 @@ def subject_face(*, palate_mm: np.ndarray | None = None, jaw_length_mm: float | 
     head_measures : optional
         Kept on the face for the versions' chin and jaw adjustment.
     """
-    if jaw_length_mm is not None:
-        _jaw_length_d(jaw_length_mm)  # refused even where no palate needs it
+    # refused even where no palate needs it
+    d = None if jaw_length_mm is None else _jaw_length_d(jaw_length_mm)
     if palate_mm is None:
-        return build_face(head_measures=head_measures)
+        return build_face(head_measures=head_measures, jaw_length_mm=d)
     pal = np.asarray(palate_mm, dtype=np.float64)
     if pal.ndim != 2 or pal.shape[1] != 2 or len(pal) < 2 or not np.isfinite(pal).all():
         raise CassiInputError("palate_mm must be a finite (P >= 2, 2) array of x, y mm")
@@ -118,9 +118,10 @@ def subject_face(*, palate_mm: np.ndarray | None = None, jaw_length_mm: float | 
     if pal[0, 0] < pal[-1, 0]:
         pal = pal[::-1].copy()  # given back to front: PAL.DAT runs front to back
     neutral = build_face().vertices
-    if jaw_length_mm is None:
+    if d is None:
         mapping = XrmbToParke(scale=N.UNITS_PER_MM,
                               origin=neutral[K.V_UPPER_INCISOR_TIP - 1, [0, 2]].copy())
     else:
-        mapping = XrmbToParke.from_face(neutral, jaw_length_mm)
-    return build_face(palate_mm=pal, palate_xz=mapping.to_parke(pal), head_measures=head_measures)
+        mapping = XrmbToParke.from_face(neutral, d)
+    return build_face(palate_mm=pal, palate_xz=mapping.to_parke(pal), head_measures=head_measures,
+                      jaw_length_mm=d)

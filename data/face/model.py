@@ -98,6 +98,9 @@ class FaceModel:
         The PAL.DAT outline the palate was built from (XRMB mm), None for the default palate.
     head_measures : object | None
         The subject's head measures as given (used by the versions' chin adjustment).
+    jaw_length_mm : float | None
+        The subject's jaw length d (MNI-MNM, mm) the face was built for, None for the model's
+        own scale; :attr:`units_per_mm` follows from it.
     regions : dict[str, tuple[int, ...]]
         Vertex groups the generator names for the parameters (eyelid, eyelid_lip, brow,
         eye_socket, forehead, cheek, mouth_expression); empty for Parke's own files, where the
@@ -114,6 +117,7 @@ class FaceModel:
     parameters: dict[int, float] = field(default_factory=dict)
     palate_mm: np.ndarray | None = None
     head_measures: object | None = None
+    jaw_length_mm: float | None = None
     description: str = "cassi-farm face"
     regions: dict[str, tuple[int, ...]] = field(default_factory=dict)
 
@@ -130,6 +134,15 @@ class FaceModel:
     @property
     def vertex_count(self) -> int:
         return int(self.vertices.shape[0])
+
+    @property
+    def units_per_mm(self) -> float:
+        """Parke units per millimetre of this face: p / d for a subject's face (thesis 4.1.1, the
+        scale its pellets are mapped by: :class:`cassi.versions.mapping.XrmbToParke`), the
+        model's nominal :data:`~cassi.data.face.numbering.UNITS_PER_MM` without a jaw length."""
+        if self.jaw_length_mm is None:
+            return float(N.UNITS_PER_MM)
+        return jaw_length_units(self.vertices) / float(self.jaw_length_mm)
 
     def vertex(self, number: int) -> np.ndarray:
         """Position (3,) of vertex ``number`` (1-based)."""
@@ -254,8 +267,8 @@ def _verts_per_eye() -> int:
 
 
 def build_face(*, palate_mm: np.ndarray | None = None, palate_xz: np.ndarray | None = None,
-               head_measures=None, parameters: dict[int, float] | None = None,
-               clamp: bool = False) -> FaceModel:
+               head_measures=None, jaw_length_mm: float | None = None,
+               parameters: dict[int, float] | None = None, clamp: bool = False) -> FaceModel:
     """The neutral face: Parke's structure generated from code, start parameter values applied.
 
     A subject's face comes from :func:`cassi.versions.mapping.subject_face`, which maps the
@@ -271,6 +284,9 @@ def build_face(*, palate_mm: np.ndarray | None = None, palate_xz: np.ndarray | N
         palate size; given with ``palate_mm``. Default: the generator's typical palate.
     head_measures : optional
         Stored on the model for the versions' chin and jaw adjustment (4.1.1); the neutral
+        geometry does not use it.
+    jaw_length_mm : float, optional
+        The subject's jaw length d, kept on the model (:attr:`FaceModel.units_per_mm`); the
         geometry does not use it.
     parameters : dict[int, float], optional
         Parke parameters (Table 3.1 numbers) overriding the start values.
@@ -291,7 +307,8 @@ def build_face(*, palate_mm: np.ndarray | None = None, palate_xz: np.ndarray | N
         if palate_xz.ndim != 2 or palate_xz.shape[1] != 2 or not np.isfinite(palate_xz).all():
             raise CassiInputError("palate_xz must be a finite (P, 2) array of Parke x, z")
     base = _base_face(palate_xz)
-    face = replace(base, palate_mm=pal, head_measures=head_measures)
+    face = replace(base, palate_mm=pal, head_measures=head_measures,
+                   jaw_length_mm=None if jaw_length_mm is None else float(jaw_length_mm))
     return apply_parameters(face, parameters or {}, clamp=clamp)
 
 
