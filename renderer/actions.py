@@ -90,7 +90,8 @@ def cmd_export(args) -> int:
         raise CassiInputError("the task has no animated frame")
     summary = write_glb(out, render_topology(face), face.vertices, positions,
                         frames * (NOMINAL_PERIOD_US * 1e-6), quantize=args.positions == "int16",
-                        name=f"{args.subject} task {args.task} rep {args.rep} {args.version}")
+                        name=f"{args.subject} task {args.task} rep {args.rep} {args.version}",
+                        mm_per_unit=1.0 / face.units_per_mm)  # the subject's size (d / p)
     print(out)
     log.info("glTF: %d frame(s), %d vertices (%d moving), %d bytes, %d bytes of deltas per "
              "frame, %.0f bytes per frame in all", summary.frames, summary.vertices,

@@ -115,10 +115,16 @@ def _minmax(values: np.ndarray, quantized: bool) -> tuple[list, list]:
 
 
 def glb_bytes(topology: RenderTopology, neutral: np.ndarray, positions: np.ndarray,
-              times_s: np.ndarray, *, quantize: bool = True,
-              name: str = "CASSI face") -> tuple[bytes, GlbSummary]:
+              times_s: np.ndarray, *, quantize: bool = True, name: str = "CASSI face",
+              mm_per_unit: float = MM_PER_UNIT) -> tuple[bytes, GlbSummary]:
     """The .glb of ``positions`` float (F, V, 3) Parke units (face numbering) keyed at
-    ``times_s`` (F,) seconds, as morph targets over ``neutral`` (V, 3)."""
+    ``times_s`` (F,) seconds, as morph targets over ``neutral`` (V, 3).
+
+    glTF lengths are metres: a Parke unit is ``mm_per_unit`` mm, the subject's own size when it
+    is ``1 / face.units_per_mm`` (d / p, thesis 4.1.1), else the model's nominal scale."""
+    if not (np.isfinite(mm_per_unit) and mm_per_unit > 0):
+        raise ValueError(f"mm_per_unit must be a positive number, not {mm_per_unit!r}")
+    metres = float(mm_per_unit) / 1000.0
     # float32 like the positions, so that a vertex that does not move has a delta of exactly 0
     neutral = np.asarray(neutral, np.float32)
     positions = np.asarray(positions, np.float32)
@@ -153,8 +159,8 @@ def glb_bytes(topology: RenderTopology, neutral: np.ndarray, positions: np.ndarr
         ctype, vdtype = _SHORT, np.int16
     else:
         origin, step = np.zeros(3), 0.0
-        stored_base = (base * METRES_PER_UNIT).astype(np.float32)
-        deltas = (frames * METRES_PER_UNIT - base * METRES_PER_UNIT).astype(np.float32)
+        stored_base = (base * metres).astype(np.float32)
+        deltas = (frames * metres - base * metres).astype(np.float32)
         ctype, vdtype = _FLOAT, np.float32
     moving = np.flatnonzero(np.any(deltas != 0, axis=(0, 2)))
 
@@ -236,8 +242,8 @@ def glb_bytes(topology: RenderTopology, neutral: np.ndarray, positions: np.ndarr
         children.append(mi)
     root = {"name": name, "children": children}
     if quantize:
-        root["translation"] = [float(x * METRES_PER_UNIT) for x in origin]
-        root["scale"] = [float(step * METRES_PER_UNIT)] * 3
+        root["translation"] = [float(x * metres) for x in origin]
+        root["scale"] = [float(step * metres)] * 3
     nodes.append(root)
 
     gltf: dict = {"asset": {"version": "2.0", "generator": "cassi-farm cassi export"},
@@ -281,8 +287,9 @@ def _glb(text: bytes, binary: bytes) -> bytes:
 
 def write_glb(path: str | os.PathLike, topology: RenderTopology, neutral: np.ndarray,
               positions: np.ndarray, times_s: np.ndarray, *, quantize: bool = True,
-              name: str = "CASSI face") -> GlbSummary:
+              name: str = "CASSI face", mm_per_unit: float = MM_PER_UNIT) -> GlbSummary:
     """Write :func:`glb_bytes` to ``path`` atomically."""
-    data, summary = glb_bytes(topology, neutral, positions, times_s, quantize=quantize, name=name)
+    data, summary = glb_bytes(topology, neutral, positions, times_s, quantize=quantize, name=name,
+                              mm_per_unit=mm_per_unit)
     atomic_write_bytes(path, data)
     return summary

@@ -18,7 +18,6 @@ from cassi.harness.actions import task_positions
 from cassi.harness.cli import main
 
 PERIOD_S = 6866e-6
-M_PER_UNIT = 0.25e-3
 _DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32,
            5126: np.float32}
 _WIDTH = {"SCALAR": 1, "VEC3": 3}
@@ -42,6 +41,16 @@ def task(corpus):
 @pytest.fixture(scope="module")
 def animated(corpus, task):
     return task_positions(str(corpus), "JW45", task, 1, "cassi-2.1")
+
+
+@pytest.fixture(scope="module")
+def m_per_unit(corpus, animated):
+    """Metres a Parke unit in the export: the subject's own size, d / p (thesis 4.1.1), from its
+    profile's jaw length and the face's jaw sites."""
+    from cassi.harness.evaluation.caches import get_corpus, get_profile
+    from cassi.versions.mapping import XrmbToParke
+    profile = get_profile(get_corpus(str(corpus)), "JW45")
+    return 1e-3 / XrmbToParke.from_face(animated[0].vertices, profile.jaw_length_mm).scale
 
 
 def _export(corpus, task, out, *extra) -> int:
@@ -91,24 +100,24 @@ def _root(gltf):
     return gltf["nodes"][gltf["scenes"][gltf["scene"]]["nodes"][0]]
 
 
-def _to_parke(gltf, local: np.ndarray) -> np.ndarray:
+def _to_parke(gltf, local: np.ndarray, m_per_unit: float) -> np.ndarray:
     """Mesh-local positions -> Parke units on Parke axes (undo the root's TRS, metres, axes)."""
     root = _root(gltf)
     assert "rotation" not in root and "matrix" not in root
     world = local * np.asarray(root.get("scale", [1, 1, 1])) + root.get("translation", [0, 0, 0])
-    return (world / M_PER_UNIT)[:, [2, 0, 1]]  # glTF (x, y, z) = Parke (y, z, x)
+    return (world / m_per_unit)[:, [2, 0, 1]]  # glTF (x, y, z) = Parke (y, z, x)
 
 
-def _frame(gltf, binary, k: int) -> np.ndarray:
+def _frame(gltf, binary, k: int, m_per_unit: float) -> np.ndarray:
     """Frame k decoded: the animated mesh's base plus its target k (what weight 1 shows)."""
     prim = gltf["meshes"][0]["primitives"][0]
     base = _accessor(gltf, binary, prim["attributes"]["POSITION"]).astype(np.float64)
     delta = _accessor(gltf, binary, prim["targets"][k]["POSITION"]).astype(np.float64)
-    return _to_parke(gltf, base + delta)
+    return _to_parke(gltf, base + delta, m_per_unit)
 
 
 @pytest.mark.parametrize("positions", ["int16", "float32"])
-def test_frame_k_is_task_frame_k(corpus, task, animated, tmp_path, positions):
+def test_frame_k_is_task_frame_k(corpus, task, animated, tmp_path, positions, m_per_unit):
     face, frames, pos = animated
     stride = 7
     out = tmp_path / "face.glb"
@@ -120,7 +129,7 @@ def test_frame_k_is_task_frame_k(corpus, task, animated, tmp_path, positions):
     if positions == "int16":
         assert gltf["extensionsRequired"] == ["KHR_mesh_quantization"]
         assert gltf["extensionsUsed"] == ["KHR_mesh_quantization"]
-        tol = 0.5 * _root(gltf)["scale"][0] / M_PER_UNIT + 1e-6
+        tol = 0.5 * _root(gltf)["scale"][0] / m_per_unit + 1e-6
         assert tol < 0.05  # half a step under 0.0125 mm
     else:
         assert "extensionsRequired" not in gltf
@@ -128,7 +137,7 @@ def test_frame_k_is_task_frame_k(corpus, task, animated, tmp_path, positions):
     every = set()
     for k in (0, 1, len(kept) // 2, len(kept) - 1):
         want, _, _ = topo.mesh(kept[k])
-        got = _frame(gltf, binary, k)
+        got = _frame(gltf, binary, k, m_per_unit)
         assert got.shape == want.shape
         assert np.abs(got - want).max() <= tol, k
         every.add(k)
@@ -163,7 +172,7 @@ def test_animation_time_base_and_weights(corpus, task, animated, tmp_path):
     assert sampler["interpolation"] in ("LINEAR", "STEP")
 
 
-def test_glb_loads_in_trimesh_with_parts_and_materials(corpus, task, animated, tmp_path):
+def test_glb_loads_in_trimesh_with_parts_and_materials(corpus, task, animated, tmp_path, m_per_unit):
     face, frames, pos = animated
     out = tmp_path / "face.glb"
     assert _export(corpus, task, out, "--stride", "50") == 0
@@ -172,9 +181,11 @@ def test_glb_loads_in_trimesh_with_parts_and_materials(corpus, task, animated, t
     assert len(scene.geometry) == len(topo.parts)
     assert sum(len(g.faces) for g in scene.geometry.values()) == \
         sum(len(p.triangles) for p in topo.parts.values())
-    # trimesh applies the root's dequantising transform: the neutral head, in metres
+    # trimesh applies the root's dequantising transform: the neutral head, in metres, at the
+    # subject's size (not the model's nominal 0.25 mm a unit)
     verts, _, _ = topo.mesh(face.vertices)
-    want = verts[:, [1, 2, 0]] * M_PER_UNIT
+    want = verts[:, [1, 2, 0]] * m_per_unit
+    assert abs(m_per_unit - 0.25e-3) > 1e-6
     lo, hi = scene.bounds
     assert np.allclose(lo, want.min(axis=0), atol=2e-5)
     assert np.allclose(hi, want.max(axis=0), atol=2e-5)
