@@ -162,7 +162,9 @@ def test_the_palate_never_reaches_below_the_incisor_tip(corpus, version):
         own = version_face(version, face)
         lowest = own.vertices[np.asarray(N.PALATE) - 1, 2].min()
         tip = own.vertices[N.UPPER_INCISOR_TIP - 1, 2]
-        assert lowest >= tip + K.PALATE_ABOVE_INCISOR_MM * N.UNITS_PER_MM - 1e-9
+        # in the subject's millimetres (p / d, the scale the pellets are mapped by)
+        assert face.units_per_mm == own.units_per_mm
+        assert lowest >= tip + K.PALATE_ABOVE_INCISOR_MM * face.units_per_mm - 1e-9
 
 
 # --- collisions --------------------------------------------------------------------------------

@@ -59,28 +59,30 @@ def lower_arch(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return p[order, 0], np.abs(p[order, 1])
 
 
-def rest_tongue(vertices: np.ndarray) -> np.ndarray:
+def rest_tongue(vertices: np.ndarray, scale: float = N.UNITS_PER_MM) -> np.ndarray:
     """The thick tongue at rest, float (STATIONS, C, 3), on the shared face's own centre line
-    (tip, T1-T4 of Parke's tongue), the back turning straight down (no pharynx at rest)."""
+    (tip, T1-T4 of Parke's tongue), the back turning straight down (no pharynx at rest);
+    ``scale``: the face's Parke units per mm (``FaceModel.units_per_mm``)."""
     v = np.asarray(vertices, np.float64)
     xz = v[:, [0, 2]]
     tip = xz[None, N.TONGUE_TIP - 1]
     pel = xz[None, np.asarray(N.TONGUE_PELLETS) - 1]
     back = back_points(pel[:, 2], pel[:, 3], np.array([0.0, -1.0]),
-                       K.BACK_STEP_MM * N.UNITS_PER_MM)
+                       K.BACK_STEP_MM * scale)
     st = centre_stations(tip, pel, back)
     ax, ay = lower_arch(v)
-    width = arch_half_width(ax, ay, st[..., 0], scale=N.UNITS_PER_MM)
-    width[:, 0] = K.HALF_WIDTH_TIP_MM * N.UNITS_PER_MM
-    return sections(st, normals(st), width, station_thickness_mm() * N.UNITS_PER_MM)[0]
+    width = arch_half_width(ax, ay, st[..., 0], scale=scale)
+    width[:, 0] = K.HALF_WIDTH_TIP_MM * scale
+    return sections(st, normals(st), width, station_thickness_mm() * scale)[0]
 
 
-def fit_palate(vertices: np.ndarray) -> np.ndarray:
-    """The vertices with every palate vertex at least PALATE_ABOVE_INCISOR_MM (at the model's
-    scale) above the upper incisor tip (226); a copy."""
+def fit_palate(vertices: np.ndarray, scale: float = N.UNITS_PER_MM) -> np.ndarray:
+    """The vertices with every palate vertex at least PALATE_ABOVE_INCISOR_MM (subject mm, at
+    ``scale`` Parke units a mm: ``FaceModel.units_per_mm``) above the upper incisor tip (226);
+    a copy."""
     v = np.array(vertices, np.float64)
     rows = np.asarray(N.PALATE) - 1
-    floor = v[N.UPPER_INCISOR_TIP - 1, 2] + K.PALATE_ABOVE_INCISOR_MM * N.UNITS_PER_MM
+    floor = v[N.UPPER_INCISOR_TIP - 1, 2] + K.PALATE_ABOVE_INCISOR_MM * scale
     v[rows, 2] = np.maximum(v[rows, 2], floor)
     return v
 
@@ -121,10 +123,11 @@ def thick_tongue_face(face: FaceModel) -> FaceModel:
     extra = int(numbers.max()) - n
     tongue = _material(face, "tongue")
     rows = numbers.ravel() - 1
+    scale = face.units_per_mm  # the subject's p / d, as the animation's (ctx.mapping.scale)
 
     def grow(a: np.ndarray) -> np.ndarray:
-        out = np.concatenate([fit_palate(a), np.zeros((extra, 3))])
-        out[rows] = rest_tongue(a).reshape(-1, 3)
+        out = np.concatenate([fit_palate(a, scale), np.zeros((extra, 3))])
+        out[rows] = rest_tongue(a, scale).reshape(-1, 3)
         return out
 
     polys = [p for p in face.polygons if p.material != tongue] + _polygons(numbers, tongue)
