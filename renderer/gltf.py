@@ -13,7 +13,8 @@ Layout:
   weight 1 on target k and 0 on the others (a sparse accessor, so it grows linearly with the
   frames), LINEAR interpolation (between keys, the positions interpolate linearly);
 - axes: glTF is +Y up and looks at the face from +Z: glTF (x, y, z) = Parke (y, z, x) (a cyclic
-  permutation, so triangle orientation is kept), in metres (MM_PER_UNIT).
+  permutation, so triangle orientation is kept), in metres at ``mm_per_unit`` mm a Parke unit
+  (the export passes the subject's d / p; default the model's nominal MM_PER_UNIT).
 
 ``quantize=True`` stores positions and deltas as int16 (KHR_mesh_quantization, declared in
 extensionsUsed and extensionsRequired) on one grid whose step and origin sit in the root node's
@@ -34,12 +35,11 @@ from cassi.data.face.numbering import MM_PER_UNIT
 from cassi.data.face.topology import RenderTopology
 from cassi.renderer.views import material_for
 
-__all__ = ["GlbSummary", "glb_bytes", "write_glb", "AXES", "METRES_PER_UNIT",
+__all__ = ["GlbSummary", "glb_bytes", "write_glb", "AXES",
            "QUANTIZATION"]
 
 #: glTF axis i is Parke axis AXES[i].
 AXES = (1, 2, 0)
-METRES_PER_UNIT = MM_PER_UNIT / 1000.0
 QUANTIZATION = "KHR_mesh_quantization"
 #: Largest quantised magnitude used (int16 holds 32767; the rest is room for rounding).
 _QMAX = 32000

@@ -227,6 +227,52 @@ def test_textgrid_interval_errors_name_their_line(tmp_path, form):
         assert hit == (f"intervals [{k}]:" if form == "long_textgrid" else start), (info.value, hit)
 
 
+def _long_grid(tiers) -> str:
+    """A long-form TextGrid of (class, name, intervals or points) tiers, one-second intervals."""
+    out = ['File type = "ooTextFile"', 'Object class = "TextGrid"', "", "xmin = 0", "xmax = 3",
+           "tiers? <exists>", f"size = {len(tiers)}", "item []:"]
+    for j, (cls, name, n) in enumerate(tiers, 1):
+        out += [f"    item [{j}]:", f'        class = "{cls}"', f'        name = "{name}"',
+                "        xmin = 0", "        xmax = 3"]
+        kind, body = (("intervals", lambda k: [f"xmin = {k - 1}", f"xmax = {k}", 'text = "a"'])
+                      if cls == "IntervalTier" else
+                      ("points", lambda k: [f"number = {k}", 'mark = "a"']))
+        out.append(f"        {kind}: size = {n}")
+        for k in range(1, n + 1):
+            out += [f"        {kind} [{k}]:"] + ["            " + b for b in body(k)]
+    return "\n".join(out) + "\n"
+
+
+def test_textgrid_error_lines_in_awkward_layouts():
+    """The line finder reads the tier the parser keeps: an interval tier (not a point tier of
+    the same name), the last of names equal but for case, quoted names; CRLF, blank lines and
+    multi-line labels do not shift it; a text it cannot place gives no line, never an error."""
+    from cassi.data.xrmb.alignment import _interval_line
+
+    def line_of(text, wanted, nth):
+        return [i + 1 for i, ln in enumerate(text.split("\n")) if ln.strip() == wanted][nth]
+
+    grid = _long_grid([("TextTier", "phone", 2), ("IntervalTier", "phone", 3), ("IntervalTier", "word", 2)])
+    assert _interval_line(grid, "phone", 0) == line_of(grid, "intervals [1]:", 0)
+    assert _interval_line(grid, "word", 1) == line_of(grid, "intervals [2]:", 1)
+    assert _interval_line(grid.replace("\n", "\r\n"), "word", 1) == line_of(grid, "intervals [2]:", 1)
+    assert _interval_line(grid, "word", 5) is None
+    blank = grid.replace("        intervals [1]:", "\n        intervals [1]:", 1)
+    assert _interval_line(blank, "phone", 0) == line_of(blank, "intervals [1]:", 0)
+    cases = _long_grid([("IntervalTier", "Phone", 3), ("IntervalTier", "phone", 3), ("IntervalTier", "word", 2)])
+    assert _interval_line(cases, "phone", 0) == line_of(cases, "intervals [1]:", 1)
+    quoted = _long_grid([("IntervalTier", 'say ""hi""', 3), ("IntervalTier", "word", 2)])
+    assert _interval_line(quoted, 'say "hi"', 0) == line_of(quoted, "intervals [1]:", 0)
+    short = ('File type = "ooTextFile"\nObject class = "TextGrid"\n\n0\n3\n<exists>\n2\n'
+             '"IntervalTier"\n"say ""hi"""\n0\n3\n2\n0\n1\n"a\nb"\n1\n3\n"c"\n'
+             '"IntervalTier"\n"word"\n0\n3\n1\n0\n3\n"w"\n')
+    assert _interval_line(short, 'say "hi"', 1) == 17          # after a two-line label
+    assert _interval_line(short, "word", 0) == 25
+    assert _interval_line(short.replace("\n", "\r\n"), "word", 0) == 25
+    for text in ("", '{"tiers": []}', grid):
+        assert _interval_line(text, "none", 0) is None
+
+
 # ----------------------------------------------------------------------------- Mis.dat
 def test_jw12_mis_dat(tmp_path):
     """Thesis Figure 3.10: 49 entries; codes with a space; -1 = to the end; raster-hop notes."""

@@ -371,6 +371,22 @@ def test_face_files_round_trip(face, tmp_path):
         FaceModel.read(paths["st1"], paths["top"], paths["st2"])
 
 
+def test_a_subject_face_keeps_its_scale_in_its_files(tmp_path):
+    """The sidecar keeps the jaw length, so a written subject face reads back at its own scale;
+    a jaw length that is not a positive number is refused naming the sidecar."""
+    import json
+    face = subject_face(jaw_length_mm=71.5)
+    paths = face.write(tmp_path)
+    back = FaceModel.read(paths["st1"], paths["top"], paths["st2"])
+    assert back.jaw_length_mm == 71.5 and back.units_per_mm == pytest.approx(face.units_per_mm)
+    meta = json.loads(paths["meta"].read_text())
+    for bad in (-3, "70", True, float("nan")):
+        paths["meta"].write_text(json.dumps({**meta, "jaw_length_mm": bad}))
+        with pytest.raises(CassiInputError, match="jaw_length_mm") as info:
+            FaceModel.read(paths["st1"], paths["top"], paths["st2"])
+        assert info.value.path == str(paths["meta"])
+
+
 def test_parke_sized_files_load(tmp_path):
     """A Parke-sized model (287 vertices, some undefined, no eyes) loads and renders."""
     verts = np.full((287, 3), np.nan)

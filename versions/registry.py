@@ -15,6 +15,7 @@ from __future__ import annotations
 import difflib
 import threading
 from importlib.metadata import entry_points
+from types import MappingProxyType
 from typing import Any, Generic, Iterator, TypeVar
 
 from cassi.common.errors import CassiInputError
@@ -148,10 +149,10 @@ class Registry(Generic[T]):
 
 #: The built-in versions, in the order the thesis compares them (Table C: "compared with the
 #: previous version"): Parke's own face first, then CASSI 1.0, 2.0 and 2.1.
-BUILT_IN_VERSIONS = {"parke-1974": "cassi.versions.parke1974:Parke1974",
-                     "cassi-1.0": "cassi.versions.cassi10:Cassi10",
-                     "cassi-2.0": "cassi.versions.cassi20:Cassi20",
-                     "cassi-2.1": "cassi.versions.cassi21:Cassi21"}
+BUILT_IN_VERSIONS = MappingProxyType({"parke-1974": "cassi.versions.parke1974:Parke1974",
+                                       "cassi-1.0": "cassi.versions.cassi10:Cassi10",
+                                       "cassi-2.0": "cassi.versions.cassi20:Cassi20",
+                                       "cassi-2.1": "cassi.versions.cassi21:Cassi21"})
 
 #: The version registry: built-ins here, third-party ones from the ``cassi.versions`` group.
 VERSIONS: Registry[Any] = Registry("version", entry_point_group="cassi.versions")

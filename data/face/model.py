@@ -142,7 +142,7 @@ class FaceModel:
         model's nominal :data:`~cassi.data.face.numbering.UNITS_PER_MM` without a jaw length."""
         if self.jaw_length_mm is None:
             return float(N.UNITS_PER_MM)
-        return jaw_length_units(self.vertices) / float(self.jaw_length_mm)
+        return self.jaw_length / float(self.jaw_length_mm)
 
     def vertex(self, number: int) -> np.ndarray:
         """Position (3,) of vertex ``number`` (1-based)."""
@@ -175,7 +175,8 @@ class FaceModel:
               top_name="stt.top") -> dict[str, Path]:
         """Write ``st1.pts``, ``st2.pts`` and ``stt.top`` into ``directory`` (atomically), plus
         ``cassi-face.json`` with what Parke's formats cannot hold (the named regions the
-        parameters act on, the eyes); :meth:`read` picks it up when it sits beside stt.top."""
+        parameters act on, the eyes, the subject's jaw length); :meth:`read` picks it up when it
+        sits beside stt.top."""
         import json
 
 
@@ -188,7 +189,8 @@ class FaceModel:
         write_top(paths["top"], TopFile(f"stt.top - {self.description}", self.polygons))
         meta = {"format": 1, "regions": {k: list(map(int, v)) for k, v in self.regions.items()},
                 "eyes_first": self.eyes_first,
-                "eye_centres": np.asarray(self.eye_centres).tolist()}
+                "eye_centres": np.asarray(self.eye_centres).tolist(),
+                "jaw_length_mm": self.jaw_length_mm}
         atomic_write_text(paths["meta"], json.dumps(meta, indent=1) + "\n")
         return paths
 
@@ -233,15 +235,15 @@ class FaceModel:
                 cs.append(0.5 * (verts[base] + verts[base + back]))
             centres = np.array(cs)
         desc = p1.description
-        regions = {}
+        regions, jaw = {}, None
         side = Path(top).parent / SIDECAR
         if side.is_file():
-            regions, eyes_first, centres = _read_sidecar(side, p1.count, eyes_first, centres)
+            regions, eyes_first, centres, jaw = _read_sidecar(side, p1.count, eyes_first, centres)
         return cls(verts, t.polygons, st1=p1.vertices, st2=v2, eye_centres=centres,
-                   eyes_first=eyes_first, description=desc, regions=regions)
+                   eyes_first=eyes_first, description=desc, regions=regions, jaw_length_mm=jaw)
 
 
-#: Beside stt.top: what Parke's formats cannot hold (regions, eyes).
+#: Beside stt.top: what Parke's formats cannot hold (regions, eyes, the jaw length).
 SIDECAR = "cassi-face.json"
 
 
@@ -254,12 +256,18 @@ def _read_sidecar(path: Path, count: int, eyes_first, centres):
         ef = meta.get("eyes_first", eyes_first)
         ef = None if ef is None else int(ef)
         ec = np.asarray(meta.get("eye_centres", centres), np.float64).reshape(-1, 3)
+        jaw = meta.get("jaw_length_mm")
     except (ValueError, TypeError, AttributeError) as exc:
         raise CassiInputError(f"malformed face sidecar: {exc}", path=path) from None
     bad = [n for v in regions.values() for n in v if not 1 <= n <= count]
     if bad:
         raise CassiInputError(f"region vertex numbers outside 1..{count}: {bad[:5]}", path=path)
-    return regions, ef, ec
+    if jaw is not None:
+        if isinstance(jaw, bool) or not isinstance(jaw, (int, float)) or not (np.isfinite(jaw) and jaw > 0):
+            raise CassiInputError(f"jaw_length_mm must be a positive number of mm or null, not {jaw!r}",
+                                  path=path)
+        jaw = float(jaw)
+    return regions, ef, ec, jaw
 
 
 def _verts_per_eye() -> int:

@@ -55,9 +55,55 @@ def _decode(data: bytes, path) -> str:
         raise CassiInputError("not valid UTF-8 text", path=path, line=line) from None
 
 
-_LONG_NAME = re.compile(r'^\s*name\s*=\s*"(?P<name>(?:[^"]|"")*)"\s*$', re.M)
-_LONG_INTERVAL = re.compile(r"^\s*intervals\s*\[\d+\]\s*:?\s*$", re.M)
-_LONG_ITEM = re.compile(r"^\s*item\s*\[\d+\]\s*:?\s*$", re.M)
+_LONG_ITEM = re.compile(r"^[ \t]*item[ \t]*\[\d+\][ \t]*:?[ \t]*\r?$", re.M)
+_LONG_FIELD = re.compile(r'^[ \t]*(?P<key>class|name)[ \t]*=[ \t]*"(?P<value>(?:[^"\n]|"")*)"[ \t]*\r?$', re.M)
+_LONG_INTERVAL = re.compile(r"^[ \t]*intervals[ \t]*\[\d+\][ \t]*:?[ \t]*\r?$", re.M)
+
+
+def _unquote(value: str) -> str:
+    """A Praat string's text: the doubled quotes inside it read as one."""
+    return value.replace('""', '"')
+
+
+def _long_interval_line(text: str, want: str, index: int) -> int | None:
+    """Long form: the line of ``intervals [index + 1]:`` in the last interval tier named
+    ``want`` (case aside, as the parsed tiers are keyed)."""
+    items = [m.start() for m in _LONG_ITEM.finditer(text)] + [len(text)]
+    found = None
+    for a, b in zip(items, items[1:]):
+        fields = {m.group("key"): _unquote(m.group("value"))
+                  for m in _LONG_FIELD.finditer(text, a, b)}
+        if fields.get("class") == "IntervalTier" and fields.get("name", "").lower() == want:
+            starts = [m.start() for m in _LONG_INTERVAL.finditer(text, a, b)]
+            found = text.count("\n", 0, starts[index]) + 1 if index < len(starts) else None
+    return found
+
+
+def _short_interval_line(text: str, want: str, index: int) -> int | None:
+    """Short form: the xmin line of interval ``index`` in the last interval tier named ``want``:
+    rows "IntervalTier", name, xmin, xmax, size, then xmin, xmax, label per interval (a label
+    may run over several lines, until its quotes pair up)."""
+    lines = text.split("\n")
+    found = None
+    for i in range(len(lines) - 1):
+        name = lines[i + 1].strip()
+        if lines[i].strip() != '"IntervalTier"' or len(name) < 2 or not name.startswith('"') \
+                or not name.endswith('"') or _unquote(name[1:-1]).lower() != want:
+            continue
+        row, k, found = i + 5, 0, None
+        while row < len(lines) and k <= index:
+            if k == index:
+                found = row + 1
+                break
+            row += 2                               # xmin, xmax
+            quotes = 0
+            while row < len(lines):                # the label, until its quotes pair up
+                quotes += lines[row].count('"')
+                row += 1
+                if quotes and quotes % 2 == 0:
+                    break
+            k += 1
+    return found
 
 
 def _interval_line(text: str | None, tier: str, index: int) -> int | None:
@@ -67,19 +113,9 @@ def _interval_line(text: str | None, tier: str, index: int) -> int | None:
     if text is None:
         return None
     want = tier.lower()
-    for m in _LONG_NAME.finditer(text):
-        if m.group("name").replace('""', '"').lower() != want:
-            continue
-        nxt = _LONG_ITEM.search(text, m.end())
-        end = nxt.start() if nxt else len(text)
-        starts = [i.start() for i in _LONG_INTERVAL.finditer(text, m.end(), end)]
-        return text.count("\n", 0, starts[index]) + 1 if index < len(starts) else None
-    lines = text.splitlines()
-    for i in range(len(lines) - 1):  # short form: "IntervalTier", "name", xmin, xmax, size
-        if lines[i].strip() == '"IntervalTier"' and lines[i + 1].strip().strip('"').lower() == want:
-            line = i + 6 + 3 * index
-            return line if line <= len(lines) else None
-    return None
+    if _LONG_ITEM.search(text):
+        return _long_interval_line(text, want, index)
+    return _short_interval_line(text, want, index)
 
 
 def _tier_frame(tier: dict, *, path, text: str | None = None) -> pd.DataFrame:

@@ -65,8 +65,9 @@ def bench_profile():
 
 
 def bench_face():
-    """The neutral face model (``cassi.data.face.model.build_face()``)."""
-    return build_face()
+    """The neutral face model (``cassi.data.face.model.build_face()``) at the bench profile's
+    scale (its jaw length), as the versions animate it."""
+    return build_face(jaw_length_mm=bench_profile().jaw_length_mm)
 
 
 def bench_geometry(quick: bool = False, *, face=None, frames: int | None = None,
