@@ -17,6 +17,7 @@ table, task, component; a level the run did not rate; a duplicate) is refused wi
 from __future__ import annotations
 
 import csv
+import io
 import json
 import os
 import re
@@ -75,12 +76,20 @@ def read_human_ratings(path: str | os.PathLike, run: Run,
         raise CassiInputError("no such ratings file", path=path) from err
     except (OSError, UnicodeDecodeError) as err:
         raise CassiInputError(f"unreadable ratings file: {err}", path=path) from err
-    reader = csv.reader(text.splitlines(keepends=True))
+    # only \n and \r end a line (str.splitlines would also split at \f, \v, \x85 ...); strict: an
+    # unterminated quote is an error, not a field running to the end of the file
+    reader = csv.reader(io.StringIO(text, newline=""), strict=True)
     try:
         header = [h.strip().lower() for h in next(reader)]
     except StopIteration:
         raise CassiInputError("empty ratings file: expected the header "
                               + ",".join(RATING_FILE_COLUMNS), path=path, line=1) from None
+    except csv.Error as err:
+        raise CassiInputError(f"malformed CSV: {err}", path=path, line=reader.line_num) from err
+    twice = sorted({h for h in header if h and header.count(h) > 1})
+    if twice:
+        raise CassiInputError(f"the header names column(s) {', '.join(twice)} more than once",
+                              path=path, line=1)
     missing = [c for c in RATING_FILE_COLUMNS if c not in header]
     if missing:
         raise CassiInputError(f"the header lacks column(s) {', '.join(missing)} (expected "
@@ -95,7 +104,7 @@ def read_human_ratings(path: str | os.PathLike, run: Run,
 
             def bad(why: str):
                 return CassiInputError(why, path=path, line=line)
-            if len(cells) < len(header):
+            if len(cells) != len(header):
                 raise bad(f"{len(cells)} fields, the header has {len(header)}")
             v = {c: cells[i].strip() for c, i in col.items()}
             for need in ("subject", "version", "table", "rating"):
@@ -167,7 +176,8 @@ def agreement(run: Run, ratings_path: str | os.PathLike,
             stats = agreement_stats(g["human"].map(idx), g["run"].map(idx))
             groups.append({"table": table, "version": version, **stats})
     dis = human[human["human"] != human["run"]].copy()
-    dis["steps"] = dis["run"].map(idx) - dis["human"].map(idx)
+    # astype first: with no disagreement the mapped columns are empty and untyped
+    dis["steps"] = dis["run"].map(idx).astype("int64") - dis["human"].map(idx).astype("int64")
     dis["evidence"] = [evidence_href(s, v, t) for s, v, t in
                        zip(dis["subject"], dis["version"], dis["table"])]
     return {"run": run.name, "ratings_file": str(ratings_path), "synthetic": run.synthetic,

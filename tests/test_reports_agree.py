@@ -73,6 +73,8 @@ def test_agree_on_a_good_file(run, tmp_path, capsys):
     ("JW11,,cassi-2.0,A,lips,", "no rating"),
     ("JW11,19,cassi-2.0,A,tongue,POOR", "duplicate of line 4"),
     ("JW11,\u00b2,cassi-2.0,A,lips,GOOD", "is not a task number"),   # a digit int() refuses
+    ("JW11,,cassi-1.0,A,tongue,GOOD,POOR", "7 fields, the header has 6"),
+    ('JW11,,cassi-1.0,A,tongue,"GOOD', "malformed CSV: unexpected end of data"),
 ])
 def test_bad_lines_exit_2_naming_the_file_and_line(run, tmp_path, capsys, line, problem):
     ratings = tmp_path / "bad.csv"
@@ -91,6 +93,22 @@ def test_bad_header_and_empty_file(run, tmp_path, capsys):
     ratings.write_text(HEADER)
     assert main(["agree", str(run), "--ratings", str(ratings)]) == 2
     assert f"{ratings}:1: no ratings" in capsys.readouterr().err
+
+
+def test_a_file_that_agrees_throughout(run, tmp_path, capsys):
+    """No disagreement at all is a result, not a crash; a form feed inside a line does not
+    shift the lines named."""
+    ratings = tmp_path / "ok.csv"
+    ratings.write_text(HEADER + "JW11,,cassi-2.0,A,lips,GOOD\n")
+    assert main(["agree", str(run), "--ratings", str(ratings), "--out", str(tmp_path / "ag")]) == 0
+    assert "0 disagreement(s)" in capsys.readouterr().out
+    assert json.loads((tmp_path / "ag" / "agreement.json").read_text())["disagreements"] == []
+    ratings.write_text(HEADER + "JW11,,cassi-2.0,A,lips,GOOD\f\n" + "JW11,,cassi-2.0,A,lips,GOOD\n")
+    assert main(["agree", str(run), "--ratings", str(ratings)]) == 2
+    assert f"{ratings}:3: duplicate of line 2" in capsys.readouterr().err
+    ratings.write_text("subject,task,version,table,component,rating,rating\nJW11,,cassi-2.0,A,lips,GOOD,POOR\n")
+    assert main(["agree", str(run), "--ratings", str(ratings)]) == 2
+    assert f"{ratings}:1: the header names column(s) rating more than once" in capsys.readouterr().err
 
 
 def test_report_with_ratings_has_the_section_and_links_to_the_evidence(run, tmp_path):
