@@ -130,6 +130,24 @@ def test_symlink_inside_the_corpus_is_fine(corpus_dir):
     assert (1, 1) in Corpus(corpus_dir).subject("JW45").task_files()
 
 
+def test_link_loops_and_fifos_are_named_not_followed(corpus_dir):
+    """A symbolic link loop (in the root or as a task file) and a FIFO where a file belongs are
+    named (exit 2 for the files the corpus needs), never a traceback or a read that blocks."""
+    os.symlink("loop", corpus_dir / "loop")                                    # loops on itself
+    os.symlink("tp007.txy", corpus_dir / "JW45" / "tp007.txy")
+    os.mkfifo(corpus_dir / "JW45" / "tp008.txy")
+    (corpus_dir / "corpus.json").unlink(missing_ok=True)
+    os.mkfifo(corpus_dir / "corpus.json")
+    c = Corpus(corpus_dir)
+    assert any("loop" in w and "skipped" in w for w in c.warnings)
+    with pytest.raises(CassiInputError, match="is not a regular file") as info:
+        c.metadata
+    assert info.value.path.endswith("corpus.json")
+    reports, errors = check_corpus(Corpus(corpus_dir))
+    assert any("tp007.txy" in e and "symbolic link loop" in e for e in errors), errors
+    assert "tp008.txy: is not a regular file" in " ".join(errors) + str(reports)
+
+
 def test_bad_metadata_names_file_and_line(corpus_dir):
     (corpus_dir / "corpus.json").write_text('{\n "synthetic": true,\n}\n')
     with pytest.raises(CassiInputError) as info:

@@ -48,8 +48,11 @@ def ensure_inside(root: Path, path: Path) -> Path:
 
     Raises :class:`CassiInputError` naming the path when it would escape the corpus directory.
     """
-    real_root = root.resolve()
-    real = path.resolve()
+    try:
+        real_root = root.resolve()
+        real = path.resolve()
+    except (RuntimeError, OSError) as err:  # Python 3.11 raises RuntimeError on a link loop
+        raise CassiInputError(f"cannot resolve (a symbolic link loop?): {err}", path=path) from None
     if real != real_root and real_root not in real.parents:
         link = "is a symbolic link that " if path.is_symlink() else ""
         raise CassiInputError(f"{link}leads outside the corpus directory {root} (to {real}): "
@@ -286,9 +289,16 @@ class Corpus:
             # A single subject directory given directly.
             return {self.root.resolve().name: self.root}
         for e in sorted(entries, key=lambda e: natural_key(e.name)):
-            if e.name.startswith(".") or not e.is_dir():
+            if e.name.startswith("."):
                 continue
             path = self.root / e.name
+            try:
+                if not e.is_dir():
+                    continue
+            except OSError as err:  # a symbolic link loop: not a subject directory either
+                self.warnings.append(f"{path}: cannot tell what it is ({err.strerror or err}); "
+                                     f"skipped")
+                continue
             try:
                 ensure_inside(self.root, path)
             except CassiInputError as err:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import re
+import stat
 from pathlib import Path
 from typing import Iterator
 
@@ -30,7 +31,12 @@ def read_bytes(path: str | os.PathLike) -> bytes:
     """Read a whole file, turning OS errors into :class:`CassiInputError` naming the file."""
     path = Path(path)
     try:
-        size = path.stat().st_size
+        st = path.stat()
+        if stat.S_ISDIR(st.st_mode):
+            raise CassiInputError("is a directory, not a file", path=path)
+        if not stat.S_ISREG(st.st_mode):  # a FIFO or a device would block or never end
+            raise CassiInputError("is not a regular file", path=path)
+        size = st.st_size
         if size > MAX_FILE_BYTES:
             raise CassiInputError(f"file is too large ({size} bytes)", path=path)
         with open(path, "rb") as fh:
