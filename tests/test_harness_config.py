@@ -45,6 +45,9 @@ def test_toml_and_yaml_give_the_same_config(tmp_path):
     ('executor = "slurm"\n', "unknown executor 'slurm'; valid: local, ray", 1),
     ('address = "x:1"\n', "address is only used with executor 'ray'", 1),
     ('out = "o"\nworkers = [\n', "not valid TOML", None),
+    ('out = "o"\nstride = 99999999999\n', r"stride: 99999999999 is out of range \(at most", 2),
+    ('stride = ' + "9" * 5000 + "\n", "not valid TOML: a number of more than 4300 digits", None),
+    ('tasks = ["\u0663"]\n', "tasks: expected an integer", 1),       # ASCII digits only
 ])
 def test_bad_settings_name_file_and_line(tmp_path, text, match, line):
     path = tmp_path / "run.toml"
@@ -72,6 +75,24 @@ def test_bad_yaml_and_suffix(tmp_path):
     (tmp_path / "r.json").write_text("{}")
     with pytest.raises(CassiInputError, match=".toml, .yaml or .yml"):
         C.load_config(tmp_path / "r.json")
+
+
+def test_yaml_refuses_a_key_set_twice_and_numbers_it_cannot_read(tmp_path):
+    """PyYAML keeps the last of two equal keys; a run file that sets one twice is refused with
+    the second's line. A number Python cannot read (over 4300 digits) is an input error too."""
+    path = tmp_path / "run.yaml"
+    path.write_text("stride: 5\nworkers: 2\nstride: 10\n")
+    with pytest.raises(CassiInputError, match=r"'stride' is set twice \(first on line 1\)") as err:
+        C.load_config(path)
+    assert err.value.path == str(path) and err.value.line == 3
+    path.write_text("run:\n  tasks: [19]\n  tasks: [21]\n")
+    with pytest.raises(CassiInputError, match="'tasks' is set twice"):
+        C.load_config(path)
+    path.write_text("stride: " + "9" * 5000 + "\n")
+    with pytest.raises(CassiInputError, match="not valid YAML: a number of more than 4300 digits"):
+        C.load_config(path)
+    path.write_text("subjects: [JW11, JW11]\nstride: 5\n")           # a repeated value is fine
+    assert C.load_config(path).subjects == ("JW11",)
 
 
 def test_flags_override_the_file(tmp_path):

@@ -140,14 +140,40 @@ def _did_you_mean(name: str, valid) -> str:
     return f" (did you mean {close[0]!r}?)" if close else ""
 
 
+#: No setting is an integer beyond this (task numbers, strides, workers, seeds): a longer one is
+#: a typing error, and Python refuses to read one of more than 4300 digits at all.
+_MAX_INT = 10 ** 9
+
+
 def _as_int(value: Any, key: str, where: dict) -> int:
     if isinstance(value, bool):
         raise CassiInputError(f"{key}: expected an integer, got {value!r}", **where)
-    if isinstance(value, int):
-        return value
-    if isinstance(value, str) and re.fullmatch(r"\s*[+-]?\d+\s*", value):
-        return int(value)
-    raise CassiInputError(f"{key}: expected an integer, got {value!r}", **where)
+    if isinstance(value, str) and re.fullmatch(r"\s*[+-]?[0-9]{1,10}\s*", value):  # ASCII digits
+        value = int(value)
+    if not isinstance(value, int):
+        raise CassiInputError(f"{key}: expected an integer, got {str(value)[:40]!r}", **where)
+    if abs(value) > _MAX_INT:
+        raise CassiInputError(f"{key}: {str(value)[:20]}{'...' if len(str(value)) > 20 else ''} "
+                              f"is out of range (at most {_MAX_INT})", **where)
+    return value
+
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """PyYAML's safe loader, refusing a key set twice in one mapping (PyYAML keeps the last)."""
+
+    def construct_mapping(self, node, deep=False):
+        seen = {}
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            try:
+                first = seen.setdefault(key, key_node.start_mark.line + 1)
+            except TypeError:  # an unhashable key: PyYAML's own error follows
+                continue
+            if first != key_node.start_mark.line + 1:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"{key!r} is set twice (first on line {first})",
+                    key_node.start_mark)
+        return super().construct_mapping(node, deep=deep)
 
 
 def validate(raw: Mapping[str, Any], *, source: str | Path | None = None,
@@ -222,13 +248,19 @@ def load_config(path: str | Path) -> RunConfig:
             m = re.search(r"line (\d+)", str(err))
             raise CassiInputError(f"not valid TOML: {err}", path=path,
                                   line=int(m.group(1)) if m else None) from err
+        except ValueError as err:  # an integer too long for Python to read
+            raise CassiInputError("not valid TOML: a number of more than 4300 digits",
+                                  path=path) from None
     elif suffix in (".yaml", ".yml"):
         try:
-            raw = yaml.safe_load(text)
+            raw = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a safe loader
         except yaml.YAMLError as err:
             mark = getattr(err, "problem_mark", None)
             raise CassiInputError(f"not valid YAML: {getattr(err, 'problem', err)}", path=path,
                                   line=mark.line + 1 if mark else None) from err
+        except ValueError as err:  # an integer too long for Python to read
+            raise CassiInputError("not valid YAML: a number of more than 4300 digits",
+                                  path=path) from None
         raw = {} if raw is None else raw
     else:
         raise CassiInputError("run configuration must be .toml, .yaml or .yml", path=path)
