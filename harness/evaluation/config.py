@@ -248,7 +248,7 @@ def load_config(path: str | Path) -> RunConfig:
             m = re.search(r"line (\d+)", str(err))
             raise CassiInputError(f"not valid TOML: {err}", path=path,
                                   line=int(m.group(1)) if m else None) from err
-        except ValueError as err:  # an integer too long for Python to read
+        except ValueError:  # an integer too long for Python to read
             raise CassiInputError("not valid TOML: a number of more than 4300 digits",
                                   path=path) from None
     elif suffix in (".yaml", ".yml"):
@@ -258,7 +258,7 @@ def load_config(path: str | Path) -> RunConfig:
             mark = getattr(err, "problem_mark", None)
             raise CassiInputError(f"not valid YAML: {getattr(err, 'problem', err)}", path=path,
                                   line=mark.line + 1 if mark else None) from err
-        except ValueError as err:  # an integer too long for Python to read
+        except ValueError:  # an integer too long for Python to read
             raise CassiInputError("not valid YAML: a number of more than 4300 digits",
                                   path=path) from None
         raw = {} if raw is None else raw
