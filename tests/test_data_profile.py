@@ -9,8 +9,9 @@ from data_helpers import FIXTURES, JW45_EXCERPT, REST, recording, write_subject
 
 from cassi.data.corpus.disk import Corpus
 from cassi.common.errors import CassiInputError
-from cassi.data.corpus.profile import (MaxProtru, file_measures, parse_maxprotru, preprocess,
-                                read_lipthick, read_maxprotru, write_lipthick, write_maxprotru)
+from cassi.data.corpus.profile import (MaxProtru, file_measures, parse_lipthick, parse_maxprotru,
+                                preprocess, read_lipthick, read_maxprotru, write_lipthick,
+                                write_maxprotru)
 from cassi.data.xrmb.files import read_txy
 
 D_REST = math.hypot(*(REST[6] - REST[7]))  # MNI-MNM of the helper's rest posture, mm
@@ -119,14 +120,40 @@ def test_printed_header_with_spaces_is_accepted():
     assert t["JW11"].max_ll == 0.439836
 
 
-@pytest.mark.parametrize("text, reason", [
-    ("Subject A B\n", "unexpected header"), ("JW1 1 2 3\n", "expected 7 columns"),
-    ("JW1 1 2 3 4 5 x\n", "not a number"), ("", "empty file"),
-    ("JW1 1 2 3 4 5 6\nJW1 1 2 3 4 5 6\n", "listed twice"),
+_ROW = "0.3 0.2 0.5 0.4 0.01 0.0"    # REST_UL REST_LL MAX_UL MAX_LL MIN_UL MIN_LL, ordered
+
+
+@pytest.mark.parametrize("text, reason, line", [
+    ("Subject A B\n", "unexpected header", 1), ("JW1 1 2 3\n", "expected 7 columns", 1),
+    ("JW1 1 2 3 4 5 x\n", "not a number", 1), ("", "empty file", None),
+    (f"JW1 {_ROW}\nJW1 {_ROW}\n", r"listed twice \(line 1", 2),
+    (f"JW1 {_ROW}\njw1 {_ROW}\n", r"jw1 listed twice \(line 1, up to case\)", 2),
+    (f"!!! {_ROW}\n", "'!!!' is not a subject name", 1),
+    ("JW1 0.3 0.2 0.5 0.4 0.6 0.0\n", r"UL: expected MIN <= REST <= MAX, got 0.6, 0.3, 0.5", 1),
+    ("JW1 0.3 0.2 0.5 0.1 0.01 0.0\n", "LL: expected MIN <= REST <= MAX", 1),
 ])
-def test_malformed_maxprotru(text, reason):
-    with pytest.raises(CassiInputError, match=reason):
+def test_malformed_maxprotru(text, reason, line):
+    with pytest.raises(CassiInputError, match=reason) as info:
         parse_maxprotru(text, path="maxprotru.txt")
+    assert info.value.line == line
+
+
+@pytest.mark.parametrize("text, reason, line", [
+    ("JW1 0\n", "lip thickness must be positive, got 0", 1),
+    ("JW1 0.5\nJW2 -0.4\n", "lip thickness must be positive, got -0.4", 2),
+    ("JW1 0.5\njw1 0.6\n", "listed twice", 2), ("0.4 0.5\n", "not a subject name", 1),
+])
+def test_malformed_lipthick(text, reason, line):
+    with pytest.raises(CassiInputError, match=reason) as info:
+        parse_lipthick(text, path="lipthick.txt")
+    assert info.value.line == line
+
+
+def test_the_published_profile_tables_pass(shared_dir):
+    """Every row of the thesis's Figures 4.16 and 4.25 as printed passes the new checks."""
+    ref = shared_dir / "reference" / "profiles"
+    assert len(read_maxprotru(ref / "maxprotru.txt")) == 15
+    assert all(v > 0 for v in read_lipthick(ref / "lipthick.txt").values())
 
 
 def test_written_profile_tables_match_preprocess(subject_dir, tmp_path):

@@ -176,12 +176,16 @@ value = st.integers(-2_000_000, 2_000_000).map(lambda v: v / 1e6)
 @given(st.dictionaries(st.from_regex(r"JW[0-9]{1,3}", fullmatch=True),
                        st.tuples(*[value] * 7), min_size=1, max_size=8))
 def test_profile_tables_roundtrip(table):
-    mp = {k: MaxProtru(*v[:6]) for k, v in table.items()}
+    def row(v):  # MIN <= REST <= MAX per lip, as the reader requires
+        ul, ll = sorted(v[0:3]), sorted(v[3:6])
+        return MaxProtru(rest_ul=ul[1], rest_ll=ll[1], max_ul=ul[2], max_ll=ll[2], min_ul=ul[0],
+                         min_ll=ll[0])
+    mp = {k: row(v) for k, v in table.items()}
     back = parse_maxprotru(format_maxprotru(mp))
     assert back.keys() == mp.keys()
     for k in mp:
         np.testing.assert_allclose(back[k], mp[k], atol=5e-7)
-    lt = {k: v[6] for k, v in table.items()}
+    lt = {k: abs(v[6]) + 1e-6 for k, v in table.items()}        # a thickness is positive
     back_lt = parse_lipthick(format_lipthick(lt))
     assert set(back_lt) == set(lt) and all(abs(back_lt[k] - lt[k]) < 5e-7 for k in lt)
 

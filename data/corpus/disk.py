@@ -36,7 +36,7 @@ from cassi.data.xrmb.files import PELLETS, TaskRecording, parse_task_name, read_
 
 METADATA_FILE = "corpus.json"
 SUBJECT_FILES = {"pal": "PAL.DAT", "pha": "PHA.DAT", "mis": "Mis.dat"}
-_SUBJECT_NAME_RE = re.compile(r"[A-Za-z][A-Za-z0-9_-]{0,31}", re.ASCII)
+SUBJECT_NAME_RE = re.compile(r"[A-Za-z][A-Za-z0-9_-]{0,31}", re.ASCII)
 
 
 def natural_key(name: str):
@@ -304,7 +304,7 @@ class Corpus:
             except CassiInputError as err:
                 self.problems.append(str(err))
                 continue
-            if not _SUBJECT_NAME_RE.fullmatch(e.name):
+            if not SUBJECT_NAME_RE.fullmatch(e.name):
                 self.warnings.append(f"{path}: not a subject name; skipped")
                 continue
             try:
@@ -367,7 +367,7 @@ class Corpus:
 
     def subject(self, name: str) -> SubjectData:
         """The subject named ``name`` (case-insensitive)."""
-        if not isinstance(name, str) or not _SUBJECT_NAME_RE.fullmatch(name):
+        if not isinstance(name, str) or not SUBJECT_NAME_RE.fullmatch(name):
             raise CassiInputError(f"bad subject name {str(name)[:40]!r}")
         match = next((k for k in self._subjects if k.upper() == name.upper()), None)
         if match is None:

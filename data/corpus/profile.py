@@ -35,7 +35,8 @@ import numpy as np
 import pandas as pd
 
 from cassi.common.atomic import atomic_write_text
-from cassi.data.corpus.disk import SUBJECT_FILES, Corpus, SubjectData, natural_key
+from cassi.data.corpus.disk import (SUBJECT_FILES, SUBJECT_NAME_RE, Corpus, SubjectData,
+                                    natural_key)
 from cassi.common.errors import CassiInputError
 from cassi.data.xrmb.headmeasures import HeadMeasures
 from cassi.data.xrmb.textlines import decode_ascii, numbered_rows, parse_num, read_bytes
@@ -248,6 +249,18 @@ def write_maxprotru(path: str | os.PathLike, table) -> None:
     atomic_write_text(path, format_maxprotru(table))
 
 
+def _subject_row(name: str, seen: dict[str, int], *, path, line: int) -> None:
+    """Refuse a row's subject name that is not one (the corpus's rule for subject folders), or
+    that repeats an earlier row's, up to case (the folders are matched up to case)."""
+    if not SUBJECT_NAME_RE.fullmatch(name):
+        raise CassiInputError(f"{name!r} is not a subject name (a letter, then letters, digits, "
+                              f"_ or -)", path=path, line=line)
+    first = seen.setdefault(name.upper(), line)
+    if first != line:
+        raise CassiInputError(f"subject {name} listed twice (line {first}, up to case)",
+                              path=path, line=line)
+
+
 def parse_maxprotru(data: bytes | str, *, path=None) -> dict[str, MaxProtru]:
     """Parse maxprotru.txt text -> ``{subject: MaxProtru}`` in file order.
 
@@ -255,6 +268,7 @@ def parse_maxprotru(data: bytes | str, *, path=None) -> dict[str, MaxProtru]:
     """
     text = decode_ascii(data, path=path)
     out: dict[str, MaxProtru] = {}
+    seen: dict[str, int] = {}
     header_seen = False
     for line, toks in numbered_rows(text):
         if not header_seen:
@@ -271,11 +285,16 @@ def parse_maxprotru(data: bytes | str, *, path=None) -> dict[str, MaxProtru]:
             raise CassiInputError(f"expected 7 columns (subject and six values), found "
                                   f"{len(toks)}", path=path, line=line)
         name = toks[0]
-        if name in out:
-            raise CassiInputError(f"subject {name} listed twice", path=path, line=line)
+        _subject_row(name, seen, path=path, line=line)
         vals = [parse_num(t, what=f"column {k} ({MAXPROTRU_COLUMNS[k - 2]})", path=path, line=line)
                 for k, t in enumerate(toks[1:], start=2)]
-        out[name] = MaxProtru(*vals)
+        row = MaxProtru(*vals)
+        for lip in ("ul", "ll"):
+            lo, rest, hi = (getattr(row, f"{k}_{lip}") for k in ("min", "rest", "max"))
+            if not lo <= rest <= hi:  # eq. 4.13 maps MIN..REST..MAX onto c: they must be ordered
+                raise CassiInputError(f"{lip.upper()}: expected MIN <= REST <= MAX, got {lo:g}, "
+                                      f"{rest:g}, {hi:g}", path=path, line=line)
+        out[name] = row
     if not out:
         raise CassiInputError("empty file: no subject rows", path=path)
     return out
@@ -306,13 +325,16 @@ def parse_lipthick(data: bytes | str, *, path=None) -> dict[str, float]:
     """Parse lipthick.txt text -> ``{subject: value}`` in file order."""
     text = decode_ascii(data, path=path)
     out: dict[str, float] = {}
+    seen: dict[str, int] = {}
     for line, toks in numbered_rows(text):
         if len(toks) != 2:
             raise CassiInputError(f"expected 2 columns (subject value), found {len(toks)}",
                                   path=path, line=line)
-        if toks[0] in out:
-            raise CassiInputError(f"subject {toks[0]} listed twice", path=path, line=line)
-        out[toks[0]] = parse_num(toks[1], what="column 2 (lip thickness)", path=path, line=line)
+        _subject_row(toks[0], seen, path=path, line=line)
+        v = parse_num(toks[1], what="column 2 (lip thickness)", path=path, line=line)
+        if not v > 0:  # the UL-LL pellet distance over the jaw length
+            raise CassiInputError(f"lip thickness must be positive, got {v:g}", path=path, line=line)
+        out[toks[0]] = v
     if not out:
         raise CassiInputError("empty file: no subject rows", path=path)
     return out
