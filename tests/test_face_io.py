@@ -62,10 +62,17 @@ def test_real_file_quirks(tmp_path):
     ("d\n2 1\n1 0 zero 0\n", 3, "not a number"),
     ("d\n2 1\n1 0 0\n", 3, "number x y z"),
     ("d\nmany\n", 2, "integer"),
+    ("d\n2000000000 0\n", 2, "beyond any face"),          # not 45 GiB of vertices
+    ("d\n2 1\n\u0661 0 0 0\n", 3, "not an integer"),          # ASCII digits, as Parke wrote
+    ("d\n2 1\n1 1_000 0 0\n", 3, "not a number"),
+    ("d\n2 1\n1 1e-05 -2.5E+3 .5\n", None, None),           # repr's exponents read back
 ])
 def test_bad_pts_names_line(tmp_path, text, line, what):
     p = tmp_path / "bad.pts"
     p.write_text(text)
+    if line is None:
+        np.testing.assert_array_equal(read_pts(p, strict=False).vertices[0], [1e-05, -2500.0, 0.5])
+        return
     with pytest.raises(CassiInputError) as err:
         read_pts(p)
     assert f"bad.pts:{line}:" in str(err.value) and what in str(err.value)
@@ -77,6 +84,9 @@ def test_bad_pts_names_line(tmp_path, text, line, what):
     ("d\n1\n1 1 2 x\n", 3),             # not a number
     ("d\n1\n1 1 2 2\n", 3),             # repeated vertex
     ("d\n1\n1 1 2 3.a\n", 3),           # bad crease suffix
+    ("d\n1\n1 1 2 3 4 5\n", 3),         # a pentagon: Parke's are triangles and quads
+    ("d\n1\n-7 1 2 3\n", 3),            # no material -7
+    ("d\n1\n1 1 2 \u0663\n", 3),         # ASCII digits only
 ])
 def test_bad_top_names_line(tmp_path, text, line):
     p = tmp_path / "bad.top"

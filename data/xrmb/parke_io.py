@@ -20,14 +20,15 @@ their shortest repr, integral values as integers, as Parke's files have them).
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from os import PathLike
-from pathlib import Path
 
 import numpy as np
 
 from cassi.common.atomic import atomic_write_text
 from cassi.common.errors import CassiInputError
+from cassi.data.xrmb.textlines import INT_RE, read_bytes
 
 
 @dataclass(frozen=True)
@@ -95,11 +96,15 @@ class TopFile:
     polygons: tuple[Polygon, ...]
 
 
+#: Parke's numbers as his files write them (ASCII digits; an exponent as ``repr`` writes one).
+_NUMBER_RE = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]{1,3})?", re.ASCII)
+#: No face has more vertices than this (Parke's has 287, cassi-farm's under 1,000): a larger
+#: header count is a damaged file, not a face to allocate.
+MAX_VERTICES = 1_000_000
+
+
 def _lines(path: str | PathLike) -> list[str]:
-    try:
-        raw = Path(path).read_bytes()
-    except OSError as exc:
-        raise CassiInputError(f"cannot read: {exc.strerror or exc}", path=path) from None
+    raw = read_bytes(path)  # regular files only, with the project's size limit
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
@@ -108,20 +113,18 @@ def _lines(path: str | PathLike) -> list[str]:
 
 
 def _number(tok: str, path, line: int, what: str) -> float:
-    try:
-        v = float(tok)
-    except ValueError:
-        raise CassiInputError(f"{what} {tok!r} is not a number", path=path, line=line) from None
+    if not _NUMBER_RE.fullmatch(tok):
+        raise CassiInputError(f"{what} {tok[:40]!r} is not a number", path=path, line=line)
+    v = float(tok)
     if not np.isfinite(v):
         raise CassiInputError(f"{what} {tok!r} is not finite", path=path, line=line)
     return v
 
 
 def _int(tok: str, path, line: int, what: str) -> int:
-    try:
-        return int(tok)
-    except ValueError:
-        raise CassiInputError(f"{what} {tok!r} is not an integer", path=path, line=line) from None
+    if not INT_RE.fullmatch(tok) or len(tok) > 12:
+        raise CassiInputError(f"{what} {tok[:40]!r} is not an integer", path=path, line=line)
+    return int(tok)
 
 
 def read_pts(path: str | PathLike, *, strict: bool = True) -> PtsFile:
@@ -158,6 +161,9 @@ def read_pts(path: str | PathLike, *, strict: bool = True) -> PtsFile:
     declared = _int(head[1], path, k + 1, "defined count") if len(head) == 2 else None
     if total <= 0 or (declared is not None and not 0 <= declared <= total):
         raise CassiInputError(f"bad counts {lines[k].strip()!r}", path=path, line=k + 1)
+    if total > MAX_VERTICES:
+        raise CassiInputError(f"vertex count {total} is beyond any face's ({MAX_VERTICES})",
+                              path=path, line=k + 1)
     verts = np.full((total, 3), np.nan)
     seen = np.zeros(total, bool)
     for i in range(k + 1, len(lines)):
@@ -250,10 +256,13 @@ def read_top(path: str | PathLike, *, vertex_count: int | None = None,
         toks = lines[i].split()
         if not toks:
             continue
-        if len(toks) < 4:
+        if not 4 <= len(toks) <= 5:  # Parke's polygons are triangles and quads
             raise CassiInputError(f"expected 'material v v v [v]', got {lines[i].strip()!r}",
                                   path=path, line=i + 1)
         mat = _int(toks[0], path, i + 1, "material")
+        if mat < 1:
+            raise CassiInputError(f"material {mat} is not a material number (1, 2, ...)",
+                                  path=path, line=i + 1)
         vs, cs = [], []
         for t in toks[1:]:
             num, dot, crease = t.partition(".")
