@@ -243,6 +243,29 @@ def _long_grid(tiers) -> str:
     return "\n".join(out) + "\n"
 
 
+def test_textgrid_times_praatio_would_misread_or_that_leave_the_grid():
+    """praatio reads "-0.1" as 0.1: a negative time is refused where it stands. An interval
+    beyond the grid's span is refused; one that overlaps the one before by rounding (< 1 us) is
+    read as starting where that one ends."""
+    from cassi.data.xrmb.alignment import parse_alignment
+    grid = _long_grid([("IntervalTier", "phone", 3), ("IntervalTier", "word", 2)])
+    lines = grid.split("\n")
+    k = lines.index("            xmin = 1")                     # phone interval 2
+    neg = "\n".join(lines[:k] + ["            xmin = -0.1"] + lines[k + 1:])
+    with pytest.raises(CassiInputError, match="a negative time 'xmin = -0.1'") as info:
+        parse_alignment(neg, path="tp1.TextGrid")
+    assert info.value.line == k + 1
+    j = len(lines) - 1 - lines[::-1].index("            xmax = 2")  # word interval 2 ends at 2 ...
+    far = "\n".join(lines[:j] + ["            xmax = 9"] + lines[j + 1:])   # ... now at 9 in a 3 s grid
+    with pytest.raises(CassiInputError, match="outside the grid's 0.0..3.0 s") as info:
+        parse_alignment(far, path="tp1.TextGrid")
+    assert info.value.line == j - 1
+    near = "\n".join(lines[:k] + ["            xmin = 0.9999999"] + lines[k + 1:])
+    a = parse_alignment(near, path="tp1.TextGrid")
+    assert a.phones["start_s"].iloc[1] == 1.0
+    assert parse_alignment(grid).words["end_s"].tolist() == [1.0, 2.0]
+
+
 def test_textgrid_error_lines_in_awkward_layouts():
     """The line finder reads the tier the parser keeps: an interval tier (not a point tier of
     the same name), the last of names equal but for case, quoted names; CRLF, blank lines and
