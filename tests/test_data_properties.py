@@ -158,7 +158,10 @@ coord = st.integers(-200_000, 200_000).map(lambda v: v / 1000.0)
 @given(st.dictionaries(st.from_regex(r"JW[0-9]{1,3}", fullmatch=True),
                        st.tuples(coord, coord, coord, coord), max_size=8))
 def test_head_measures_roundtrip(table):
-    hm = {k: HeadMeasures(np.array(v[:2]), np.array(v[2:])) for k, v in table.items()}
+    def jaw(v):  # below the incisors, the gonion behind the gnathion, as the reader requires
+        gox, goy, dx, gny = (abs(round(c * 1000)) + 1 for c in v)      # whole micrometres
+        return HeadMeasures(np.array([-gox, -goy]) / 1000.0, np.array([-gox + dx, -gny]) / 1000.0)
+    hm = {k: jaw(v) for k, v in table.items()}
     assert parse_head_measures(format_head_measures(hm)) == hm
 
 

@@ -353,8 +353,13 @@ def test_head_measures_fixture_and_roundtrip(tmp_path):
 
 @pytest.mark.parametrize("text, line, reason", [
     ("JW1 1 2 3\n", 1, "expected 5 columns"), ("JW1 1 2 3 x\n", 1, "not a number"),
-    ("JW1 1 2 3 4\njw1 1 2 3 4\n", 2, "listed twice"), ("../x 1 2 3 4\n", 1, "bad subject"),
-    ("JW1 1 2 3 4\nSubject GONION_X GONION_Y GNATHION_X GNATHION_Y\n", 2, "header line after"),
+    ("JW1 -80000 -50000 -5000 -44000\njw1 -80000 -50000 -5000 -44000\n", 2, "listed twice"),
+    ("../x 1 2 3 4\n", 1, "bad subject"),
+    ("JW1 -80000 -50000 -5000 -44000\nSubject GONION_X GONION_Y GNATHION_X GNATHION_Y\n", 2,
+     "header line after"),
+    ("JW1 0 0 0 0\n", 1, "are not a jaw"),                          # no jaw at all
+    ("JW1 -80000 50000 -5000 -44000\n", 1, "are not a jaw"),        # a gonion above the teeth
+    ("JW1 -5000 -50000 -80000 -44000\n", 1, "the gonion behind the gnathion"),
 ])
 def test_malformed_head_measures(tmp_path, text, line, reason):
     p = tmp_path / "Headmeasures.txt"

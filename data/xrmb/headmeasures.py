@@ -19,8 +19,9 @@ Plain ASCII text, whitespace separated (tabs or spaces, LF or CRLF, final newlin
   gonion (angle of the jaw) x, y and gnathion (point of the chin) x, y, in micrometres, in the same
   XRMB head frame as the task files (thesis 3.2.3: origin between the tips of the upper central
   incisors, +x out of the mouth along the maxillary occlusal plane, +y toward the roof of the
-  mouth), so both points have negative x and y. Integers, like the other XRMB files; decimals are
-  read too.
+  mouth), so both points lie below the origin (negative y) and the gonion behind the gnathion
+  (a prominent chin may put the gnathion's x slightly in front of the incisors, x > 0); a row
+  that breaks this is refused. Integers, like the other XRMB files; decimals are read too.
 - One line per subject; a subject listed twice is an error.
 
 The file may sit in the corpus root (all subjects) or in a subject's directory (that subject; it
@@ -100,6 +101,11 @@ def parse_head_measures(data: bytes | str, *,
         if any(abs(v) > _MAX_ABS_UM for v in vals):
             raise CassiInputError("coordinate implausibly far from the origin (micrometres "
                                   "expected)", path=path, line=line_no)
+        gox, goy, gnx, gny = vals
+        if not (goy < 0 and gny < 0 and gox < gnx):
+            raise CassiInputError(f"gonion ({gox:g}, {goy:g}) and gnathion ({gnx:g}, {gny:g}) um "
+                                  f"are not a jaw: both lie below the incisor tips (y < 0), the "
+                                  f"gonion behind the gnathion", path=path, line=line_no)
         seen_line[key] = line_no
         arr = np.asarray(vals, dtype=np.float64) / 1000.0
         out[key] = HeadMeasures(gonion_mm=arr[:2].copy(), gnathion_mm=arr[2:].copy())
