@@ -264,6 +264,13 @@ def test_textgrid_times_praatio_would_misread_or_that_leave_the_grid():
     a = parse_alignment(near, path="tp1.TextGrid")
     assert a.phones["start_s"].iloc[1] == 1.0
     assert parse_alignment(grid).words["end_s"].tolist() == [1.0, 2.0]
+    label = grid.replace('text = "a"', 'text = "a\n-5 dB"', 1)         # a label's line, not a time
+    assert len(parse_alignment(label).phones) == 3
+    k2 = lines.index("            xmax = 1")                     # phone interval 1 ends at 1 ...
+    inside = lines[:k2] + ["            xmax = 1.0000008"] + lines[k2 + 1:]
+    inside[k + 1] = "            xmax = 1.0000005"            # ... interval 2 ends inside it
+    with pytest.raises(CassiInputError, match="ends inside the one before"):
+        parse_alignment("\n".join(inside), path="tp1.TextGrid")
 
 
 def test_textgrid_error_lines_in_awkward_layouts():

@@ -151,6 +151,8 @@ def _tier_frame(tier: dict, *, path, text: str | None = None,
         if start < prev_end - ROUNDING_S:
             raise refuse(f"overlaps the one before: starts at {start} s, before {prev_end} s")
         start = max(start, prev_end)  # a rounding overlap: the intervals still tile the time
+        if end < start:
+            raise refuse(f"bad interval {start}..{end} (it ends inside the one before)")
         if start < span[0] - ROUNDING_S or end > span[1] + ROUNDING_S:
             raise refuse(f"{start}..{end} s lies outside the grid's {span[0]}..{span[1]} s")
         prev_end = end
@@ -170,7 +172,9 @@ def parse_alignment(data: bytes | str, *, path: str | os.PathLike | None = None)
     text = data if isinstance(data, str) else _decode(data, path)
     if not text.strip():
         raise CassiInputError("empty file", path=path)
-    negative = _NEGATIVE_TIME.search(text)
+    # quoted labels blanked (lines kept): a label's own "-5 dB" is not a time
+    unquoted = re.sub(r'"(?:[^"]|"")*"', lambda m: re.sub(r"[^\n]", " ", m.group()), text)
+    negative = _NEGATIVE_TIME.search(unquoted)
     if negative:  # praatio reads "-0.1" as 0.1: refuse it before it does
         raise CassiInputError(f"a negative time {negative.group(0).strip()!r}: a recording's "
                               f"times start at 0", path=path,
@@ -184,8 +188,9 @@ def parse_alignment(data: bytes | str, *, path: str | os.PathLike | None = None)
     except Exception as err:  # noqa: BLE001 - praatio raises many kinds on malformed text
         raise CassiInputError(f"not a readable TextGrid ({type(err).__name__}: "
                               f"{str(err)[:120]})", path=path) from None
-    if not (math.isfinite(xmin) and math.isfinite(xmax)) or xmax < xmin:
-        raise CassiInputError(f"the grid's time range {xmin}..{xmax} s is not a finite span",
+    if not (math.isfinite(xmin) and math.isfinite(xmax)) or xmax < xmin or xmin < 0:
+        raise CassiInputError(f"the grid's time range {xmin}..{xmax} s is not a finite span "
+                              f"from 0 on",
                               path=path)
 
     def pick(names):

@@ -151,10 +151,9 @@ def _as_int(value: Any, key: str, where: dict) -> int:
     if isinstance(value, str) and re.fullmatch(r"\s*[+-]?[0-9]{1,10}\s*", value):  # ASCII digits
         value = int(value)
     if not isinstance(value, int):
-        raise CassiInputError(f"{key}: expected an integer, got {str(value)[:40]!r}", **where)
-    if abs(value) > _MAX_INT:
-        raise CassiInputError(f"{key}: {str(value)[:20]}{'...' if len(str(value)) > 20 else ''} "
-                              f"is out of range (at most {_MAX_INT})", **where)
+        raise CassiInputError(f"{key}: expected an integer, got {repr(value)[:40]}", **where)
+    if abs(value) > _MAX_INT:  # no str(value): a hex literal may have more digits than str allows
+        raise CassiInputError(f"{key}: out of range (at most {_MAX_INT})", **where)
     return value
 
 
@@ -164,12 +163,15 @@ class _UniqueKeyLoader(yaml.SafeLoader):
     def construct_mapping(self, node, deep=False):
         seen = {}
         for key_node, _ in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge":  # '<<: *base' merges, it sets no key
+                continue
             key = self.construct_object(key_node, deep=deep)
             try:
-                first = seen.setdefault(key, key_node.start_mark.line + 1)
+                first = seen.get(key)
+                seen.setdefault(key, key_node.start_mark.line + 1)
             except TypeError:  # an unhashable key: PyYAML's own error follows
                 continue
-            if first != key_node.start_mark.line + 1:
+            if first is not None:
                 raise yaml.constructor.ConstructorError(
                     None, None, f"{key!r} is set twice (first on line {first})",
                     key_node.start_mark)
@@ -248,9 +250,8 @@ def load_config(path: str | Path) -> RunConfig:
             m = re.search(r"line (\d+)", str(err))
             raise CassiInputError(f"not valid TOML: {err}", path=path,
                                   line=int(m.group(1)) if m else None) from err
-        except ValueError:  # an integer too long for Python to read
-            raise CassiInputError("not valid TOML: a number of more than 4300 digits",
-                                  path=path) from None
+        except ValueError as err:  # e.g. an integer too long for Python to read, a bad date
+            raise CassiInputError(f"not valid TOML: {str(err)[:160]}", path=path) from None
     elif suffix in (".yaml", ".yml"):
         try:
             raw = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a safe loader
@@ -258,9 +259,8 @@ def load_config(path: str | Path) -> RunConfig:
             mark = getattr(err, "problem_mark", None)
             raise CassiInputError(f"not valid YAML: {getattr(err, 'problem', err)}", path=path,
                                   line=mark.line + 1 if mark else None) from err
-        except ValueError:  # an integer too long for Python to read
-            raise CassiInputError("not valid YAML: a number of more than 4300 digits",
-                                  path=path) from None
+        except ValueError as err:  # e.g. an integer too long for Python to read, a bad date
+            raise CassiInputError(f"not valid YAML: {str(err)[:160]}", path=path) from None
         raw = {} if raw is None else raw
     else:
         raise CassiInputError("run configuration must be .toml, .yaml or .yml", path=path)
