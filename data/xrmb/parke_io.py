@@ -28,7 +28,7 @@ import numpy as np
 
 from cassi.common.atomic import atomic_write_text
 from cassi.common.errors import CassiInputError
-from cassi.data.xrmb.textlines import INT_RE, read_bytes
+from cassi.data.xrmb.textlines import parse_int, read_bytes
 
 
 @dataclass(frozen=True)
@@ -122,9 +122,9 @@ def _number(tok: str, path, line: int, what: str) -> float:
 
 
 def _int(tok: str, path, line: int, what: str) -> int:
-    if not INT_RE.fullmatch(tok) or len(tok) > 12:
-        raise CassiInputError(f"{what} {tok[:40]!r} is not an integer", path=path, line=line)
-    return int(tok)
+    if len(tok) > 12:  # no count or number of a face runs to 13 digits
+        raise CassiInputError(f"{what}: {tok[:40]!r} is not an integer", path=path, line=line)
+    return parse_int(tok, what=what, path=path, line=line)
 
 
 def read_pts(path: str | PathLike, *, strict: bool = True) -> PtsFile:

@@ -43,8 +43,6 @@ def read_bytes(path: str | os.PathLike) -> bytes:
             return fh.read(MAX_FILE_BYTES + 1)
     except CassiInputError:
         raise
-    except IsADirectoryError:
-        raise CassiInputError("is a directory, not a file", path=path) from None
     except FileNotFoundError:
         raise CassiInputError("file not found", path=path) from None
     except PermissionError:
