@@ -152,6 +152,26 @@ def test_unknown_names_list_the_valid_ones(change, match):
         C.check_names(C.RunConfig(**change), CATALOG)
 
 
+@pytest.mark.parametrize("name", ["run.toml", "run.yaml"])
+def test_unknown_names_from_a_run_file_name_its_line(tmp_path, name):
+    """A name the corpus lacks is refused at the line of the run file that set it, also after
+    flags were applied over the file; a flag's own name has no line."""
+    path = tmp_path / name
+    sep = " =" if name.endswith(".toml") else ":"
+    path.write_text(f'out{sep} "o"\nsubjects{sep} ["JW11"]\n\ntasks{sep} [19, 7]\n')
+    args = _parser().parse_args(["run", "--config", str(path), "--versions", "cassi-1.0"])
+    cfg = config_from_args(args)
+    with pytest.raises(CassiInputError, match=r"unknown task 7; valid tasks: 19, 21, 106") as err:
+        C.check_names(cfg, CATALOG)
+    assert err.value.path == str(path) and err.value.line == 4
+    assert str(err.value).startswith(f"{path}:4: ")
+    args = _parser().parse_args(["run", "--config", str(path), "--tasks", "8"])
+    with pytest.raises(CassiInputError, match="unknown task 8") as err:
+        C.check_names(config_from_args(args), CATALOG)
+    assert err.value.path is None
+    assert C.resolved(cfg).keys().isdisjoint({"where"}) and cfg == cfg.replace(where={})
+
+
 def test_known_names_pass():
     C.check_names(C.RunConfig(subjects=("JW12",), tasks=(2,), versions=("cassi-1.0",),
                               views=("geometry",)), CATALOG)

@@ -103,12 +103,22 @@ class RunConfig:
     workers: int = field(default_factory=usable_cores)   # one worker per usable core
     threads: int = 1
     retries: int = 1
+    #: Where each setting read from a run file was set (key -> ``{"path", "line"}``), so a
+    #: name checked later against the corpus (:func:`check_names`) is refused at its line.
+    #: Not a setting: never saved, never compared.
+    where: Mapping[str, Mapping[str, Any]] = field(default_factory=dict, compare=False,
+                                                   repr=False)
 
     def replace(self, **changes) -> "RunConfig":
         return dataclasses.replace(self, **changes)
 
 
-FIELDS = tuple(f.name for f in dataclasses.fields(RunConfig))
+FIELDS = tuple(f.name for f in dataclasses.fields(RunConfig) if f.name != "where")
+
+
+def settings(cfg: RunConfig) -> dict[str, Any]:
+    """Every setting of ``cfg`` by name (its ``where`` left out)."""
+    return {k: getattr(cfg, k) for k in FIELDS}
 _LISTS = {"subjects": str, "tasks": int, "versions": str, "views": str, "video_versions": str}
 _INTS = {"stride": 0, "extremes": 0, "animate_stride": 0, "chunk": 1, "workers": 1, "threads": 1, "retries": 0}   # name -> minimum
 _STRS = ("preset", "variant", "executor", "address")
@@ -188,8 +198,11 @@ def validate(raw: Mapping[str, Any], *, source: str | Path | None = None,
         Unknown key (with the valid ones), wrong type, value out of range, unknown executor.
     """
     values: dict[str, Any] = {}
+    origin: dict[str, dict[str, Any]] = {}
     for key, value in raw.items():
         where = {"path": source, "line": _line_of(text, key)} if source else {}
+        if where and isinstance(key, str):
+            origin[key] = where
         if not isinstance(key, str) or key not in FIELDS:
             raise CassiInputError(f"unknown setting {key!r}{_did_you_mean(key, FIELDS)}; valid "
                                   f"settings: {', '.join(FIELDS)}", **where)
@@ -225,7 +238,7 @@ def validate(raw: Mapping[str, Any], *, source: str | Path | None = None,
             if not isinstance(value, str):
                 raise CassiInputError(f"{key}: expected text, got {value!r}", **where)
             values[key] = value.strip()
-    cfg = RunConfig(**values)
+    cfg = RunConfig(**values, where=origin)
     if cfg.executor not in EXECUTORS:
         raise CassiInputError(f"unknown executor {cfg.executor!r}; valid: {', '.join(EXECUTORS)}",
                               path=source, line=_line_of(text, "executor"))
@@ -273,10 +286,12 @@ def load_config(path: str | Path) -> RunConfig:
 
 def merge(base: RunConfig, overrides: Mapping[str, Any]) -> RunConfig:
     """``base`` with every non-None override applied (CLI flags over a config file)."""
-    raw = {k: v for k, v in dataclasses.asdict(base).items()
+    raw = {k: v for k, v in settings(base).items()
            if v is not None and v != getattr(RunConfig(), k)}
-    raw.update({k: v for k, v in overrides.items() if v is not None})
-    return validate(raw)
+    given = {k: v for k, v in overrides.items() if v is not None}
+    raw.update(given)
+    # a setting the flags did not change keeps the run file's line
+    return validate(raw).replace(where={k: v for k, v in base.where.items() if k not in given})
 
 
 @dataclass(frozen=True)
@@ -290,30 +305,33 @@ class Catalog:
     presets: tuple[str, ...] = ()
 
 
-def _unknown(kind: str, names, valid) -> None:
+def _unknown(kind: str, names, valid, where: Mapping[str, Any] | None = None) -> None:
     bad = [n for n in names if n not in valid]
     if bad:
         hint = _did_you_mean(bad[0], valid)
         raise CassiInputError(f"unknown {kind} {', '.join(map(str, bad))}{hint}; valid "
-                              f"{kind}s: {', '.join(map(str, valid)) or '(none)'}")
+                              f"{kind}s: {', '.join(map(str, valid)) or '(none)'}",
+                              **(where or {}))
 
 
 def check_names(cfg: RunConfig, catalog: Catalog) -> None:
-    """Fail before any work when a name is unknown, listing the valid names."""
+    """Fail before any work when a name is unknown, listing the valid names (and, for a name
+    read from a run file, the file and line that set it)."""
+    w = cfg.where.get
     if cfg.subjects is not None:
-        _unknown("subject", cfg.subjects, catalog.subjects)
+        _unknown("subject", cfg.subjects, catalog.subjects, w("subjects"))
     if cfg.tasks is not None and catalog.tasks:
         subjects = cfg.subjects or catalog.subjects
         valid = sorted({t for s in subjects for t in catalog.tasks.get(s, ())})
-        _unknown("task", cfg.tasks, valid)
+        _unknown("task", cfg.tasks, valid, w("tasks"))
     if cfg.versions is not None:
-        _unknown("version", cfg.versions, catalog.versions)
+        _unknown("version", cfg.versions, catalog.versions, w("versions"))
     if cfg.video_versions is not None:
-        _unknown("version", cfg.video_versions, catalog.versions)
+        _unknown("version", cfg.video_versions, catalog.versions, w("video_versions"))
     if cfg.views is not None:
-        _unknown("view", cfg.views, tuple(catalog.views) + (GEOMETRY_VIEW,))
+        _unknown("view", cfg.views, tuple(catalog.views) + (GEOMETRY_VIEW,), w("views"))
     if catalog.presets:
-        _unknown("preset", [cfg.preset], catalog.presets)
+        _unknown("preset", [cfg.preset], catalog.presets, w("preset"))
 
 
 def package_version() -> str:
@@ -341,7 +359,7 @@ def git_revision(where: Path | None = None) -> str | None:
 def resolved(cfg: RunConfig, **extra) -> dict:
     """The configuration as saved with the results: every field, plus provenance."""
     doc = {k: (str(v) if isinstance(v, Path) else list(v) if isinstance(v, tuple) else v)
-           for k, v in dataclasses.asdict(cfg).items()}
+           for k, v in settings(cfg).items()}
     doc["package_version"] = package_version()
     doc["git_revision"] = git_revision()
     doc.update(extra)
