@@ -227,6 +227,35 @@ def test_textgrid_interval_errors_name_their_line(tmp_path, form):
         assert hit == (f"intervals [{k}]:" if form == "long_textgrid" else start), (info.value, hit)
 
 
+@pytest.mark.parametrize("form", ["long_textgrid", "short_textgrid"])
+def test_textgrid_whose_tier_does_not_hold_its_declared_count(tmp_path, form):
+    """praatio reads the intervals that are there, Praat exactly the declared number: a tier cut
+    short at an interval boundary, or one with an interval pasted in, is refused at its size
+    line; the file as praatio wrote it reads."""
+    from praatio import textgrid
+    from cassi.data.xrmb.alignment import parse_alignment
+    tg = textgrid.Textgrid()
+    for name, ivs in (("word", [(0.0, 0.4, "sp"), (0.4, 1.0, "SA")]),
+                      ("phone", [(0.0, 0.4, "sp"), (0.4, 0.6, "S"), (0.6, 1.0, "AH")])):
+        tg.addTier(textgrid.IntervalTier(name, ivs, 0.0, 1.0))
+    tg.save(str(tmp_path / "tp105.TextGrid"), format=form, includeBlankSpaces=True)
+    good = (tmp_path / "tp105.TextGrid").read_text()
+    assert len(parse_alignment(good).phones) == 3
+    lines = good.rstrip("\n").split("\n")
+    cut = lines[:-4 if form == "long_textgrid" else -3]          # the phone tier's last interval gone
+    with pytest.raises(CassiInputError, match="tier 'phone' declares 3 intervals but holds 2") as info:
+        parse_alignment("\n".join(cut) + "\n", path="tp105.TextGrid")
+    size = [i + 1 for i, ln in enumerate(lines)
+            if ln.strip() in ("intervals: size = 3", "3")]
+    assert info.value.line == size[-1] and info.value.path == "tp105.TextGrid"
+    grown = "\n".join(lines).replace("size = 2", "size = 1") if form == "long_textgrid" else None
+    if grown is None:                               # short form: the word tier's size row
+        head = lines.index('"word"')
+        grown = "\n".join(lines[:head + 3] + ["1"] + lines[head + 4:])
+    with pytest.raises(CassiInputError, match="tier 'word' declares 1 intervals but holds 2"):
+        parse_alignment(grown + "\n", path="tp105.TextGrid")
+
+
 def _long_grid(tiers) -> str:
     """A long-form TextGrid of (class, name, intervals or points) tiers, one-second intervals."""
     out = ['File type = "ooTextFile"', 'Object class = "TextGrid"', "", "xmin = 0", "xmax = 3",

@@ -65,45 +65,83 @@ def _unquote(value: str) -> str:
     return value.replace('""', '"')
 
 
-def _long_interval_line(text: str, want: str, index: int) -> int | None:
-    """Long form: the line of ``intervals [index + 1]:`` in the last interval tier named
-    ``want`` (case aside, as the parsed tiers are keyed)."""
+_LONG_SIZE = re.compile(r"^[ \t]*intervals[ \t]*:[ \t]*size[ \t]*=[ \t]*(?P<n>[0-9]+)[ \t]*\r?$",
+                        re.M | re.ASCII)
+
+
+def _long_tier_span(text: str, want: str) -> tuple[int, int] | None:
+    """Long form: the text span of the last interval tier named ``want`` (case aside, as the
+    parsed tiers are keyed)."""
     items = [m.start() for m in _LONG_ITEM.finditer(text)] + [len(text)]
     found = None
     for a, b in zip(items, items[1:]):
         fields = {m.group("key"): _unquote(m.group("value"))
                   for m in _LONG_FIELD.finditer(text, a, b)}
         if fields.get("class") == "IntervalTier" and fields.get("name", "").lower() == want:
-            starts = [m.start() for m in _LONG_INTERVAL.finditer(text, a, b)]
-            found = text.count("\n", 0, starts[index]) + 1 if index < len(starts) else None
+            found = (a, b)
+    return found
+
+
+def _long_interval_line(text: str, want: str, index: int) -> int | None:
+    """Long form: the line of ``intervals [index + 1]:`` in tier ``want``."""
+    span = _long_tier_span(text, want)
+    if span is None:
+        return None
+    starts = [m.start() for m in _LONG_INTERVAL.finditer(text, *span)]
+    return text.count("\n", 0, starts[index]) + 1 if index < len(starts) else None
+
+
+def _short_tier_head(lines: list[str], want: str) -> int | None:
+    """Short form: the index of the "IntervalTier" row of the last interval tier named
+    ``want``; its rows are "IntervalTier", name, xmin, xmax, size, then xmin, xmax, label per
+    interval."""
+    found = None
+    for i in range(len(lines) - 1):
+        name = lines[i + 1].strip()
+        if lines[i].strip() == '"IntervalTier"' and len(name) >= 2 and name.startswith('"') \
+                and name.endswith('"') and _unquote(name[1:-1]).lower() == want:
+            found = i
     return found
 
 
 def _short_interval_line(text: str, want: str, index: int) -> int | None:
-    """Short form: the xmin line of interval ``index`` in the last interval tier named ``want``:
-    rows "IntervalTier", name, xmin, xmax, size, then xmin, xmax, label per interval (a label
-    may run over several lines, until its quotes pair up)."""
+    """Short form: the xmin line of interval ``index`` in tier ``want`` (a label may run over
+    several lines, until its quotes pair up)."""
     lines = text.split("\n")
-    found = None
-    for i in range(len(lines) - 1):
-        name = lines[i + 1].strip()
-        if lines[i].strip() != '"IntervalTier"' or len(name) < 2 or not name.startswith('"') \
-                or not name.endswith('"') or _unquote(name[1:-1]).lower() != want:
-            continue
-        row, k, found = i + 5, 0, None
-        while row < len(lines) and k <= index:
-            if k == index:
-                found = row + 1
+    head = _short_tier_head(lines, want)
+    if head is None:
+        return None
+    row, k = head + 5, 0
+    while row < len(lines):
+        if k == index:
+            return row + 1
+        row += 2                                   # xmin, xmax
+        quotes = 0
+        while row < len(lines):                    # the label, until its quotes pair up
+            quotes += lines[row].count('"')
+            row += 1
+            if quotes and quotes % 2 == 0:
                 break
-            row += 2                               # xmin, xmax
-            quotes = 0
-            while row < len(lines):                # the label, until its quotes pair up
-                quotes += lines[row].count('"')
-                row += 1
-                if quotes and quotes % 2 == 0:
-                    break
-            k += 1
-    return found
+        k += 1
+    return None
+
+
+def _declared_size(text: str | None, tier: str) -> tuple[int, int] | None:
+    """The interval count tier ``tier`` declares (``intervals: size = N``; the short form's
+    fifth row) and its 1-based line; None when the text does not say."""
+    if text is None:
+        return None
+    want = tier.lower()
+    if _LONG_ITEM.search(text):
+        span = _long_tier_span(text, want)
+        m = _LONG_SIZE.search(text, *span) if span else None
+        return (int(m.group("n")), text.count("\n", 0, m.start()) + 1) if m else None
+    lines = text.split("\n")
+    head = _short_tier_head(lines, want)
+    row = None if head is None else head + 4
+    if row is None or row >= len(lines) or not re.fullmatch(r"[0-9]+", lines[row].strip(), re.ASCII):
+        return None
+    return int(lines[row].strip()), row + 1
 
 
 def _interval_line(text: str | None, tier: str, index: int) -> int | None:
@@ -135,6 +173,13 @@ def _tier_frame(tier: dict, *, path, text: str | None = None,
     entries = tier.get("entries", [])
     if not isinstance(entries, (list, tuple)):
         raise CassiInputError(f"tier {name!r}: its entries are not a list", path=path)
+    declared = _declared_size(text, str(name))
+    if declared is not None and declared[0] != len(entries):
+        # praatio reads what is there; Praat reads exactly the declared count, so a file cut
+        # short (or one with intervals pasted in) is not what its header says
+        raise CassiInputError(f"tier {name!r} declares {declared[0]} intervals but holds "
+                              f"{len(entries)}: the file is cut short or was edited by hand",
+                              path=path, line=declared[1])
     for k, entry in enumerate(entries):
         def refuse(reason: str) -> CassiInputError:
             return CassiInputError(f"tier {name!r}, interval {k + 1}: {reason}", path=path,
