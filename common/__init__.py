@@ -1,2 +1,3 @@
-"""Basics every layer may import: errors that carry file and line (:mod:`.errors`) and atomic
-writes (:mod:`.atomic`). It imports no other cassi package."""
+"""Basics every layer may import: errors that carry file and line (:mod:`.errors`), atomic
+writes (:mod:`.atomic`) and command-line argument types (:mod:`.cliargs`). It imports no other
+cassi package."""

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 
+from cassi.common.cliargs import ascii_int
 from cassi.common.errors import CassiInputError
 from cassi.common.lazy import resolve
 
@@ -30,7 +31,7 @@ def register(subparsers) -> None:
     mk.add_argument("--out", required=True, type=Path, help="output directory")
     mk.add_argument("--subjects", type=_subject_list, default=None,
                     help="comma-separated subjects, e.g. JW11,JW45 (default: all 15)")
-    mk.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    mk.add_argument("--seed", type=ascii_int, default=0, help="random seed (default 0)")
     mk.add_argument("--alignments", type=Path, default=None,
                     help="directory of SUBJECT/tpNNN.TextGrid alignments to time the gestures")
     mk.set_defaults(func="cassi.data.actions:cmd_make")
@@ -85,7 +86,7 @@ def _subject_list(text: str) -> list[str]:
 def _task_list(text: str) -> list[int]:
     out: list[int] = []
     for part in (p.strip() for p in text.split(",")):
-        m = re.fullmatch(r"(\d{1,3})(?:-(\d{1,3}))?", part)
+        m = re.fullmatch(r"([0-9]{1,3})(?:-([0-9]{1,3}))?", part, re.ASCII)
         if not m or int(m.group(2) or m.group(1)) < int(m.group(1)):
             raise argparse.ArgumentTypeError(f"bad task list {text!r} (e.g. 105 or 102-105,13)")
         out.extend(range(int(m.group(1)), int(m.group(2) or m.group(1)) + 1))

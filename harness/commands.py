@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from cassi.common.cliargs import ascii_int
 from cassi.common.errors import CassiInputError
 
 from cassi.harness.evaluation import config as C
@@ -67,7 +68,7 @@ def _add_gc(sub) -> None:
                        "store that no kept night links. Given a store (cassi run --cache DIR), "
                        "remove what no run directory links.")
     p.add_argument("dir", type=Path, help="a nightly directory (cassi nightly --out) or a store")
-    p.add_argument("--keep", type=int, default=KEEP_NIGHTS,
+    p.add_argument("--keep", type=ascii_int, default=KEEP_NIGHTS,
                    help=f"nights to keep (default {KEEP_NIGHTS}: a month)")
     p.set_defaults(func="cassi.harness.actions:cmd_gc")
 

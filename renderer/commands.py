@@ -15,6 +15,7 @@ from collections.abc import Callable
 import numpy as np
 
 
+from cassi.common.cliargs import ascii_int
 from cassi.renderer.views import PRESET_NAMES, VIEW_NAMES
 
 __all__ = ["register", "NEUTRAL"]
@@ -30,8 +31,8 @@ def _task(p: argparse.ArgumentParser) -> None:
     p.add_argument("--corpus", default=None,
                    help="corpus directory (see cassi corpus; default: the embedded synthetic one)")
     p.add_argument("--subject", required=True, help="subject name, e.g. JW45")
-    p.add_argument("--task", required=True, type=int, help="task number")
-    p.add_argument("--rep", type=int, default=1, help="repetition (default 1)")
+    p.add_argument("--task", required=True, type=ascii_int, help="task number")
+    p.add_argument("--rep", type=ascii_int, default=1, help="repetition (default 1)")
     p.add_argument("--version", required=True,
                    help=f"'{NEUTRAL}' (the subject's neutral face) or a registered version "
                         "(cassi versions)")
@@ -55,7 +56,7 @@ def register(sub, *, positions_provider: PositionsProvider | str) -> None:
                                    "sidecar with the render metadata and optionally the mask.")
     _common(p)
     p.add_argument("--view", required=True, choices=VIEW_NAMES)
-    p.add_argument("--frame", required=True, type=int, help="recording row to render")
+    p.add_argument("--frame", required=True, type=ascii_int, help="recording row to render")
     p.add_argument("--out", required=True, help="output file, .png (sRGB) or .exr (linear)")
     p.add_argument("--mask", action="store_true", help="also write <out stem>.mask.png")
     p.set_defaults(func="cassi.renderer.actions:cmd_render", positions_provider=provider)
@@ -65,9 +66,9 @@ def register(sub, *, positions_provider: PositionsProvider | str) -> None:
                                    "given views, side by side, as an MP4 or GIF.")
     _common(a)
     a.add_argument("--views", default="front,side", help="comma-separated views (front,side)")
-    a.add_argument("--stride", type=int, default=5, help="render every Nth frame (default 5)")
-    a.add_argument("--start", type=int, default=None, help="first recording row")
-    a.add_argument("--end", type=int, default=None, help="last recording row")
+    a.add_argument("--stride", type=ascii_int, default=5, help="render every Nth frame (default 5)")
+    a.add_argument("--start", type=ascii_int, default=None, help="first recording row")
+    a.add_argument("--end", type=ascii_int, default=None, help="last recording row")
     a.add_argument("--fps", type=float, default=None, help="frames per second (default: real time)")
     a.add_argument("--out", required=True, help="output .mp4 or .gif")
     a.set_defaults(func="cassi.renderer.actions:cmd_animate", positions_provider=provider)
@@ -80,7 +81,7 @@ def register(sub, *, positions_provider: PositionsProvider | str) -> None:
                                    "any glTF viewer.")
     _task(e)
     e.add_argument("--format", default="gltf", choices=("gltf",), help="output format (gltf)")
-    e.add_argument("--stride", type=int, default=1, help="keep every Nth frame (default 1)")
+    e.add_argument("--stride", type=ascii_int, default=1, help="keep every Nth frame (default 1)")
     e.add_argument("--positions", default="int16", choices=("int16", "float32"),
                    help="int16: quantised (KHR_mesh_quantization, the default); float32: exact")
     e.add_argument("--out", required=True, help="output .glb")

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from cassi.common.cliargs import ascii_int
 from cassi.harness.evaluation.config import (NIGHTLY_ANIMATE_STRIDE, NIGHTLY_EXTREMES,
                                              NIGHTLY_STRIDE, NIGHTLY_VIDEO_VERSIONS)
 
@@ -32,14 +33,14 @@ def register(sub) -> None:
                        "previous night; exit 0 when the gates hold, 1 when one fails.")
     p.add_argument("--out", type=Path, required=True, help="the nightly directory (kept across nights)")
     p.add_argument("--corpus", type=Path, help="corpus directory (default: the embedded synthetic one)")
-    p.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
-    p.add_argument("--stride", type=int, default=NIGHTLY_STRIDE,
+    p.add_argument("--workers", type=ascii_int, default=2, help="local worker processes (default 2)")
+    p.add_argument("--stride", type=ascii_int, default=NIGHTLY_STRIDE,
                    help="also render every N-th frame (default 0: the first frame and the frames "
                         "the checks point at, which keeps a night under 15 minutes on 2 cores)")
-    p.add_argument("--extremes", type=int, default=NIGHTLY_EXTREMES,
+    p.add_argument("--extremes", type=ascii_int, default=NIGHTLY_EXTREMES,
                    help="frames the checks point at to render per task file and version "
                         f"(default {NIGHTLY_EXTREMES})")
-    p.add_argument("--animate-stride", type=int, default=NIGHTLY_ANIMATE_STRIDE,
+    p.add_argument("--animate-stride", type=ascii_int, default=NIGHTLY_ANIMATE_STRIDE,
                    help="row stride of every task file's four-view video, all views "
                         f"(default {NIGHTLY_ANIMATE_STRIDE}; 0: no videos)")
     p.add_argument("--video-versions", dest="video_versions",

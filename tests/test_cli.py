@@ -36,6 +36,32 @@ def test_help_on_every_command(command, capsys):
     assert "usage: cassi " + " ".join(command) in capsys.readouterr().out
 
 
+def _parsers(parser: argparse.ArgumentParser):
+    yield parser
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                yield from _parsers(sub)
+
+
+def test_integer_options_take_ascii_digits_only(capsys):
+    """int() reads '٣' (Arabic-Indic three) and '1_0': every integer option parses through
+    ascii_int instead, so such text is refused (exit 2) before any work."""
+    raw_int = [(p.prog, a.dest) for p in _parsers(build_parser()) for a in p._actions
+               if a.type is int]
+    assert raw_int == []
+    base = ["render", "--subject", "JW11", "--version", "cassi-1.0", "--view", "front",
+            "--frame", "9", "--out", "x.png"]
+    for bad in ("٣", "1_0", " 3", "3.0"):
+        with pytest.raises(SystemExit) as exc:
+            main([*base, "--task", bad])
+        assert exc.value.code == 2
+        assert "argument --task: " in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        main(["corpus", "stats", ".", "--tasks", "١٠٥"])
+    assert exc.value.code == 2 and "bad task list" in capsys.readouterr().err
+
+
 def test_bench_help_names_every_benchmark(capsys):
     """The parser does not import the benchmarks (pandas, the executors): its list is checked
     against theirs here."""
