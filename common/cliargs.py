@@ -2,9 +2,11 @@
 from __future__ import annotations
 
 import argparse
+import math
 import re
 
 _INT = re.compile(r"[+-]?[0-9]{1,18}", re.ASCII)
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]{1,3})?", re.ASCII)
 
 
 def ascii_int(text: str) -> int:
@@ -13,3 +15,12 @@ def ascii_int(text: str) -> int:
     if not _INT.fullmatch(text):
         raise argparse.ArgumentTypeError(f"{text[:40]!r} is not an integer (ASCII digits)")
     return int(text)
+
+
+def positive_number(text: str) -> float:
+    """A finite number above 0 in ASCII digits (``float()`` also reads ``'nan'``, ``'inf'`` and
+    ``'١.٥'``; a rate or a length of those only fails, if at all, after the work is done)."""
+    value = float(text) if _NUMBER.fullmatch(text) else math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not a positive number")
+    return value

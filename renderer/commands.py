@@ -15,7 +15,7 @@ from collections.abc import Callable
 import numpy as np
 
 
-from cassi.common.cliargs import ascii_int
+from cassi.common.cliargs import ascii_int, positive_number
 from cassi.renderer.views import PRESET_NAMES, VIEW_NAMES
 
 __all__ = ["register", "NEUTRAL"]
@@ -69,7 +69,7 @@ def register(sub, *, positions_provider: PositionsProvider | str) -> None:
     a.add_argument("--stride", type=ascii_int, default=5, help="render every Nth frame (default 5)")
     a.add_argument("--start", type=ascii_int, default=None, help="first recording row")
     a.add_argument("--end", type=ascii_int, default=None, help="last recording row")
-    a.add_argument("--fps", type=float, default=None, help="frames per second (default: real time)")
+    a.add_argument("--fps", type=positive_number, default=None, help="frames per second (default: real time)")
     a.add_argument("--out", required=True, help="output .mp4 or .gif")
     a.set_defaults(func="cassi.renderer.actions:cmd_animate", positions_provider=provider)
 

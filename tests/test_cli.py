@@ -7,6 +7,7 @@ import sys
 
 import pytest
 
+from cassi.common.cliargs import positive_number
 from cassi.harness.cli import build_parser, main
 
 
@@ -44,12 +45,13 @@ def _parsers(parser: argparse.ArgumentParser):
                 yield from _parsers(sub)
 
 
-def test_integer_options_take_ascii_digits_only(capsys):
+def test_numeric_options_take_ascii_digits_only(capsys):
     """int() reads '٣' (Arabic-Indic three) and '1_0': every integer option parses through
-    ascii_int instead, so such text is refused (exit 2) before any work."""
-    raw_int = [(p.prog, a.dest) for p in _parsers(build_parser()) for a in p._actions
-               if a.type is int]
-    assert raw_int == []
+    ascii_int instead, so such text is refused (exit 2) before any work; a rate or length
+    parses through positive_number (float() reads 'nan' and 'inf')."""
+    raw = [(p.prog, a.dest) for p in _parsers(build_parser()) for a in p._actions
+           if a.type in (int, float)]
+    assert raw == []
     base = ["render", "--subject", "JW11", "--version", "cassi-1.0", "--view", "front",
             "--frame", "9", "--out", "x.png"]
     for bad in ("٣", "1_0", " 3", "3.0"):
@@ -60,6 +62,12 @@ def test_integer_options_take_ascii_digits_only(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["corpus", "stats", ".", "--tasks", "١٠٥"])
     assert exc.value.code == 2 and "bad task list" in capsys.readouterr().err
+    for bad in ("nan", "inf", "0", "-5", "١.٥", "1e999"):
+        with pytest.raises(SystemExit) as exc:
+            main(["animate", "--subject", "JW11", "--task", "105", "--version", "cassi-1.0",
+                  "--out", "x.gif", "--fps", bad])
+        assert exc.value.code == 2 and "not a positive number" in capsys.readouterr().err
+    assert positive_number("12.5") == 12.5 and positive_number("1e1") == 10.0
 
 
 def test_bench_help_names_every_benchmark(capsys):

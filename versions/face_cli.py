@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from cassi.common.cliargs import positive_number
 from cassi.common.errors import CassiInputError
 from cassi.data.face.preview import preview_png
 from cassi.common.atomic import writable_dir
@@ -21,7 +22,7 @@ def main(argv: list[str] | None = None) -> int:
                                  description="write the generated face in Parke's formats")
     ap.add_argument("out_dir", help="folder for st1.pts, st2.pts and stt.top")
     ap.add_argument("--palate", help="a subject's PAL.DAT (XRMB micrometres)")
-    ap.add_argument("--jaw-length", type=float, help="the subject's jaw length d in mm (p/d)")
+    ap.add_argument("--jaw-length", type=positive_number, help="the subject's jaw length d in mm (p/d)")
     ap.add_argument("--preview", help="also write a PNG preview here")
     args = ap.parse_args(argv)
     try:
