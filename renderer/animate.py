@@ -4,13 +4,14 @@ loaded once per view); frames stream to ffmpeg, so memory stays flat however lon
 """
 from __future__ import annotations
 
+import contextlib
 import os
 from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
 
-from cassi.common.atomic import atomic_tmp_path
+from cassi.common.atomic import replacing
 from cassi.common.errors import CassiInputError
 from cassi.data.xrmb.files import NOMINAL_PERIOD_US  # the XRMB frame period, us
 
@@ -69,37 +70,31 @@ def write_animation(path: str | os.PathLike, frames: Iterable[np.ndarray], *, fp
         kw = dict(codec="gif", pix_fmt_out="rgb8")
     else:
         raise CassiInputError("animation file must end in .mp4 or .gif", path=path)
-    tmp = atomic_tmp_path(path)
-    writer = None
-    n = 0
-    try:
-        for frame in frames:
-            frame = np.ascontiguousarray(frame, np.uint8)
-            h, w = frame.shape[:2]
-            if writer is None:
-                if suffix == ".mp4" and (h % 2 or w % 2):
-                    raise ValueError("MP4 frames need even width and height")
-                writer = imageio_ffmpeg.write_frames(str(tmp), (w, h), fps=fps, macro_block_size=2,
-                                                     ffmpeg_log_level="error", **kw)
-                writer.send(None)
-                size = (h, w)
-            elif (h, w) != size:
-                raise ValueError("all animation frames must have the same size")
-            writer.send(frame.tobytes())
-            n += 1
+    with replacing(path) as tmp:   # renamed onto path at the end, removed on any failure
+        writer = None
+        try:
+            for frame in frames:
+                frame = np.ascontiguousarray(frame, np.uint8)
+                h, w = frame.shape[:2]
+                if writer is None:
+                    if suffix == ".mp4" and (h % 2 or w % 2):
+                        raise ValueError("MP4 frames need even width and height")
+                    writer = imageio_ffmpeg.write_frames(str(tmp), (w, h), fps=fps,
+                                                         macro_block_size=2,
+                                                         ffmpeg_log_level="error", **kw)
+                    writer.send(None)
+                    size = (h, w)
+                elif (h, w) != size:
+                    raise ValueError("all animation frames must have the same size")
+                writer.send(frame.tobytes())
+        except BaseException:
+            if writer is not None:   # stop ffmpeg before its file goes
+                with contextlib.suppress(Exception):
+                    writer.close()
+            raise
         if writer is None:
             raise CassiInputError("no frames to animate", path=path)
         writer.close()
-        writer = None
-        os.replace(tmp, path)
-    except BaseException:
-        if writer is not None:
-            try:
-                writer.close()
-            except Exception:  # noqa: BLE001 - already failing
-                pass
-        tmp.unlink(missing_ok=True)
-        raise
     return path
 
 

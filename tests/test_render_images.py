@@ -83,6 +83,12 @@ def test_animation_mp4_and_gif(tmp_path):
     with pytest.raises(CassiInputError):
         write_animation(tmp_path / "b.mp4", iter([]), fps=10)
     assert not (tmp_path / "b.mp4").exists()
+    before = (tmp_path / "a.mp4").read_bytes()
+    odd = iter(frames[:3] + [np.zeros((8, 8, 3), np.uint8)])   # fails after ffmpeg started
+    with pytest.raises(ValueError, match="same size"):
+        write_animation(tmp_path / "a.mp4", odd, fps=10)
+    assert (tmp_path / "a.mp4").read_bytes() == before          # the old video kept whole
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["a.gif", "a.mp4"]   # no .tmp left
     assert realtime_fps(1) == 50.0 and abs(realtime_fps(5) - 1e6 / (6866 * 5)) < 1e-9
 
 
