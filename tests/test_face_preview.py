@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from cassi.data.face.model import FaceModel, build_face
 from cassi.data.face.preview import preview_png
@@ -33,9 +34,11 @@ def test_preview_of_a_moved_face(tmp_path):
 
 def test_the_face_cli_refuses_bad_inputs_before_making_anything(tmp_path, capsys):
     out = tmp_path / "face"
-    for bad in ("-5", "nan"):
-        assert main([str(out), "--jaw-length", bad]) == 2
-        assert "jaw length must be a positive number" in capsys.readouterr().err
+    for bad in ("-5", "nan"):                   # argparse refuses them: exit 2, nothing made
+        with pytest.raises(SystemExit) as exc:
+            main([str(out), "--jaw-length", bad])
+        assert exc.value.code == 2
+        assert f"{bad!r} is not a positive number" in capsys.readouterr().err
     assert main([str(out), "--palate", str(tmp_path / "missing.dat")]) == 2
     assert not out.exists()                      # nothing made for a bad input
     afile = tmp_path / "afile"
