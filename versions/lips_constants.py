@@ -50,7 +50,12 @@ LOW_LIPS_THRESHOLD: float = 20.0
 #: (project issue "Verdicts that agree with the judges", section 4); on a real JW11 recording the
 #: inside edge stays 1.6-4.0 mm below 226 in every frame (that issue), never the 6.1 mm the text
 #: needs, and JW45 task 13 (thesis Figure 3.9, tests/fixtures) starts 1.0 mm above 226. Only the
-#: results' reading changes both and leaves lips centred high alone.
+#: results' reading changes both and leaves lips centred high alone. Anatomy does not argue for
+#: the text's rarity either: the vermilion-border pellets bound the two vermilions, and adult
+#: upper vermilions are about a third of the two (5.9 of 17.05 mm in men, Pietruski & Majak 2022,
+#: Aesthet. Surg. J. 42:1130; 6.47 of 18.11 mm in women, Pietruski et al. 2022; the same norms
+#: place the synthetic subjects' lips, cassi.data.synth.subjects), which is 2.1's split (4.3.2),
+#: not 2.0's half: a reading that adjusts most speakers is the expected one.
 LOW_LIPS_READING: str = "results"
 
 #: Section 4.3.2: for low-lip subjects the upper lip gets 2/3 and the lower lip 4/3 of
