@@ -12,7 +12,9 @@ component,rating`` (others, e.g. a rater's name or a note, are ignored):
 
 Each line is compared with the run's rating at the same level
 (:func:`cassi.harness.rubric.tables.level_ratings`). A bad line (unknown word, subject, version,
-table, task, component; a level the run did not rate; a duplicate) is refused with its line.
+table, task, component; a level the run did not rate; a duplicate; a line with fewer fields than
+the header, or a filled field beyond it) is refused with its line. Blank fields beyond the header
+(a spreadsheet's trailing commas) are read as nothing.
 """
 from __future__ import annotations
 
@@ -104,7 +106,9 @@ def read_human_ratings(path: str | os.PathLike, run: Run,
 
             def bad(why: str):
                 return CassiInputError(why, path=path, line=line)
-            if len(cells) != len(header):
+            # blank cells beyond the header are a spreadsheet's trailing commas; a filled one
+            # or a missing one is a comma out of place, which would shift the columns
+            if len(cells) < len(header) or any(c.strip() for c in cells[len(header):]):
                 raise bad(f"{len(cells)} fields, the header has {len(header)}")
             v = {c: cells[i].strip() for c, i in col.items()}
             for need in ("subject", "version", "table", "rating"):

@@ -74,6 +74,8 @@ def test_agree_on_a_good_file(run, tmp_path, capsys):
     ("JW11,19,cassi-2.0,A,tongue,POOR", "duplicate of line 4"),
     ("JW11,\u00b2,cassi-2.0,A,lips,GOOD", "is not a task number"),   # a digit int() refuses
     ("JW11,,cassi-1.0,A,tongue,GOOD,POOR", "7 fields, the header has 6"),
+    ("JW11,,cassi-1.0,A,tongue,GOOD,,x", "8 fields, the header has 6"),
+    ("JW11,,cassi-1.0,A,GOOD", "5 fields, the header has 6"),
     ('JW11,,cassi-1.0,A,tongue,"GOOD', "malformed CSV: unexpected end of data"),
 ])
 def test_bad_lines_exit_2_naming_the_file_and_line(run, tmp_path, capsys, line, problem):
@@ -128,3 +130,13 @@ def test_report_with_ratings_has_the_section_and_links_to_the_evidence(run, tmp_
     ratings.write_text(HEADER + "<script>,,cassi-2.0,A,,GOOD\n")
     assert main(["report", str(run), "--ratings", str(ratings), "--out", str(tmp_path / "r2")]) == 2
     assert not (tmp_path / "r2" / "index.html").exists()
+
+
+def test_blank_cells_beyond_the_header_are_a_spreadsheets_trailing_commas(run, tmp_path, capsys):
+    ratings = tmp_path / "export.csv"
+    for header in (HEADER, HEADER.replace("\n", ",,\n")):    # unnamed columns or none
+        ratings.write_text(header + "JW11,,cassi-2.0,A,lips,GOOD,,\n"
+                           + "JW12,,cassi-2.0,A,lips,EXCELLENT, ,\n")
+        assert main(["agree", str(run), "--ratings", str(ratings),
+                     "--out", str(tmp_path / "ag")]) == 0
+        assert "0 disagreement(s)" in capsys.readouterr().out
