@@ -17,6 +17,15 @@ def ascii_int(text: str) -> int:
     return int(text)
 
 
+def seed_int(text: str) -> int:
+    """A random seed: a non-negative integer in ASCII digits of any size numpy's SeedSequence
+    takes (up to 2**128; ascii_int's 18 digits would refuse a valid 64-bit seed)."""
+    if not re.fullmatch(r"\+?[0-9]{1,39}", text, re.ASCII) or int(text) >= 2 ** 128:
+        raise argparse.ArgumentTypeError(
+            f"{text[:40]!r} is not a seed: a non-negative integer below 2**128 in ASCII digits")
+    return int(text)
+
+
 def positive_number(text: str) -> float:
     """A finite number above 0 in ASCII digits (``float()`` also reads ``'nan'``, ``'inf'`` and
     ``'١.٥'``; a rate or a length of those only fails, if at all, after the work is done)."""

@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 
-from cassi.common.cliargs import ascii_int
+from cassi.common.cliargs import seed_int
 from cassi.common.errors import CassiInputError
 from cassi.common.lazy import resolve
 
@@ -31,7 +31,7 @@ def register(subparsers) -> None:
     mk.add_argument("--out", required=True, type=Path, help="output directory")
     mk.add_argument("--subjects", type=_subject_list, default=None,
                     help="comma-separated subjects, e.g. JW11,JW45 (default: all 15)")
-    mk.add_argument("--seed", type=ascii_int, default=0, help="random seed (default 0)")
+    mk.add_argument("--seed", type=seed_int, default=0, help="random seed (default 0)")
     mk.add_argument("--alignments", type=Path, default=None,
                     help="directory of SUBJECT/tpNNN.TextGrid alignments to time the gestures")
     mk.set_defaults(func="cassi.data.actions:cmd_make")

@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from cassi.common.cliargs import positive_number
+from cassi.common.cliargs import positive_number, seed_int
 from cassi.harness.cli import build_parser, main
 
 
@@ -68,6 +68,11 @@ def test_numeric_options_take_ascii_digits_only(capsys):
                   "--out", "x.gif", "--fps", bad])
         assert exc.value.code == 2 and "not a positive number" in capsys.readouterr().err
     assert positive_number("12.5") == 12.5 and positive_number("1e1") == 10.0
+    # a seed takes any size SeedSequence does: a 64-bit one (20 digits) is valid
+    assert seed_int(str(2 ** 64 - 1)) == 2 ** 64 - 1 and seed_int("0") == 0
+    for bad in ("-1", str(2 ** 128), "1_0", "٣", ""):
+        with pytest.raises(argparse.ArgumentTypeError, match="is not a seed"):
+            seed_int(bad)
 
 
 def test_bench_help_names_every_benchmark(capsys):

@@ -248,12 +248,18 @@ def test_textgrid_whose_tier_does_not_hold_its_declared_count(tmp_path, form):
     size = [i + 1 for i, ln in enumerate(lines)
             if ln.strip() in ("intervals: size = 3", "3")]
     assert info.value.line == size[-1] and info.value.path == "tp105.TextGrid"
-    grown = "\n".join(lines).replace("size = 2", "size = 1") if form == "long_textgrid" else None
-    if grown is None:                               # short form: the word tier's size row
+    def declared(count: str) -> str:                # the word tier's size line says count
+        if form == "long_textgrid":
+            return "\n".join(lines).replace("intervals: size = 2", f"intervals: size = {count}")
         head = lines.index('"word"')
-        grown = "\n".join(lines[:head + 3] + ["1"] + lines[head + 4:])
+        return "\n".join(lines[:head + 3] + [count] + lines[head + 4:])
     with pytest.raises(CassiInputError, match="tier 'word' declares 1 intervals but holds 2"):
-        parse_alignment(grown + "\n", path="tp105.TextGrid")
+        parse_alignment(declared("1") + "\n", path="tp105.TextGrid")
+    # a count Python's int() refuses (over 4300 digits) is refused at its line too, not a
+    # ValueError; leading zeros name the same count
+    with pytest.raises(CassiInputError, match=r"declares 99999999999999999999\.\.\. \(5000 digits\)"):
+        parse_alignment(declared("9" * 5000) + "\n", path="tp105.TextGrid")
+    assert len(parse_alignment(declared("002") + "\n").words) == 2
 
 
 def _long_grid(tiers) -> str:

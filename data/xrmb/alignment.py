@@ -126,22 +126,23 @@ def _short_interval_line(text: str, want: str, index: int) -> int | None:
     return None
 
 
-def _declared_size(text: str | None, tier: str) -> tuple[int, int] | None:
+def _declared_size(text: str | None, tier: str) -> tuple[str, int] | None:
     """The interval count tier ``tier`` declares (``intervals: size = N``; the short form's
-    fifth row) and its 1-based line; None when the text does not say."""
+    fifth row), as its ASCII digits without leading zeros (never through ``int()``, which
+    refuses more than 4300 digits), and its 1-based line; None when the text does not say."""
     if text is None:
         return None
     want = tier.lower()
     if _LONG_ITEM.search(text):
         span = _long_tier_span(text, want)
         m = _LONG_SIZE.search(text, *span) if span else None
-        return (int(m.group("n")), text.count("\n", 0, m.start()) + 1) if m else None
+        return (m.group("n").lstrip("0") or "0", text.count("\n", 0, m.start()) + 1) if m else None
     lines = text.split("\n")
     head = _short_tier_head(lines, want)
     row = None if head is None else head + 4
     if row is None or row >= len(lines) or not re.fullmatch(r"[0-9]+", lines[row].strip(), re.ASCII):
         return None
-    return int(lines[row].strip()), row + 1
+    return lines[row].strip().lstrip("0") or "0", row + 1
 
 
 def _interval_line(text: str | None, tier: str, index: int) -> int | None:
@@ -174,10 +175,11 @@ def _tier_frame(tier: dict, *, path, text: str | None = None,
     if not isinstance(entries, (list, tuple)):
         raise CassiInputError(f"tier {name!r}: its entries are not a list", path=path)
     declared = _declared_size(text, str(name))
-    if declared is not None and declared[0] != len(entries):
+    if declared is not None and declared[0] != str(len(entries)):
         # praatio reads what is there; Praat reads exactly the declared count, so a file cut
         # short (or one with intervals pasted in) is not what its header says
-        raise CassiInputError(f"tier {name!r} declares {declared[0]} intervals but holds "
+        count = declared[0] if len(declared[0]) <= 20 else f"{declared[0][:20]}... ({len(declared[0])} digits)"
+        raise CassiInputError(f"tier {name!r} declares {count} intervals but holds "
                               f"{len(entries)}: the file is cut short or was edited by hand",
                               path=path, line=declared[1])
     for k, entry in enumerate(entries):

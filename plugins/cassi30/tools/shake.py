@@ -23,6 +23,7 @@ import time
 
 import numpy as np
 
+from cassi.common.cliargs import ascii_int
 from cassi.data.face import numbering as N
 from cassi.harness.evaluation.caches import get_corpus, get_face, get_profile
 from cassi.harness.evaluation.evalset import default_tasks
@@ -97,7 +98,7 @@ def main(argv=None) -> None:
     ap.add_argument("versions", nargs="+")
     ap.add_argument("--corpus", default=None)
     ap.add_argument("--subjects", nargs="*", default=None)
-    ap.add_argument("--worst", type=int, default=5, help="task files listed per version")
+    ap.add_argument("--worst", type=ascii_int, default=5, help="task files listed per version")
     a = ap.parse_args(argv)
     t0 = time.perf_counter()
     res = measure(a.versions, a.corpus, a.subjects)
