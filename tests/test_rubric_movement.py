@@ -25,16 +25,24 @@ def face():
     return build_face()
 
 
-def judge(face, positions, rec, *, task=106, checks=MOVEMENT + RANGES + ["lips_never_touch"]):
+def judge(face, positions, rec, *, tasks=(5, 106),
+          checks=MOVEMENT + RANGES + ["lips_never_touch"]):
+    """The checks on the same animation as a speech file (task 5: Tables A-C) and as the jaw
+    wagging task (106: Table E); Tables F and G judge both."""
     anim = SimpleNamespace(positions=positions, frames=np.arange(F), diagnostics=None,
                            version="planted")
-    out = R.run_geometry_checks(anim, face, SimpleNamespace(jaw_length_mm=JAW_MM, subject="SYN"),
-                                task=task, recording=rec, checks=checks)
-    return out
+    return pd.concat([R.run_geometry_checks(anim, face, SimpleNamespace(jaw_length_mm=JAW_MM,
+                                                                        subject="SYN"),
+                                            task=task, recording=rec, checks=checks)
+                      for task in tasks], ignore_index=True)
 
 
-def whole(out):
-    return out[out["frame"] == -1].set_index("check")
+def whole(out, task=None):
+    """Whole-task rows by check: of ``task``, or the speech file's and 106's E rows."""
+    rows = out[out["frame"] == -1]
+    rows = rows[(rows["task"] == task) if task is not None else
+                ((rows["task"] == 5) | (rows["table"] == "E"))]
+    return rows.set_index("check")
 
 
 def still(face, *, drop_mm=0.0):
@@ -76,8 +84,12 @@ def test_a_still_face_is_not_excellent_in_c_or_e(face):
 
 def test_jaw_does_not_open_is_judged_on_task_106_only(face):
     rec = recording()
-    r = whole(judge(face, still(face), rec, task=5))
+    r = whole(judge(face, still(face), rec, tasks=(5,)), task=5)
     assert "jaw_does_not_open" not in r.index and "lips_do_not_open" in r.index
+    # and C's lip checks are not judged on task 106 (the thesis's C is the Table 5.1 files)
+    r = whole(judge(face, still(face), rec, tasks=(106,)), task=106)
+    assert "jaw_does_not_open" in r.index
+    assert not {"lips_do_not_open", "lips_do_not_close", "lips_never_touch"} & set(r.index)
 
 
 def test_a_face_that_follows_the_recording_earns_neither(face):
@@ -99,7 +111,7 @@ def test_lips_that_miss_half_the_closures_earn_one_negative(face):
     units = 3.0 * float(XrmbToParke.from_face(face.vertices, JAW_MM).scale)
     for r in LOWER:
         pos[missed, r - 1, 2] -= units
-    r = whole(judge(face, pos, rec))
+    r = whole(judge(face, pos, rec, tasks=(5,)), task=5)
     assert r.loc["lips_do_not_close", "value"] == pytest.approx(0.5, abs=0.02)
     assert r.loc["lips_do_not_close", "negatives"] == 1
     assert r.loc["lips_never_touch", "negatives"] == 0         # they do touch: C's own charge
@@ -107,8 +119,8 @@ def test_lips_that_miss_half_the_closures_earn_one_negative(face):
 
 def test_lips_held_apart_are_charged_once_in_c(face):
     rec = recording()
-    out = judge(face, still(face, drop_mm=5.0), rec)
-    r = whole(out)
+    out = judge(face, still(face, drop_mm=5.0), rec, tasks=(5,))
+    r = whole(out, task=5)
     assert r.loc["lips_never_touch", "negatives"] == 2          # 4 mm or more: "large separation"
     assert r.loc["lips_do_not_close", "negatives"] == 2         # its own verdict ...
     v = R.verdicts(out).set_index(["table", "check"])

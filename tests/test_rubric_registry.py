@@ -36,6 +36,14 @@ def test_registry_is_complete_and_consistent():
     assert all(c.tasks == (118,) for c in R.checks_for(table="D"))
     assert all(c.tasks == (106,) for c in R.checks_for(table="E"))
     assert not any(c.applies_to(5) for c in R.checks_for(table="D"))
+    # Tables A-C judge the speech files (thesis 6.1: "the tasks given in Table 5.1"), never the
+    # oral-motor tasks that D and E judge; F and G judge every file
+    for task, tables in ((106, {"E", "F", "G"}), (118, {"D", "F", "G"}),
+                         (19, {"A", "B", "C", "F", "G"}), (105, {"A", "B", "C", "F", "G"})):
+        assert {c.table for c in R.checks_for(task=task)} == tables, task
+    assert all(not c.applies_to(t) and c.skip_tasks == (106, 118)
+               for c in R.CHECKS.values() if c.table in "ABC" for t in (106, 118))
+    assert all(c.applies_to(None) for c in R.CHECKS.values() if c.tasks is None)
     # Table F is labelled as cassi-farm's, not the thesis's
     assert R.TABLES["F"][0] == "" and "not in the thesis" in R.table_title("F")
     # one fault, one charge names a registered check

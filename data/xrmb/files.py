@@ -43,6 +43,7 @@ from cassi.data.xrmb.textlines import (decode_ascii, numbered_rows, parse_int, p
 
 __all__ = [
     "PELLETS", "BAD_VALUE", "NOMINAL_PERIOD_US", "JAW_WAGGING_TASK", "MAX_PROTRUSION_TASK",
+    "ORAL_MOTOR_TASKS",
     "N_COLUMNS", "COLUMN_NAMES", "TaskRecording",
     "parse_task_name", "task_file_name", "parse_txy", "read_txy", "format_txy", "write_txy",
     "parse_outline", "format_outline", "read_pal", "write_pal", "check_palate_length",
@@ -59,6 +60,8 @@ NOMINAL_PERIOD_US = 6866
 #: Table 5.9) and maximum lip protrusion (Table 5.8, and the file 2.x's rounding is read from).
 JAW_WAGGING_TASK = 106
 MAX_PROTRUSION_TASK = 118
+#: Both, in the thesis's order: tasks judged by their own tables, not by the speech tables.
+ORAL_MOTOR_TASKS = (JAW_WAGGING_TASK, MAX_PROTRUSION_TASK)
 N_COLUMNS = 1 + 2 * len(PELLETS)
 COLUMN_NAMES = ("time",) + tuple(f"{p}{c}" for p in PELLETS for c in "xy")
 

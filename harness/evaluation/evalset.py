@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import Iterable
 
-from cassi.data.xrmb.files import JAW_WAGGING_TASK, MAX_PROTRUSION_TASK
+from cassi.data.xrmb.files import ORAL_MOTOR_TASKS
 from cassi.harness.farm.runner import TaskSpec
 
 #: Thesis Table 5.1: subject -> the two tasks used for evaluation (task descriptions in comments).
@@ -35,7 +35,7 @@ TABLE_5_1: dict[str, tuple[int, int]] = {
 }
 
 #: Section 5.3: jaw wagging and maximum lip protrusion, where a usable file exists.
-EXTRA_TASKS = (JAW_WAGGING_TASK, MAX_PROTRUSION_TASK)
+EXTRA_TASKS = ORAL_MOTOR_TASKS
 
 
 def _task_numbers(subject_data) -> list[tuple[int, int]]:

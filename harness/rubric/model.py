@@ -125,7 +125,10 @@ class Check:
         ``"module:function"`` inside this package, ``function(ctx) -> Measurement``; resolved
         when first called, so the registry imports no measure code.
     tasks : tuple of int or None
-        Only these tasks (118 for Table D, 106 for Table E); None = every task.
+        Only these tasks (118 for Table D, 106 for Table E); None = every task but ``skip_tasks``.
+    skip_tasks : tuple of int
+        Tasks a check with ``tasks=None`` never judges: the registry gives Tables A-C's checks
+        the oral-motor tasks 106 and 118, which Tables D and E judge (``SPEECH_TABLES``).
     counted : bool
         False for what the thesis measured but did not count (tongue through the palate) and
         for image cross-checks of a geometric check; such rows always carry 0 negatives.
@@ -151,6 +154,7 @@ class Check:
     kind: str
     measure: str
     tasks: tuple[int, ...] | None = None
+    skip_tasks: tuple[int, ...] = ()
     counted: bool = True
     gate_tolerance: int = 0
     charged_with: str | None = None
@@ -194,7 +198,9 @@ class Check:
         return float(self.thresholds[0])
 
     def applies_to(self, task: int | None) -> bool:
-        return self.tasks is None or (task is not None and int(task) in self.tasks)
+        if self.tasks is not None:
+            return task is not None and int(task) in self.tasks
+        return task is None or int(task) not in self.skip_tasks
 
     def grade(self, value: float) -> int:
         """Negatives for a value by the thresholds (0 when not counted or not measurable)."""

@@ -21,16 +21,17 @@ thesis's; G is charged apart from F because a face on the pellets can still be t
 """
 from __future__ import annotations
 
+import dataclasses
 import difflib
 
 import pandas as pd
 
 from cassi.common.errors import CassiInputError
-from cassi.data.xrmb.files import JAW_WAGGING_TASK, MAX_PROTRUSION_TASK
+from cassi.data.xrmb.files import JAW_WAGGING_TASK, MAX_PROTRUSION_TASK, ORAL_MOTOR_TASKS
 
 from cassi.harness.rubric.model import Check
 
-__all__ = ["CHECKS", "get_check", "checks_for", "registry_table", "MIN_FRAMES",
+__all__ = ["CHECKS", "get_check", "checks_for", "registry_table", "MIN_FRAMES", "SPEECH_TABLES",
            "TABLE_C_FROM_A", "MARKED_SHARE", "AGGREGATION_RULES"]
 
 # ----------------------------------------------------------------------------------------------
@@ -1184,10 +1185,20 @@ _ALL: list[Check] = [
 ]
 
 #: The registry: check name -> :class:`Check`, in rubric order.
+#: The tables judged on the speech files only. The thesis evaluated lip placement and movement
+#: (Table 5.5, C) "produced by the tasks given in Table 5.1" (section 6.1), two error-free files
+#: per subject (5.1), like the teeth, lips and tongue of 1.0 (5.3, A) and the face shape (5.4,
+#: B); tasks 118 and 106 had evaluations of their own (5.8, D; 5.9, E). So a check of A-C never
+#: judges those two: a jaw wagged wide open or lips pushed fully forward are what D and E judge,
+#: not lip placement in speech. Every other task (a corpus's own choice of two) is judged.
+SPEECH_TABLES = ("A", "B", "C")
+
 CHECKS: dict[str, Check] = {}
 for _c in _ALL:
     if _c.name in CHECKS:
         raise RuntimeError(f"check {_c.name} registered twice")
+    if _c.table in SPEECH_TABLES and _c.tasks is None:
+        _c = dataclasses.replace(_c, skip_tasks=ORAL_MOTOR_TASKS)
     CHECKS[_c.name] = _c
 for _c in CHECKS.values():
     if _c.charged_with is not None and _c.charged_with not in CHECKS:
@@ -1212,6 +1223,7 @@ def registry_table() -> pd.DataFrame:
                               frames=c.frames, thresholds=list(c.thresholds),
                               negatives=list(c.negatives), direction=c.direction,
                               counted=c.counted, tasks=None if c.tasks is None else list(c.tasks),
+                              skip_tasks=list(c.skip_tasks),
                               charged_with=c.charged_with, text=c.text,
                               description=c.description, reason=c.reason)
                          for c in CHECKS.values()])
@@ -1219,7 +1231,8 @@ def registry_table() -> pd.DataFrame:
 
 def checks_for(*, kind: str | None = None, table: str | None = None,
                task: int | None = None) -> list[Check]:
-    """Registered checks filtered by kind, table and task (a task selects D/E checks)."""
+    """Registered checks filtered by kind, table and task (task 118 or 106 selects D or E's
+    checks and not A-C's; any other task A-C's and F-G's)."""
     return [c for c in CHECKS.values()
             if (kind is None or c.kind == kind) and (table is None or c.table == table)
             and (task is None or c.applies_to(task))]
