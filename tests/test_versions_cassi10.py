@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from _versions_toy import JW45_ROW, ToyFace, toy_profile, toy_recording, toy_vertices
 from cassi.common.errors import CassiInputError
 from cassi.versions import constants as K
-from cassi.versions.cassi10 import Cassi10, check_parameters, tongue_followers
+from cassi.versions.cassi10 import Cassi10, TongueReading, check_parameters, tongue_followers
 from cassi.versions.mapping import XrmbToParke, model_jaw_length
 from cassi.versions.parke1974 import Parke1974
 from cassi.versions.protocol import Animation, held_pellets
@@ -223,7 +223,7 @@ def test_head_measures_adjust_the_chin(face, rec):
     np.testing.assert_allclose(with_hm.vertex(258)[0], without.vertex(258)[0], atol=1e-5)
 
 
-def test_tongue_on_pellets_tip_ahead_of_t1_back_anchored(anim10, face, rec):
+def test_tongue_on_pellets_tip_with_t1_back_anchored(anim10, face, rec):
     m = XrmbToParke.from_face(face.vertices, toy_profile().jaw_length_mm)
     for n, p in zip(K.V_TONGUE_PELLETS, (T1, T2, T3, T4)):
         np.testing.assert_allclose(anim10.vertex(n)[:, [0, 2]], m.to_parke(rec.xy_mm[3:, p]),
@@ -231,29 +231,50 @@ def test_tongue_on_pellets_tip_ahead_of_t1_back_anchored(anim10, face, rec):
         assert np.all(anim10.vertex(n)[:, 1] == 0)
     follow = tongue_followers(face.vertices)
     assert follow[288] == 289 and follow[293] is None        # tip from T1, back anchored
-    # The tip lies in front of T1 on the line T2 -> T1 (4.1.1 "T1 ... behind the tip"), at most
-    # TONGUE_TIP_AHEAD_MM and at least TONGUE_TIP_MIN_AHEAD_MM (subject mm).
-    t1, t2, tip = (anim10.vertex(n)[:, [0, 2]].astype(float) for n in (289, 290, 288))
+    # The text's tongue (the default): the tip is "adjusted accordingly", carried with T1 at the
+    # neutral model's offset, and so is the edge beside it; nothing holds them behind the teeth.
+    assert Cassi10.tongue is TongueReading.TEXT
+    for n in (288, 294):
+        offset = face.vertices[n - 1, [0, 2]] - face.vertices[288, [0, 2]]
+        np.testing.assert_allclose(anim10.vertex(n)[:, [0, 2]] - anim10.vertex(289)[:, [0, 2]],
+                                   np.broadcast_to(offset, (anim10.n_frames, 2)), atol=1e-3)
+    np.testing.assert_array_equal(anim10.vertex(293), np.broadcast_to(face.vertices[292],
+                                                                      (anim10.n_frames, 3)))
+    assert follow[294] == 289 and follow[299] is None         # edges: beside tip -> T1, back
+    assert [follow[n] for n in (295, 296, 297, 298)] == [289, 290, 291, 292]
+
+
+def test_clamped_tongue_tip_ahead_of_t1_along_its_line(face, rec):
+    # The clamped reading: the tip lies in front of T1 on the line T2 -> T1 (4.1.1 "T1 ... behind
+    # the tip"), at most TONGUE_TIP_AHEAD_MM and at least TONGUE_TIP_MIN_AHEAD_MM (subject mm).
+    anim = Cassi10(tongue="clamped").animate(toy_profile(), face, rec)
+    m = XrmbToParke.from_face(face.vertices, toy_profile().jaw_length_mm)
+    t1, t2, tip = (anim.vertex(n)[:, [0, 2]].astype(float) for n in (289, 290, 288))
     u = (t1 - t2) / np.linalg.norm(t1 - t2, axis=1)[:, None]
     ahead = np.einsum("ij,ij->i", tip - t1, u)
     np.testing.assert_allclose(tip, t1 + ahead[:, None] * u, atol=1e-3)
     assert ahead.max() <= K.TONGUE_TIP_AHEAD_MM * m.scale + 1e-3
     assert ahead.min() >= K.TONGUE_TIP_MIN_AHEAD_MM * m.scale - 1e-3
-    np.testing.assert_array_equal(anim10.vertex(293), np.broadcast_to(face.vertices[292],
-                                                                      (anim10.n_frames, 3)))
-    assert follow[294] == 289 and follow[299] is None         # edges: beside tip -> T1, back
-    assert [follow[n] for n in (295, 296, 297, 298)] == [289, 290, 291, 292]
+    np.testing.assert_allclose(anim.diagnostics["tongue_tip_ahead_mm"], ahead / m.scale, atol=1e-3)
     # The edge beside the tip keeps its neutral offset from the tip (unless the arch holds it).
     side = face.vertices[293, [0, 2]] - face.vertices[287, [0, 2]]
-    np.testing.assert_allclose(anim10.vertex(294)[:, 2] - anim10.vertex(288)[:, 2],
-                               np.full(anim10.n_frames, side[1]), atol=1e-3)
+    np.testing.assert_allclose(anim.vertex(294)[:, 2] - anim.vertex(288)[:, 2],
+                               np.full(anim.n_frames, side[1]), atol=1e-3)
+    with pytest.raises(ValueError):
+        Cassi10(tongue="held")
+    from cassi.versions.cassi20 import Cassi20
+    from cassi.versions.cassi21 import Cassi21
+    for cls in (Cassi20, Cassi21):       # 1.0's tongue in 2.0 and 2.1, the reading passed on
+        assert cls().stages()[-1].reading is TongueReading.TEXT
+        assert cls(tongue="clamped").stages()[-1].reading is TongueReading.CLAMPED
 
 
-def test_tongue_tip_stays_behind_the_incisors_on_the_real_face():
-    # Regression for the tip carried 10 mm ahead of T1 (the neutral model's offset): on the face
-    # model, with T1 placed 4 mm behind the lower incisor (a tongue at rest), the tip must sit in
-    # front of T1 but behind the incisors' lingual surface by the clearance, and the edge vertices
-    # inside the arch of the bottom teeth.
+def test_tongue_tip_behind_the_incisors_when_clamped_through_them_as_the_text_has_it():
+    # On the face model, with T1 placed 4 mm behind the lower incisor (a tongue at rest): clamped,
+    # the tip sits in front of T1 but behind the incisors' lingual surface by the clearance, and
+    # the edge vertices inside the arch of the bottom teeth; the text's tongue carries the tip
+    # 10 mm ahead of T1 (the neutral model's offset) and through the incisors, the fault the
+    # thesis's judges charged (Table 5.3) and its 6.2 left to collision detection.
     from cassi.versions.cassi10 import arch_wall_x, incisor_wall_x
     face_mod = importlib.import_module("cassi.data.face.model")
     face = face_mod.build_face()
@@ -270,7 +291,7 @@ def test_tongue_tip_stays_behind_the_incisors_on_the_real_face():
     for k, p in enumerate((T1, T2, T3, T4)):
         xy[:, p] = inc + np.array([-4.0 - 14.0 * k, 1.0])
     xy[:, T1, 0] += np.linspace(-1.0, 1.0, len(xy))      # a little motion
-    anim = Cassi10().animate(prof, face, rec)
+    anim = Cassi10(tongue="clamped").animate(prof, face, rec)
     pos = anim.positions.astype(np.float64)
     np.testing.assert_allclose(pos[:, 288, [0, 2]], m.to_parke(xy[3:, T1]), atol=1e-3)
     tip = pos[:, 287]
@@ -283,6 +304,9 @@ def test_tongue_tip_stays_behind_the_incisors_on_the_real_face():
     # The old rigid offset (40 units = 10 mm at Parke's scale) would have been through the teeth.
     old_tip = pos[:, 288, 0] + (v[287, 0] - v[288, 0])
     assert np.any(old_tip > wall)
+    text = Cassi10().animate(prof, face, rec).positions.astype(np.float64)
+    np.testing.assert_allclose(text[:, 288], pos[:, 288], atol=1e-3)        # T1 on its pellet
+    assert np.all(text[:, 287, 0] > incisor_wall_x(text, text[:, 287, 2]))   # through the teeth
 
 
 def test_nose_kept_above_a_high_upper_lip(face):

@@ -12,10 +12,13 @@ The version is four stages run in order (see :class:`~cassi.versions.protocol.St
    replace this stage (:meth:`Cassi10.lip_stage`).
 3. :class:`NoseClearanceStage` (4.1.1): the nose tip is raised when a high upper lip would leave
    no space below it.
-4. :class:`TongueStage` (4.1.1): 289-292 sit on T1-T4 (parameters 55-62); the tip sits in front
-   of T1 along T2 -> T1 and behind the central incisors (:func:`place_tongue_tip`), the edge
-   vertices follow their nearest centre vertex (the one beside the tip, the tip), the back stays
-   anchored.
+4. :class:`TongueStage` (4.1.1): 289-292 sit on T1-T4 (parameters 55-62); the tip and the edge
+   vertices follow their nearest pellet vertex ("adjusted accordingly"), the back stays anchored,
+   and nothing keeps the tongue out of the teeth: the thesis's versions had no collision
+   detection (6.2 lists it as future work), and its judges charged 1.0 tongues that poke through
+   the front teeth. ``Cassi10(tongue="clamped")`` (:class:`TongueReading`) instead places the tip
+   in front of T1 along T2 -> T1 behind the central incisors (:func:`place_tongue_tip`) and holds
+   the edges inside the arch; the default is ``constants.TONGUE_READING``.
 
 The palate comes with the face (``cassi.data.face.model.build_face(palate_mm=...)``); Table 4.2's
 disabled parameters are listed in :mod:`cassi.versions.constants` and refused by
@@ -24,6 +27,7 @@ disabled parameters are listed in :mod:`cassi.versions.constants` and refused by
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import Enum
 from typing import ClassVar
 
 import numpy as np
@@ -41,6 +45,7 @@ __all__ = [
     "LipFollowStage",
     "NoseClearanceStage",
     "TongueStage",
+    "TongueReading",
     "check_parameters",
     "incisor_wall_x",
     "place_tongue_tip",
@@ -331,12 +336,28 @@ def arch_wall_x(vertices: np.ndarray, y: np.ndarray) -> np.ndarray:
     return np.where(span, x, np.inf).min(axis=-1)
 
 
+class TongueReading(str, Enum):
+    """How CASSI 1.0's tongue (2.0's and 2.1's too) meets the teeth.
+
+    TEXT: 4.1.1 as written, the tip and edges following their pellets with nothing keeping them
+    out of the teeth (the thesis's versions had no collision detection, 6.2): the default, see
+    ``constants.TONGUE_READING``.
+    CLAMPED: the tip placed in front of T1 along T2 -> T1 and held behind the central incisors,
+    the edges held inside the arch (a collision rule, CASSI 3.0's kind of fix).
+    """
+
+    TEXT = "text"
+    CLAMPED = "clamped"
+
+
 @dataclass
 class TongueStage:
-    """289-292 on T1-T4; tip ahead of T1 behind the teeth; edges follow; back anchored (4.1.1,
-    parameters 55-62)."""
+    """289-292 on T1-T4; the other vertices follow them, the back anchored (4.1.1, parameters
+    55-62); with ``reading`` CLAMPED the tip sits ahead of T1 behind the teeth and the edges
+    inside the arch."""
 
     name: str = "tongue"
+    reading: TongueReading = TongueReading(K.TONGUE_READING)
     #: The pellets between two others, which a leave-one-out animation may withhold.
     predicts: ClassVar[tuple[str, ...]] = ("T2", "T3")
 
@@ -359,13 +380,16 @@ class TongueStage:
                         + (ctx.pellet(after) - n[centre[i + 1] - 1]))
         return n[centre[i] - 1] + offset
 
+    def _clamped(self) -> bool:
+        return TongueReading(self.reading) is TongueReading.CLAMPED
+
     def _setup(self, ctx: TaskContext):
         if "tongue_plan" not in ctx.state:
             follow = tongue_followers(ctx.neutral)
             centre = np.asarray(K.V_TONGUE_PELLETS) - 1
-            # The tip and the edge vertex beside it are placed by place_tongue_tip; every other
-            # moving vertex takes column j of the (F, 4, 2) pellet displacements.
-            tip_pair = {N.TONGUE_TIP, N.TONGUE_EDGE[0]}
+            # Clamped, the tip and the edge vertex beside it are placed by place_tongue_tip;
+            # every other moving vertex takes column j of the (F, 4, 2) pellet displacements.
+            tip_pair = {N.TONGUE_TIP, N.TONGUE_EDGE[0]} if self._clamped() else set()
             movers = [v for v, lead in follow.items() if lead is not None and v not in tip_pair]
             idx = np.concatenate([centre, np.asarray(movers, dtype=np.int64) - 1])
             col = np.concatenate([np.arange(4), [K.V_TONGUE_PELLETS.index(follow[v])
@@ -399,25 +423,42 @@ class TongueStage:
         first = np.stack([ctx.pellet(p)[0] for p in ("T1", "T2", "T3", "T4")])   # (4, 2)
         delta = first - ctx.start[centre][:, _XZ]
         ctx.start[np.ix_(idx, _XZ)] += delta[col]
-        self._tip(ctx, ctx.start, first[None, 0], first[None, 1], ctx.start)
-        self._inside_arch(ctx, ctx.start)
+        if self._clamped():
+            self._tip(ctx, ctx.start, first[None, 0], first[None, 1], ctx.start)
+            self._inside_arch(ctx, ctx.start)
 
     def animate(self, ctx: TaskContext, positions: np.ndarray) -> None:
         idx, col, _ = self._setup(ctx)
         d = np.stack([ctx.displacement(p) for p in ("T1", "T2", "T3", "T4")], axis=1)  # (F,4,2)
         positions[:, idx, 0] = ctx.start[idx, 0] + d[:, col, 0]
         positions[:, idx, 2] = ctx.start[idx, 2] + d[:, col, 1]
-        ahead = self._tip(ctx, positions, ctx.pellet("T1"), ctx.pellet("T2"), positions)
+        if self._clamped():
+            ahead = self._tip(ctx, positions, ctx.pellet("T1"), ctx.pellet("T2"), positions)
+            self._inside_arch(ctx, positions)
+        else:
+            tip = positions[:, N.TONGUE_TIP - 1, :][:, _XZ] - positions[:, N.T1 - 1, :][:, _XZ]
+            ahead = np.hypot(tip[:, 0], tip[:, 1]) / ctx.mapping.scale
         ctx.diagnostics["tongue_tip_ahead_mm"] = ahead
-        self._inside_arch(ctx, positions)
         parameters_frame(ctx, {55: ("T1", 0), 56: ("T1", 1), 57: ("T2", 0), 58: ("T2", 1),
                                59: ("T3", 0), 60: ("T3", 1), 61: ("T4", 0), 62: ("T4", 1)})
 
 
 class Cassi10(StagedVersion):
-    """CASSI 1.0 (thesis 4.1). Subclasses change the lips by overriding :meth:`lip_stage`."""
+    """CASSI 1.0 (thesis 4.1). Subclasses change the lips by overriding :meth:`lip_stage`.
+
+    Parameters
+    ----------
+    tongue : TongueReading or str, optional
+        How the tongue meets the teeth (default :attr:`tongue`, ``constants.TONGUE_READING``).
+    """
 
     name = "cassi-1.0"
+    #: The tongue's reading: TEXT by default (the thesis's versions had no collision detection).
+    tongue: TongueReading = TongueReading(K.TONGUE_READING)
+
+    def __init__(self, *, tongue: TongueReading | str | None = None):
+        if tongue is not None:
+            self.tongue = TongueReading(tongue)
 
     def jaw_stage(self) -> Stage:
         return JawStage()
@@ -426,4 +467,5 @@ class Cassi10(StagedVersion):
         return LipFollowStage()
 
     def stages(self) -> list[Stage]:
-        return [self.jaw_stage(), self.lip_stage(), NoseClearanceStage(), TongueStage()]
+        return [self.jaw_stage(), self.lip_stage(), NoseClearanceStage(),
+                TongueStage(reading=self.tongue)]

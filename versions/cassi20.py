@@ -33,6 +33,8 @@ class Cassi20(Cassi10):
         :mod:`cassi.versions.lips_constants`'.
     corner : CornerReading or str, optional
         Where the lip corner sits on a vertical ellipse (default :attr:`corner`).
+    tongue : TongueReading or str, optional
+        As for :class:`~cassi.versions.cassi10.Cassi10` (1.0's tongue, unchanged in 2.0).
     """
 
     name = "cassi-2.0"
@@ -40,8 +42,8 @@ class Cassi20(Cassi10):
     corner: CornerReading = CornerReading(K.CORNER_READING)
 
     def __init__(self, *, params: OuterAbcParams | None = None,
-                 corner: CornerReading | str | None = None):
-        super().__init__()
+                 corner: CornerReading | str | None = None, tongue: str | None = None):
+        super().__init__(tongue=tongue)
         self.params = params or OuterAbcParams()
         if corner is not None:
             self.corner = CornerReading(corner)

@@ -32,7 +32,7 @@ class Cassi21(Cassi20):
         As for :class:`~cassi.versions.cassi20.Cassi20`.
     reading : LowLipsReading or str, optional
         Which side of vertex 226 the 20-unit threshold lies on (default :attr:`reading`).
-    corner : CornerReading or str, optional
+    corner, tongue : CornerReading or str, TongueReading or str, optional
         As for :class:`~cassi.versions.cassi20.Cassi20`.
     """
 
@@ -42,8 +42,8 @@ class Cassi21(Cassi20):
 
     def __init__(self, *, params: OuterAbcParams | None = None,
                  reading: LowLipsReading | str | None = None,
-                 corner: CornerReading | str | None = None):
-        super().__init__(params=params, corner=corner)
+                 corner: CornerReading | str | None = None, tongue: str | None = None):
+        super().__init__(params=params, corner=corner, tongue=tongue)
         if reading is not None:
             self.reading = LowLipsReading(reading)
 
