@@ -436,7 +436,7 @@ class TongueStage:
             ahead = self._tip(ctx, positions, ctx.pellet("T1"), ctx.pellet("T2"), positions)
             self._inside_arch(ctx, positions)
         else:
-            tip = positions[:, N.TONGUE_TIP - 1, :][:, _XZ] - positions[:, N.T1 - 1, :][:, _XZ]
+            tip = positions[:, N.TONGUE_TIP - 1, _XZ] - positions[:, N.T1 - 1, _XZ]
             ahead = np.hypot(tip[:, 0], tip[:, 1]) / ctx.mapping.scale
         ctx.diagnostics["tongue_tip_ahead_mm"] = ahead
         parameters_frame(ctx, {55: ("T1", 0), 56: ("T1", 1), 57: ("T2", 0), 58: ("T2", 1),

@@ -178,7 +178,8 @@ def _tier_frame(tier: dict, *, path, text: str | None = None,
     if declared is not None and declared[0] != str(len(entries)):
         # praatio reads what is there; Praat reads exactly the declared count, so a file cut
         # short (or one with intervals pasted in) is not what its header says
-        count = declared[0] if len(declared[0]) <= 20 else f"{declared[0][:20]}... ({len(declared[0])} digits)"
+        digits = declared[0]
+        count = digits if len(digits) <= 20 else f"{digits[:20]}... ({len(digits)} digits)"
         raise CassiInputError(f"tier {name!r} declares {count} intervals but holds "
                               f"{len(entries)}: the file is cut short or was edited by hand",
                               path=path, line=declared[1])

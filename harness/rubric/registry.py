@@ -1186,7 +1186,6 @@ _ALL: list[Check] = [
           charged_with="shape_tongue_t2"),
 ]
 
-#: The registry: check name -> :class:`Check`, in rubric order.
 #: The tables judged on the speech files only. The thesis evaluated lip placement and movement
 #: (Table 5.5, C) "produced by the tasks given in Table 5.1" (section 6.1), two error-free files
 #: per subject (5.1), like the teeth, lips and tongue of 1.0 (5.3, A) and the face shape (5.4,
@@ -1195,6 +1194,7 @@ _ALL: list[Check] = [
 #: not lip placement in speech. Every other task (a corpus's own choice of two) is judged.
 SPEECH_TABLES = ("A", "B", "C")
 
+#: The registry: check name -> :class:`Check`, in rubric order.
 CHECKS: dict[str, Check] = {}
 for _c in _ALL:
     if _c.name in CHECKS:
