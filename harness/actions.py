@@ -1,19 +1,22 @@
-"""What ``cassi run``, ``cassi bench``, ``cassi render`` and ``cassi animate`` do in the harness
-(parsers: :mod:`.commands`, :mod:`.render_commands`)."""
+"""What ``cassi run``, ``cassi nightly``, ``cassi bench``, ``cassi gc``, ``cassi render`` and
+``cassi animate`` do in the harness (parsers: :mod:`.commands`, :mod:`.render_commands`)."""
 from __future__ import annotations
 
 import argparse
 import json
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
 from cassi.common.atomic import atomic_write_text
 from cassi.common.errors import CassiInputError
+from cassi.common.lazy import resolve
 from cassi.harness.bench import BENCHMARKS, run_benchmarks
 from cassi.harness.commands import config_from_args
 from cassi.harness.evaluation.caches import get_corpus, get_face, get_profile, get_version_face
-from cassi.harness.evaluation.nightly import gc
+from cassi.harness.evaluation.config import NIGHTLY
+from cassi.harness.evaluation.nightly import gc, nightly
 from cassi.harness.evaluation.run import run
 from cassi.harness.farm.store import collect_garbage, store_lock
 from cassi.renderer.commands import NEUTRAL
@@ -28,6 +31,17 @@ def cmd_run(args: argparse.Namespace) -> int:
     print(f"results: {cfg.out / 'results.parquet'} (and .csv); ratings: "
           f"{cfg.out / 'ratings.parquet'}")
     return 0 if result.ok else 1
+
+
+def cmd_nightly(args: argparse.Namespace) -> int:
+    cfg = config_from_args(args, NIGHTLY, need_out=False)
+    review = partial(resolve(args.review), common_only=args.common_only)
+    passed, index = nightly(args.out, config=cfg, progress=not args.quiet, review=review)
+    gate = json.loads((Path(args.out) / "runs" / index.parent.name / "gate.json").read_text())
+    word = "BASELINE RECORDED" if passed and gate.get("baseline_recorded") else (
+        "PASSED" if passed else "FAILED")
+    print(f"{word}: {index}")
+    return 0 if passed else 1
 
 
 def cmd_bench(args: argparse.Namespace) -> int:

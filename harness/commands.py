@@ -11,12 +11,11 @@ from cassi.harness.evaluation import config as C
 from cassi.harness.evaluation.config import KEEP_NIGHTS
 
 
-def _add_run(sub) -> None:
-    p = sub.add_parser(
-        "run", help="evaluate subjects x tasks x versions x views (resumable batch)",
-        description="Run the rubric over a batch: geometry and geometric checks on every frame, "
-                    "renders at keyframes and a stride, image checks, ratings. Rerunning into "
-                    "the same --out reuses every finished job whose outputs verify.")
+def add_run_options(p: argparse.ArgumentParser, defaults: C.RunConfig) -> None:
+    """The settings of a run (:class:`~cassi.harness.evaluation.config.RunConfig`), shared by
+    every command that starts one; the help gives ``defaults``, the command's own
+    (:func:`config_from_args` applies a run file and the flags over them)."""
+    d = defaults
     p.add_argument("--config", type=Path, help="a run file (.toml, .yaml); flags override it")
     p.add_argument("--corpus", type=Path, help="corpus directory (default: the embedded synthetic "
                                                 "corpus)")
@@ -26,26 +25,61 @@ def _add_run(sub) -> None:
     p.add_argument("--versions", nargs="+", metavar="NAME", help="default: every version")
     p.add_argument("--views", nargs="+", metavar="NAME",
                    help="front side half top (default: all four); 'geometry' alone: no renders")
-    p.add_argument("--stride", help="also render every Nth frame (default 50; 0: first + "
-                                    "extremes only)")
+    p.add_argument("--stride", help=f"also render every Nth frame (default {d.stride}; 0: the "
+                                    "first frame and the frames the checks point at only)")
     p.add_argument("--extremes", help="render at most N frames the checks point at, per task "
-                                      "file and version (default 4)")
+                                      f"file and version (default {d.extremes})")
     p.add_argument("--animate-stride", dest="animate_stride",
-                   help="also render every Nth frame in every view, for each task file's video "
-                        "(default 0: off)")
-    p.add_argument("--chunk", help="frames per render job (default 16)")
-    p.add_argument("--preset", help="render preset (default preview)")
+                   help="also render every Nth row for each task file's video: the front view "
+                        "for every version (the image checks judge it), every view for the "
+                        f"--video-versions (default {d.animate_stride}; 0: no videos)")
+    every = d.video_versions is None
+    p.add_argument("--video-versions", dest="video_versions", metavar="NAMES",
+                   help="versions rendered in all four views on the video grid, for a four-view "
+                        "video of every task file: comma-separated names, 'all' or 'none' "
+                        f"(default {'all' if every else ','.join(d.video_versions) or 'none'}; "
+                        "`cassi export --format gltf` gives any view of any version)")
+    p.add_argument("--chunk", help=f"frames per render job (default {d.chunk})")
+    p.add_argument("--preset", help=f"render preset (default {d.preset})")
     p.add_argument("--variant", help="Mitsuba variant (default: the renderer's choice)")
     p.add_argument("--executor", choices=C.EXECUTORS, help="local processes (default) or ray")
     p.add_argument("--address", help="Ray cluster address (default: start a local cluster)")
-    p.add_argument("--workers", help="worker processes (default: one per usable core)")
-    p.add_argument("--threads", help="CPU threads per worker process (default 1)")
-    p.add_argument("--retries", help="retries of a job whose worker died (default 1)")
+    p.add_argument("--workers", help="worker processes (default: "
+                   + ("one per usable core)" if d.workers == C.RunConfig().workers
+                      else f"{d.workers})"))
+    p.add_argument("--threads", help=f"CPU threads per worker process (default {d.threads})")
+    p.add_argument("--retries", help=f"retries of a job whose worker died (default {d.retries})")
+
+
+def _add_run(sub) -> None:
+    p = sub.add_parser(
+        "run", help="evaluate subjects x tasks x versions x views (resumable batch)",
+        description="Run the rubric over a batch: geometry and geometric checks on every frame, "
+                    "renders at keyframes and a stride, image checks, ratings. Rerunning into "
+                    "the same --out reuses every finished job whose outputs verify.")
+    add_run_options(p, C.RunConfig())
     p.add_argument("--out", type=Path, help="output directory (required here or in --config)")
     p.add_argument("--cache", type=Path, help="a store shared between runs: jobs it holds with "
                                               "the same inputs and code are reused, not run")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.set_defaults(func="cassi.harness.actions:cmd_run")
+
+
+def _add_nightly(sub) -> None:
+    p = sub.add_parser("nightly", help="run the default evaluation, report, compare, gate",
+                       description="One night: dated run + report under DIR, compared with the "
+                       "previous night; exit 0 when the gates hold, 1 when one fails. The run's "
+                       "settings are `cassi run`'s, with a night's defaults.")
+    p.add_argument("--out", type=Path, required=True,
+                   help="the nightly directory (kept across nights)")
+    add_run_options(p, C.NIGHTLY)
+    p.add_argument("--common-only", action="store_true", dest="common_only",
+                   help="when the previous night covered other task files, versions or views, "
+                        "gate only what both nights share (default: such a night fails its gate)")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress (bars on a terminal, a line per stage every few seconds "
+                        "in a log) and no stage times")
+    p.set_defaults(func="cassi.harness.actions:cmd_nightly", review=C.NIGHT_REVIEW)
 
 
 def _add_bench(sub) -> None:
@@ -74,21 +108,32 @@ def _add_gc(sub) -> None:
 
 
 def register(sub) -> None:
-    """Add ``run``, ``bench`` and ``gc`` to the ``cassi`` subcommands."""
+    """Add ``run``, ``nightly``, ``bench`` and ``gc`` to the ``cassi`` subcommands."""
     _add_run(sub)
+    _add_nightly(sub)
     _add_bench(sub)
     _add_gc(sub)
 
 
-def config_from_args(args: argparse.Namespace) -> C.RunConfig:
-    """The run file (if any) with the command-line flags applied over it."""
-    base = C.load_config(args.config) if args.config else C.RunConfig()
+def config_from_args(args: argparse.Namespace, defaults: C.RunConfig = C.RunConfig(), *,
+                     need_out: bool = True) -> C.RunConfig:
+    """``defaults`` (the command's), the run file (if any) over them, the flags over both."""
+    base = defaults
+    if getattr(args, "config", None):
+        in_file = C.load_config(args.config)
+        given = {k: getattr(in_file, k) for k in in_file.where}
+        if "video_versions" in given and in_file.video_versions is None:
+            given["video_versions"] = C.EVERY_VERSION  # None would read as "not set"
+        base = C.merge(defaults, given).replace(where=in_file.where)
     flags = {k: getattr(args, k, None) for k in C.FIELDS}
     for name in ("subjects", "tasks", "versions", "views"):
         # `--subjects JW11,JW45` and `--subjects JW11 JW45` mean the same.
         if flags.get(name):
             flags[name] = [part for item in flags[name] for part in str(item).split(",") if part]
+    if flags.get("video_versions") is not None:
+        flags["video_versions"] = [v.strip() for v in flags["video_versions"].split(",")
+                                   if v.strip()]
     cfg = C.merge(base, flags)
-    if cfg.out is None:
+    if need_out and cfg.out is None:
         raise CassiInputError("no output directory: give --out DIR (or out = ... in --config)")
     return cfg

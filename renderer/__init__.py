@@ -5,11 +5,11 @@ Public names: :class:`FaceRenderer`, :class:`RenderResult`, :func:`choose_varian
 the writers in :mod:`cassi.renderer.images`, animations in :mod:`cassi.renderer.animate`,
 views and presets in :mod:`cassi.renderer.views`. Mitsuba itself is imported on first use.
 """
-from cassi.renderer.images import FrameWriter, contact_sheet, write_exr, write_mask_png, write_png, write_result
+from cassi.renderer.images import FrameWriter, tile, write_exr, write_mask_png, write_png, write_result
 from cassi.renderer.render import FaceRenderer, RenderResult
 from cassi.renderer.variant import choose_variant
 from cassi.renderer.views import PRESET_NAMES, PRESETS, VIEW_NAMES, VIEWS
 
-__all__ = ["FaceRenderer", "RenderResult", "choose_variant", "FrameWriter", "contact_sheet",
+__all__ = ["FaceRenderer", "RenderResult", "choose_variant", "FrameWriter", "tile",
            "write_exr", "write_png", "write_mask_png", "write_result", "VIEWS", "VIEW_NAMES",
            "PRESETS", "PRESET_NAMES"]

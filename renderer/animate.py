@@ -18,7 +18,7 @@ from cassi.data.xrmb.files import NOMINAL_PERIOD_US  # the XRMB frame period, us
 from cassi.renderer.views import VIEW_NAMES
 from cassi.data.face.model import render_topology
 from cassi.renderer.render import FaceRenderer
-from cassi.renderer.images import contact_sheet, write_contact_sheet
+from cassi.renderer.images import tile, write_contact_sheet
 
 __all__ = ["side_by_side", "animation_frames", "write_animation", "animate_positions", "views_sheet",
            "realtime_fps"]
@@ -35,7 +35,7 @@ def side_by_side(images: Sequence[np.ndarray], gap: int = 0) -> np.ndarray:
     """uint8 (H, sum W, 3) of equal-height images (linear float images are sRGB-encoded)."""
     if len({i.shape[0] for i in images}) != 1:
         raise ValueError("side_by_side needs images of equal height")
-    return contact_sheet(images, columns=len(images), gap=gap, background=(0, 0, 0), border=False)
+    return tile(images, columns=len(images), gap=gap, background=(0, 0, 0), border=False)
 
 
 def animation_frames(renderers: Sequence, positions: Iterable[np.ndarray]) -> Iterator[np.ndarray]:

@@ -18,7 +18,7 @@ from cassi.common.errors import CassiInputError
 
 __all__ = ["srgb_encode", "srgb_decode", "to_srgb8", "png_bytes", "write_exr", "write_png",
            "write_mask_png",
-           "write_sidecar", "read_image", "read_metadata", "contact_sheet", "write_contact_sheet",
+           "write_sidecar", "read_image", "read_metadata", "tile", "write_contact_sheet",
            "METADATA_PREFIX"]
 
 #: Metadata keys are written as ``cassi:<key>`` attributes (EXR header / PNG text chunks).
@@ -234,9 +234,8 @@ def read_metadata(path: str | os.PathLike) -> dict:
         inp.close()
 
 
-def contact_sheet(images: Sequence[np.ndarray], *, columns: int | None = None, gap: int = 4,
-                  background: tuple[int, int, int] = (32, 32, 32),
-                  border: bool = True) -> np.ndarray:
+def tile(images: Sequence[np.ndarray], *, columns: int | None = None, gap: int = 4,
+         background: tuple[int, int, int] = (32, 32, 32), border: bool = True) -> np.ndarray:
     """Tile uint8 (H, W, 3) images (sizes may differ; linear float ones are sRGB-encoded) into
     one uint8 grid image, row-major: cells of the largest image's size, ``gap`` pixels of
     ``background`` between them (and around them with ``border``). The one tiler of the
@@ -264,8 +263,8 @@ def contact_sheet(images: Sequence[np.ndarray], *, columns: int | None = None, g
 
 def write_contact_sheet(path: str | os.PathLike, images: Sequence[np.ndarray], *,
                         columns: int | None = None, metadata: dict | None = None) -> Path:
-    """Write :func:`contact_sheet` of ``images`` as a PNG."""
-    return write_png(path, contact_sheet(images, columns=columns), metadata=metadata, linear=False)
+    """Write :func:`tile` of ``images`` as a PNG."""
+    return write_png(path, tile(images, columns=columns), metadata=metadata, linear=False)
 
 
 def write_result(result, stem: str | os.PathLike, *, exr: bool = False, png: bool = True,

@@ -1,19 +1,14 @@
-"""What ``cassi report``, ``agree``, ``nightly``, ``gate`` and ``golden`` do (parsers:
-:mod:`cassi.reports.commands`). ``cassi nightly`` is the harness's night
-(:func:`cassi.harness.evaluation.nightly.nightly`) reviewed by :func:`.nightly.review_night`."""
+"""What ``cassi report``, ``agree``, ``gate`` and ``golden`` do (parsers:
+:mod:`cassi.reports.commands`). ``cassi nightly`` is the harness's
+(:func:`cassi.harness.actions.cmd_nightly`); its review is :func:`.nightly.review_night`."""
 from __future__ import annotations
 
 import argparse
-import json
-from functools import partial
 from pathlib import Path
 
 from cassi.common.atomic import writable_dir
 from cassi.common.errors import CassiInputError
-from cassi.harness.evaluation.config import validate
-from cassi.harness.evaluation.nightly import nightly
 from cassi.reports.gates import gate, update_golden
-from cassi.reports.nightly import review_night
 from cassi.reports.agree import agreement, write_agreement
 from cassi.reports.report import evidence_href, write_report
 from cassi.reports.runio import load_run
@@ -41,29 +36,6 @@ def cmd_agree(args: argparse.Namespace) -> int:
         print(result["note"])
     print(f"{len(result['disagreements'])} disagreement(s): {paths[2]}")
     return 0
-
-
-def video_versions_arg(text: str) -> tuple[str, ...] | None:
-    """``--video-versions``: 'none' (or nothing) -> (), 'all' -> None (every version), else the
-    comma-separated names (checked with the run's other names before any work)."""
-    names = tuple(v.strip() for v in text.split(",") if v.strip())
-    if names in ((), ("none",)):
-        return ()
-    return None if names == ("all",) else names
-
-
-def cmd_nightly(args: argparse.Namespace) -> int:
-    # the same checks as `cassi run`'s settings (validate: exit 2 naming the setting)
-    cfg = validate(dict(workers=args.workers, stride=args.stride, extremes=args.extremes,
-                        animate_stride=args.animate_stride)).replace(
-        video_versions=video_versions_arg(args.video_versions))
-    passed, index = nightly(args.out, corpus=args.corpus, config=cfg, progress=not args.quiet,
-                            review=partial(review_night, common_only=args.common_only))
-    gate = json.loads((Path(args.out) / "runs" / index.parent.name / "gate.json").read_text())
-    word = "BASELINE RECORDED" if passed and gate.get("baseline_recorded") else (
-        "PASSED" if passed else "FAILED")
-    print(f"{word}: {index}")
-    return 0 if passed else 1
 
 
 def cmd_gate(args: argparse.Namespace) -> int:

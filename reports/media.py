@@ -16,12 +16,13 @@ import imageio.v3 as iio
 import numpy as np
 import pandas as pd
 
-from cassi.common.atomic import link_or_copy, replacing
+from cassi.common.atomic import link_or_copy
 from cassi.harness.farm.store import sha256_file
 from cassi.renderer import animate, images
 from cassi.data.xrmb.files import NOMINAL_PERIOD_US
 from cassi.renderer.animate import write_animation
-from cassi.renderer.images import contact_sheet as tile
+from cassi.renderer.images import tile
+from cassi.harness.evaluation.frames import video_grid
 
 
 def copy_image(src: str | os.PathLike, dest: Path) -> Path:
@@ -37,15 +38,6 @@ def read_rgb8(path) -> np.ndarray:
     if img.ndim == 2:
         img = np.stack([img] * 3, axis=-1)
     return img[..., :3].astype(np.uint8)
-
-
-def contact_sheet(paths: list[str], dest: Path, *, columns: int = 4) -> Path:
-    """One PNG with the given renders in a grid (e.g. the four views at a check's frame)."""
-    sheet = tile([read_rgb8(p) for p in paths], columns=columns, gap=4,
-                 background=(255, 255, 255), border=False)
-    with replacing(dest) as tmp:
-        iio.imwrite(tmp, sheet, extension=".png")
-    return dest
 
 
 #: The XRMB pellet time base: one recording row every 6866 us (cassi.data.xrmb.files).
@@ -73,10 +65,9 @@ def video_frames(renders: pd.DataFrame, *, stride: int) -> list[int]:
     Extreme frames off the grid are left out: they would break the time base."""
     if not len(renders) or stride < 1:
         return []
-    first = int(renders["frame"].min())
     panels = renders.groupby(["version", "view"])["frame"].apply(lambda f: set(int(x) for x in f))
-    common = set.intersection(*panels.tolist())
-    return sorted(f for f in common if (f - first) % stride == 0)
+    return video_grid(set.intersection(*panels.tolist()), first=int(renders["frame"].min()),
+                      stride=stride)
 
 
 @functools.lru_cache(maxsize=None)

@@ -7,16 +7,15 @@ from __future__ import annotations
 
 import hashlib
 import json
-import multiprocessing
 import os
 import re
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import jinja2
 import pandas as pd
 
 from cassi.common.atomic import atomic_write_text
+from cassi.common.cores import usable_cores
 from cassi.reports import compare as cmp
 from cassi.reports.agree import agreement, write_agreement
 from cassi.reports import media, plots
@@ -24,6 +23,8 @@ from cassi.reports.runio import Run, load_run, order_versions
 from cassi.harness.evaluation.frames import COMPARISON_VIEW, VIDEO_VIEWS
 from cassi.harness.evaluation.provenance import rubric_digest
 from cassi.harness.evaluation.stages import MASKS_OUTPUT
+from cassi.harness.farm.executors import LocalExecutor
+from cassi.harness.farm.workers import thread_env
 from cassi.harness.rubric import (AGGREGATION_RULES, CHECKS, RATINGS, component_ratings,
                                   file_verdicts, rating_counts, table_c_rule, table_title,
                                   shown_beside, version_comparisons)
@@ -359,8 +360,7 @@ def _audio_for(run: Run):
 
 #: Processes that encode a report's videos at once (each video is one ffmpeg stream, the
 #: report's longest part: 57 task files' four-view and comparison videos took most of 155 s).
-REPORT_WORKERS = max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
-                     else (os.cpu_count() or 1))
+REPORT_WORKERS = usable_cores()
 
 
 class _Encoding:
@@ -382,16 +382,15 @@ class _Encoding:
                 self._done[i] = media.task_video(**c)
             else:
                 todo.append(i)
-        self._pool, self._futures = None, {}
+        self._pool, self._sent = None, []
         if REPORT_WORKERS >= 2 and len(todo) >= 2:
-            ctx = multiprocessing.get_context("spawn")  # as the farm: no forked threads of the parent
-            self._pool = ProcessPoolExecutor(min(REPORT_WORKERS, len(todo)), mp_context=ctx)
-            self._futures = {i: self._pool.submit(_task_video, self._calls[i]) for i in todo}
-        self._todo = [i for i in todo if i not in self._futures]
-
-    @property
-    def started_processes(self) -> bool:
-        return self._pool is not None
+            # the farm's process pool (spawned workers, a crashed one replaced), not a run
+            self._pool = LocalExecutor(min(REPORT_WORKERS, len(todo)), env=thread_env(1))
+            self._pool.start()
+            for i in todo:
+                self._pool.submit(str(i), _task_video, self._calls[i])
+            self._sent = todo
+        self._todo = [i for i in todo if i not in self._sent]
 
     def videos(self) -> list[dict]:
         """The report's description of every video made (waits for the encoding)."""
@@ -404,20 +403,27 @@ class _Encoding:
                                "seconds": result["seconds"], "audio": result["audio"]})
         return videos
 
-    def close(self) -> None:
-        """Stop encoding (the report failed): no worker outlives it."""
+    def close(self, *, abort: bool = True) -> None:
+        """Stop the encoding processes (by default at once: the report failed); no worker
+        outlives the report."""
         if self._pool is not None:
-            self._pool.shutdown(cancel_futures=True)
+            self._pool.close(abort=abort)
+            self._pool = None
 
     def results(self) -> list[dict | None]:
         """:func:`media.task_video` of every spec, in order."""
         try:
             for i in self._todo:
                 self._done[i] = media.task_video(**self._calls[i])
-            for i, fut in self._futures.items():
-                self._done[i] = fut.result()
-        finally:
+            while self._pool is not None and self._pool.pending():
+                for item in self._pool.wait():
+                    if not item.ok:
+                        raise RuntimeError(f"encoding a video failed: {item.error}")
+                    self._done[int(item.key)] = item.value
+        except BaseException:
             self.close()
+            raise
+        self.close(abort=False)
         return [self._done[i] for i in range(len(self._calls))]
 
 

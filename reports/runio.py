@@ -13,7 +13,7 @@ import pandas as pd
 
 from cassi.common.errors import CassiInputError
 from cassi.harness.farm.results import read_results
-from cassi.harness.farm.runner import ATTACHMENT_COLUMNS, RENDER_COLUMNS  # indexes the farm writes
+from cassi.harness.farm.results import ATTACHMENT_COLUMNS, RENDER_COLUMNS  # indexes the farm writes
 from cassi.harness.farm.tableset import OPTIONAL_TABLES, SUMMARY_FILE, verify_table_set
 from cassi.harness.rubric.tables import order_versions as rubric_order
 

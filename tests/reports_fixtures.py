@@ -11,7 +11,7 @@ import pandas as pd
 
 from cassi.harness.farm.results import normalize
 from cassi.harness.rubric import ratings_table as ratings
-from cassi.harness.farm.runner import RENDER_COLUMNS
+from cassi.harness.farm.results import RENDER_COLUMNS
 from cassi.harness.farm.tableset import write_table_set
 
 VERSIONS = ("cassi-1.0", "cassi-2.0", "cassi-2.1")

@@ -6,10 +6,13 @@ cassi's own modules are the exception, each with its reason on the line.
 """
 from __future__ import annotations
 
+import argparse
 import ast
 from pathlib import Path
 
 import pytest
+
+from cassi.harness.cli import build_parser
 
 ROOT = Path(__file__).resolve().parents[1]
 LAYERS = ("common", "data", "versions", "renderer", "harness", "reports")
@@ -22,8 +25,12 @@ ALLOWED = {
     "harness": {"common", "data", "versions", "renderer"},
     "reports": {"common", "data", "versions", "renderer", "harness"},
 }
-#: Modules reports must never import: the farm runs jobs, reports read what a run wrote.
-REPORTS_NEVER = ("cassi.harness.farm.executors", "cassi.harness.farm.workers")
+#: Modules reports must never import: they start or schedule a run; reports read what a run
+#: wrote (the farm's process pool may encode a report's videos: that is no run).
+REPORTS_NEVER = ("cassi.harness.evaluation.run", "cassi.harness.farm.runner")
+#: Names that start a run or a night, wherever they are defined: never imported by reports.
+REPORTS_NEVER_NAMES = {"run", "run_batch", "nightly", "make_executor", "RayExecutor",
+                       "cassi_pipeline"}
 MAX_LOCAL_CASSI_IMPORTS = 20
 
 if not (ROOT / "harness").is_dir():
@@ -72,10 +79,27 @@ def test_every_layer_imports_only_the_layers_below_it():
     assert not wrong, "\n".join(wrong)
 
 
-def test_reports_do_not_drive_the_farm():
+def test_reports_never_start_a_run():
     wrong = [f"{p.relative_to(ROOT)}:{n}: {name}" for layer, p, n, name, _, _ in _imports()
              if layer == "reports" and name.startswith(REPORTS_NEVER)]
+    for path in sorted((ROOT / "reports").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("cassi.harness"):
+                wrong += [f"{path.relative_to(ROOT)}:{node.lineno}: {node.module}.{a.name}"
+                          for a in node.names if a.name in REPORTS_NEVER_NAMES]
     assert not wrong, "\n".join(wrong)
+
+
+def test_the_commands_that_start_a_run_are_the_harness_s_and_share_its_options():
+    """`cassi run` and `cassi nightly` are composed in the harness, from one set of run
+    options (harness.commands.add_run_options), never in reports."""
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    for command in ("run", "nightly"):
+        handler = sub.choices[command].get_default("func")
+        assert handler.startswith("cassi.harness."), (command, handler)
+    reports_cmds = (ROOT / "reports" / "commands.py").read_text()
+    assert "add_run_options" not in reports_cmds and '"nightly"' not in reports_cmds
 
 
 def test_few_function_local_imports_of_cassi_each_with_its_reason():

@@ -2,15 +2,18 @@
 measures are unchanged), its format is in every job's digest, and the nightly's frame policy."""
 from __future__ import annotations
 
+import argparse
+
 import numpy as np
+import pytest
 
 from cassi.harness.evaluation import run as run_mod
-from cassi.harness.evaluation.config import NIGHTLY_VIDEO_VERSIONS, RunConfig
+from cassi.harness.evaluation.config import NIGHTLY, NIGHTLY_VIDEO_VERSIONS, RunConfig
 from cassi.harness.evaluation.frames import video_views
 from cassi.harness.evaluation.stages import masks_blob, read_masks_blob
 from cassi.harness.farm.jobs import Job, StageContext
 from cassi.harness.rubric.image import FrameMasks, FrameStats
-from cassi.reports.actions import video_versions_arg
+from cassi.harness.commands import config_from_args, register
 
 NAMES = ("background", "skin", "lips", "teeth_upper", "tongue", "teeth_lower")
 
@@ -59,6 +62,21 @@ def test_nightly_frame_policy_front_grid_for_every_version_and_no_four_view_grid
     for version in ("cassi-1.0", "cassi-2.1"):
         assert video_views(19, version, NIGHTLY_VIDEO_VERSIONS) == ("front",)
     assert video_views(19, "cassi-2.1", ("cassi-2.1",)) == ("front", "side", "half", "top")
-    assert video_versions_arg("none") == () and video_versions_arg("") == ()
-    assert video_versions_arg("all") is None
-    assert video_versions_arg("cassi-2.1, cassi-3.0") == ("cassi-2.1", "cassi-3.0")
+
+
+@pytest.mark.parametrize("command", ["run", "nightly"])
+def test_video_versions_words_mean_the_same_in_run_and_nightly(command):
+    def video_versions(*flag):
+        args = _parser().parse_args([command, "--out", "o", *flag])
+        return config_from_args(args, NIGHTLY if command == "nightly" else RunConfig()).video_versions
+
+    assert video_versions("--video-versions", "none") == () == video_versions("--video-versions", "")
+    assert video_versions("--video-versions", "all") is None
+    assert video_versions("--video-versions", "cassi-2.1, cassi-3.0") == ("cassi-2.1", "cassi-3.0")
+    assert video_versions() == (() if command == "nightly" else None)
+
+
+def _parser():
+    p = argparse.ArgumentParser()
+    register(p.add_subparsers(dest="command"))
+    return p

@@ -190,3 +190,37 @@ def test_table_5_1_as_printed():
     assert len(TABLE_5_1) == 15
     assert TABLE_5_1["JW16"] == (3, 6) and TABLE_5_1["JW502"] == (21, 22)
     assert all(a != b for a, b in TABLE_5_1.values())
+
+
+def _options(parser: argparse.ArgumentParser, command: str) -> dict[str, argparse.Action]:
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return {a.dest: a for a in sub.choices[command]._actions}
+
+
+def test_run_and_nightly_take_the_same_run_settings():
+    """One front door: every setting of a run is an option of both commands, parsed alike;
+    only the output and the night's own switches differ."""
+    run, night = _options(_parser(), "run"), _options(_parser(), "nightly")
+    assert set(C.FIELDS) - {"out", "cache"} <= set(run) & set(night)
+    for name in set(C.FIELDS) - {"out", "cache"}:
+        assert run[name].type is night[name].type and run[name].nargs == night[name].nargs, name
+    assert set(night) - set(run) == {"common_only", "quiet"}
+    assert set(run) - set(night) == {"cache", "no_progress"}
+
+
+def test_nightly_reads_a_run_file_over_its_own_defaults(tmp_path):
+    """A night's defaults (C.NIGHTLY), then the run file, then the flags."""
+    path = tmp_path / "night.yaml"
+    path.write_text("subjects: [JW11]\nstride: 50\nvideo_versions: all\n")
+    args = _parser().parse_args(["nightly", "--out", "n", "--config", str(path),
+                                 "--extremes", "3"])
+    cfg = config_from_args(args, C.NIGHTLY, need_out=False)
+    assert cfg.subjects == ("JW11",) and cfg.stride == 50 and cfg.video_versions is None
+    assert cfg.extremes == 3 and cfg.workers == C.NIGHTLY.workers == 2
+    assert cfg.animate_stride == C.NIGHTLY.animate_stride > 0
+    plain = config_from_args(_parser().parse_args(["nightly", "--out", "n"]), C.NIGHTLY,
+                             need_out=False)
+    assert plain.replace(out=None) == C.NIGHTLY
+    with pytest.raises(CassiInputError, match="stride: must be at least 0"):
+        config_from_args(_parser().parse_args(["nightly", "--out", "n", "--stride", "-1"]),
+                         C.NIGHTLY, need_out=False)

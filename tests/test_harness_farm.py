@@ -21,7 +21,8 @@ import pytest
 from cassi.common.errors import CassiInputError
 from cassi.harness.farm import results as R
 from cassi.harness.farm.executors import LocalExecutor
-from cassi.harness.farm.jobs import Job, SkipJob, StageContext, StageOutput, State, npz_bytes, select_frames
+from cassi.harness.farm.jobs import Job, SkipJob, StageContext, StageOutput, State, npz_bytes
+from cassi.harness.evaluation.frames import select_frames
 from cassi.harness.farm.runner import Pipeline, TaskSpec, run_batch
 from cassi.harness.farm.store import OutputStore
 from cassi.harness.rubric import ratings_table

@@ -12,7 +12,8 @@ import pandas as pd
 import pytest
 
 from cassi.harness.farm.executors import LocalExecutor, RayExecutor
-from cassi.harness.farm.jobs import Job, StageContext, StageOutput, State, npz_bytes, select_frames
+from cassi.harness.farm.jobs import Job, StageContext, StageOutput, State, npz_bytes
+from cassi.harness.evaluation.frames import select_frames
 from cassi.harness.farm.runner import Pipeline, TaskSpec, run_batch
 from cassi.harness.farm.store import OutputStore
 

@@ -59,13 +59,13 @@ def test_failed_write_leaves_old_file(tmp_path):
 
 def test_contact_sheet_layout(tmp_path):
     tiles = [np.full((10, 8, 3), 40 * k, np.uint8) for k in range(5)]
-    sheet = images.contact_sheet(tiles, columns=3, gap=2)
+    sheet = images.tile(tiles, columns=3, gap=2)
     assert sheet.shape == (2 * 10 + 3 * 2, 3 * 8 + 4 * 2, 3)
     assert (sheet[2:12, 2:10] == 0).all() and (sheet[14:24, 12:20] == 160).all()
     images.write_contact_sheet(tmp_path / "s.png", tiles)
     assert images.read_image(tmp_path / "s.png").shape[2] == 3
     with pytest.raises(CassiInputError):
-        images.contact_sheet([])
+        images.tile([])
 
 
 def test_animation_mp4_and_gif(tmp_path):

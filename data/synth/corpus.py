@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from cassi.common.atomic import atomic_write_text, replacing
+from cassi.common.cores import usable_cores
 from cassi.common.errors import CassiInputError
 from cassi.data.synth.motion import PERIOD_S, Anatomy, add_noise, expand_phones, pellets, \
     segment_targets, smooth
@@ -498,7 +499,7 @@ def make_corpus(out_dir: str | os.PathLike, *, subjects=None, seed: int = DEFAUL
     out.mkdir(parents=True, exist_ok=True)
     if workers is not None and (not isinstance(workers, (int, np.integer)) or workers < 1):
         raise CassiInputError(f"workers must be a positive integer, not {workers!r}")
-    n_workers = workers if workers is not None else min(len(names), os.cpu_count() or 1)
+    n_workers = workers if workers is not None else min(len(names), usable_cores())
     if n_workers > 1 and len(names) > 1:
         # fork is cheap and needs no `if __name__ == "__main__"` guard in the caller's script,
         # but is unsafe in a multi-threaded process (Ray workers, the farm): spawn there

@@ -20,6 +20,7 @@ import os
 import platform
 
 from cassi.common.lazy import resolve
+from cassi.common.cores import usable_cores
 from cassi.harness.bench.measure import guarded
 from cassi.renderer.variant import choose_variant
 
@@ -78,7 +79,7 @@ def run_benchmarks(*, quick: bool = False, only=None) -> dict:
     """Every benchmark (or those named in ``only``); the document ``cassi bench`` writes."""
     chosen = tuple(BENCHMARKS if only is None else (n for n in BENCHMARKS if n in set(only)))
     report = {"quick": quick, "cpu_count": os.cpu_count(),
-              "cpus_usable": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
+              "cpus_usable": usable_cores(),
               "python": platform.python_version(), "machine": platform.machine(),
               "variant": _variant(), "benchmarks": {}, "only": list(chosen)}
     for name in chosen:

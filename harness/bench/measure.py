@@ -11,6 +11,8 @@ import sys
 import time
 import traceback
 
+from cassi.harness.farm.workers import thread_env
+
 #: A fresh process's limit: a geometry job on a 100,000-row task takes a few minutes on a
 #: loaded machine; a child past half an hour is stuck, not slow.
 CHILD_TIMEOUT_S = 1800
@@ -50,7 +52,7 @@ def json_child(code: str) -> dict:
     """Run ``code`` in a fresh Python on one thread: the JSON object it prints as its last
     stdout line, or ``{"error": [its last stderr line]}`` when it fails."""
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          env={**os.environ, "OMP_NUM_THREADS": "1"}, timeout=CHILD_TIMEOUT_S)
+                          env={**os.environ, **thread_env(1)}, timeout=CHILD_TIMEOUT_S)
     if proc.returncode != 0:
         return {"error": proc.stderr.strip().splitlines()[-1:]}
     return json.loads(proc.stdout.strip().splitlines()[-1])

@@ -15,13 +15,9 @@ from pathlib import Path
 
 from cassi.common.lazy import resolve
 from cassi.harness.bench.measure import loadavg
-from cassi.harness.evaluation.config import (NIGHTLY_ANIMATE_STRIDE, NIGHTLY_EXTREMES,
-                                             NIGHTLY_STRIDE, NIGHTLY_VIDEO_VERSIONS, RunConfig)
+from cassi.harness.evaluation.config import NIGHT_REVIEW, NIGHTLY, RunConfig
 from cassi.harness.evaluation.nightly import nightly
 
-#: The night's review (gates, history, report), named as the ``cassi nightly`` command names
-#: it: the harness never imports reports.
-REVIEW = "cassi.reports.nightly:review_night"
 #: Goal of the issue on incremental nights: a night with nothing changed costs a tenth.
 GOAL_FRACTION = 0.1
 
@@ -29,17 +25,15 @@ GOAL_FRACTION = 0.1
 def _config(quick: bool) -> RunConfig:
     """Quick: one subject, one task file, two versions, the front view. Else two subjects'
     evaluation sets in every registered version and view, as a night renders them."""
-    common = dict(stride=NIGHTLY_STRIDE, extremes=NIGHTLY_EXTREMES, workers=2,
-                  animate_stride=NIGHTLY_ANIMATE_STRIDE, video_versions=NIGHTLY_VIDEO_VERSIONS)
     if quick:
-        return RunConfig(subjects=("JW45",), tasks=(13,), versions=("cassi-1.0", "cassi-2.1"),
-                         views=("front",), **common)
-    return RunConfig(subjects=("JW11", "JW45"), **common)
+        return NIGHTLY.replace(subjects=("JW45",), tasks=(13,),
+                               versions=("cassi-1.0", "cassi-2.1"), views=("front",))
+    return NIGHTLY.replace(subjects=("JW11", "JW45"))
 
 
 def bench_incremental_night(quick: bool = False) -> dict:
     cfg = _config(quick)
-    review = resolve(REVIEW)
+    review = resolve(NIGHT_REVIEW)
     tmp = Path(tempfile.mkdtemp(prefix="cassi-bench-night-"))
     try:
         seconds, passed = [], []

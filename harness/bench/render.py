@@ -31,6 +31,7 @@ from cassi.renderer.variant import choose_variant
 from cassi.renderer.views import PRESET_NAMES, VIEW_NAMES
 
 from cassi.harness.bench.measure import loadavg, rss_mb, time_loop
+from cassi.harness.farm.workers import renderer_threads
 
 __all__ = ["bench_render", "moving_positions", "bare_frame", "own_pass_frame", "pipeline_frame"]
 
@@ -93,15 +94,9 @@ def bench_render(quick: bool = False, *, topology_for=None, positions=None,
     if topology_for is None or positions is None:
         topology_for, positions = _neutral()
     variant = choose_variant(variant)  # before drjit starts: it sets DRJIT_LIBLLVM_PATH
-    import drjit as dr  # noqa: PLC0415 - only after choose_variant, as the line above says
-
     # One core, as a farm worker has: the figures then compare with the farm's per worker.
-    threads = dr.thread_count()
-    dr.set_thread_count(1)
-    try:
+    with renderer_threads(1):
         return _bench_render(quick, topology_for, positions, variant)
-    finally:
-        dr.set_thread_count(threads)
 
 
 def _bench_render(quick, topology_for, positions, variant) -> dict:

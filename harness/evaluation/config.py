@@ -36,18 +36,12 @@ from typing import Any, Mapping
 
 import yaml
 
+from cassi.common.cores import usable_cores
 from cassi.common.errors import CassiInputError
 
 from cassi.harness.farm.jobs import GEOMETRY_VIEW
 
 EXECUTORS = ("local", "ray")
-
-
-def usable_cores() -> int:
-    """CPU cores this process may run on (its affinity, e.g. a container's share)."""
-    import os  # noqa: PLC0415
-
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
 #: At most this many "extreme" frames per task file and version (the worst frame of the checks
@@ -114,6 +108,16 @@ class RunConfig:
 
 
 FIELDS = tuple(f.name for f in dataclasses.fields(RunConfig) if f.name != "where")
+
+#: ``cassi nightly``'s defaults (what a night renders, above): a run file and flags apply over
+#: them as over :class:`RunConfig`'s for ``cassi run``.
+NIGHTLY = RunConfig(workers=2, stride=NIGHTLY_STRIDE, extremes=NIGHTLY_EXTREMES,
+                    animate_stride=NIGHTLY_ANIMATE_STRIDE, video_versions=NIGHTLY_VIDEO_VERSIONS)
+#: A night's review (gates, history, report): the reports layer's, named by ``module:function``
+#: where a night is composed (the command, the benchmark), so the harness never imports reports.
+NIGHT_REVIEW = "cassi.reports.nightly:review_night"
+#: ``video_versions`` given as one word: every version (None) or none (an empty tuple).
+EVERY_VERSION, NO_VERSION = "all", "none"
 
 
 def settings(cfg: RunConfig) -> dict[str, Any]:
@@ -212,6 +216,10 @@ def validate(raw: Mapping[str, Any], *, source: str | Path | None = None,
             items = [value] if isinstance(value, (str, int)) and not isinstance(value, bool) else value
             if not isinstance(items, (list, tuple)):
                 raise CassiInputError(f"{key}: expected a list, got {value!r}", **where)
+            if key == "video_versions" and list(items) in ([], [NO_VERSION], [EVERY_VERSION]):
+                # the one list where 'none' (or []) and 'all' mean something of their own
+                values[key] = None if list(items) == [EVERY_VERSION] else ()
+                continue
             if _LISTS[key] is int:
                 items = [_as_int(v, key, where) for v in items]
             else:

@@ -28,7 +28,6 @@ import pandas as pd
 
 from cassi.data.xrmb.files import JAW_WAGGING_TASK, MAX_PROTRUSION_TASK
 from cassi.harness.evaluation.config import DEFAULT_EXTREMES
-from cassi.harness.farm.jobs import select_frames
 from cassi.harness.rubric import checks_for
 
 #: The views a task file's video shows side by side; with ``animate_stride`` each of them is
@@ -37,6 +36,33 @@ VIDEO_VIEWS = ("front", "side", "half", "top")
 #: Tasks whose versions are compared side by side (front view) in the nightly report.
 COMPARED_TASKS = (JAW_WAGGING_TASK, MAX_PROTRUSION_TASK)
 COMPARISON_VIEW = "front"
+
+
+def select_frames(first: int, last: int, *, stride: int, extremes=()) -> list[int]:
+    """Frames to render: the first animated frame, the extremes the checks point at, a stride.
+
+    Parameters
+    ----------
+    first, last : int
+        First and last animated recording rows (inclusive).
+    stride : int
+        Every ``stride``-th row from ``first``; 0 or less: no stride frames.
+    extremes : iterable of int
+        Rows the geometric checks point at (outside ``first..last`` are dropped).
+    """
+    picked = {int(first)}
+    if stride > 0:
+        picked.update(range(int(first), int(last) + 1, int(stride)))
+    picked.update(int(f) for f in extremes if first <= int(f) <= last)
+    return sorted(picked)
+
+
+def video_grid(frames, *, first: int, stride: int) -> list[int]:
+    """Of ``frames``, those on the video grid: ``first`` + k * ``stride`` (a video's time base;
+    frames off the grid, such as a check's extreme, would break it)."""
+    if stride < 1:
+        return []
+    return sorted(int(f) for f in frames if (int(f) - first) % stride == 0)
 
 
 def image_views(task: int) -> set[str]:

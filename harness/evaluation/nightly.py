@@ -29,7 +29,7 @@ from typing import Callable
 
 from cassi.common.atomic import atomic_write_text
 from cassi.common.errors import CassiInputError
-from cassi.harness.evaluation.config import KEEP_NIGHTS, RunConfig
+from cassi.harness.evaluation.config import KEEP_NIGHTS, NIGHTLY, RunConfig
 from cassi.harness.evaluation.run import run as run_farm
 from cassi.harness.farm.runner import RunResult
 from cassi.harness.farm.store import collect_garbage, store_lock
@@ -123,8 +123,9 @@ def nightly(out_dir: str | os.PathLike, *, review: Callable[[Night], tuple[bool,
     runs_dir.mkdir(parents=True, exist_ok=True)
     name = night_name(runs_dir, today)
     run_dir = runs_dir / name
-    cfg = (config or RunConfig()).replace(out=run_dir, corpus=Path(corpus) if corpus else None,
-                                          cache=root / STORE_DIR)
+    cfg = config or NIGHTLY
+    cfg = cfg.replace(out=run_dir, corpus=Path(corpus) if corpus else cfg.corpus,
+                      cache=root / STORE_DIR)
     with timer("run"):
         result = run_farm(cfg, progress=progress)
     timer.say(f"jobs reused from earlier nights (same inputs and code): "

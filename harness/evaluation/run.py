@@ -6,11 +6,11 @@ locked) before the first job starts, so bad input never leaves a half-done batch
 from __future__ import annotations
 
 import json
-import os
 import sys
 import time
 
 from cassi.common.atomic import atomic_write_text
+from cassi.common.cores import usable_cores
 from cassi.common.errors import CassiInputError
 
 from cassi.harness.evaluation import config as C
@@ -68,7 +68,7 @@ def plan(cfg: C.RunConfig):
 def worker_count(requested: int, jobs: int, *, cpus: int | None = None) -> tuple[int, str]:
     """Workers to start: at most one per job (a worker with nothing to do only costs a start),
     with a warning when more are asked for than there are cores."""
-    cpus = cpus or os.cpu_count() or 1
+    cpus = cpus or usable_cores()
     n = max(1, min(int(requested), int(jobs)))
     warning = ""
     if n > cpus:

@@ -314,22 +314,3 @@ def chunk_frames(frames: list[int] | tuple[int, ...], size: int) -> list[tuple[i
     frames = sorted(set(int(f) for f in frames))
     size = max(1, int(size))
     return [tuple(frames[i:i + size]) for i in range(0, len(frames), size)]
-
-
-def select_frames(first: int, last: int, *, stride: int, extremes=()) -> list[int]:
-    """Frames to render: the first animated frame, the extremes the checks point at, a stride.
-
-    Parameters
-    ----------
-    first, last : int
-        First and last animated recording rows (inclusive).
-    stride : int
-        Every ``stride``-th row from ``first``; 0 or less: no stride frames.
-    extremes : iterable of int
-        Rows the geometric checks point at (outside ``first..last`` are dropped).
-    """
-    picked = {int(first)}
-    if stride > 0:
-        picked.update(range(int(first), int(last) + 1, int(stride)))
-    picked.update(int(f) for f in extremes if first <= int(f) <= last)
-    return sorted(picked)

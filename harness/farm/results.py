@@ -16,6 +16,11 @@ import pandas as pd
 
 
 #: Columns of the results table, in order.
+#: The index of a run's renders (``renders.parquet``).
+RENDER_COLUMNS = ("subject", "task", "rep", "version", "view", "frame", "path")
+#: The index of the outputs a pipeline names as attachments (``attachments.parquet``): files a
+#: job keeps for the readers of a run (the report's task viewer data), found without manifests.
+ATTACHMENT_COLUMNS = ("subject", "task", "rep", "version", "view", "name", "path")
 COLUMNS = ("subject", "task", "rep", "version", "view", "frame", "check", "table", "component",
            "value", "unit", "threshold", "negatives", "detail", "synthetic")
 

@@ -16,6 +16,7 @@ from typing import Callable, Iterable
 import pandas as pd
 
 from cassi.harness.farm import results as R
+from cassi.harness.farm.results import ATTACHMENT_COLUMNS, RENDER_COLUMNS
 from cassi.harness.farm.jobs import Job, Outcome, StageContext, StageFn, State, call_job, parent_inputs, store_outputs
 from cassi.harness.farm.plan import BatchPlan, TaskSpec
 from cassi.harness.farm.progress import JobRecord, Progress, Summary, write_job_log
@@ -27,10 +28,6 @@ __all__ = ["Pipeline", "RunResult", "Scheduler", "TaskSpec", "OutputWriteError",
 
 #: Outputs named ``render-<frame>`` are images; they are listed in ``renders.parquet``.
 RENDER_PREFIX = "render-"
-RENDER_COLUMNS = ("subject", "task", "rep", "version", "view", "frame", "path")
-#: The index of the outputs a pipeline names as attachments (``attachments.parquet``): files a
-#: job keeps for the readers of a run (the report's task viewer data), found without manifests.
-ATTACHMENT_COLUMNS = ("subject", "task", "rep", "version", "view", "name", "path")
 STAGES = ("geometry", "render", "image")
 
 

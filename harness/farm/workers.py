@@ -7,6 +7,7 @@ otherwise starts a thread per core in every process).
 from __future__ import annotations
 
 import os
+from contextlib import contextmanager
 
 #: Thread-pool variables of the native libraries a worker may load (BLAS, OpenMP, numexpr).
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
@@ -33,3 +34,18 @@ def worker_env(threads: int | None = 1) -> None:
         drjit.set_thread_count(int(threads))
     except (ImportError, AttributeError, RuntimeError):
         pass
+
+
+@contextmanager
+def renderer_threads(threads: int):
+    """Dr.Jit's thread pool at ``threads`` inside the block (a benchmark measuring one core,
+    as a farm worker has), restored after. Dr.Jit must already be initialised for the variant
+    the caller chose (:func:`cassi.renderer.variant.choose_variant`)."""
+    import drjit  # noqa: PLC0415 - only after the caller chose the variant (it sets libLLVM's path)
+
+    before = drjit.thread_count()
+    drjit.set_thread_count(max(1, int(threads)))
+    try:
+        yield
+    finally:
+        drjit.set_thread_count(before)
