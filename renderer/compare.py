@@ -1,8 +1,8 @@
 """The one rule by which two renders of a frame count as the same picture: the golden tests
-(tests/test_render_golden.py) and the nightly's image gates (cassi.reports.gates) both use it.
+(tests/renderer/test_render_golden.py) and the nightly's image gates (cassi.reports.gates) both use it.
 
 Why a tolerance at all: a preview frame is the same bytes in every run of one build on one
-machine (checked separately, tests/test_render_golden.py::test_render_is_reproducible), but
+machine (checked separately, tests/renderer/test_render_golden.py::test_render_is_reproducible), but
 Dr.Jit compiles its LLVM kernels for the CPU it runs on (vector width, fused multiply-add,
 instruction choice), so a golden image made on one machine and a frame rendered on another
 differ: scalar_rgb, and llvm at another vector width, by at most one 8-bit level where the parts

@@ -3,6 +3,7 @@ need it skip cleanly when it is absent."""
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 
 import pytest
@@ -10,6 +11,9 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("CASSI_SHARED", REPO.parent / "shared"))
 FIXTURES = Path(__file__).resolve().parent / "fixtures"
+# The suites live in folders that mirror the packages (tests/harness/rubric/ ...); the shared
+# helpers (data_helpers, reports_fixtures, testpaths ...) stay here, importable from any of them.
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 
 @pytest.fixture(scope="session")

@@ -1,7 +1,7 @@
 """Every number the Parke baseline and CASSI 1.0 use, in one place, each with where it comes from.
 
 Values the thesis states carry their table or section. Values it leaves unstated are marked
-CHOSEN with the reason; tests in ``tests/test_versions_*.py`` check the behaviour they produce.
+CHOSEN with the reason; tests in ``tests/versions/test_versions_*.py`` check the behaviour they produce.
 Vertex numbers are Parke's 1-based numbers (``FaceModel.vertices[n - 1]``).
 """
 from __future__ import annotations

@@ -9,7 +9,7 @@ Two kinds of value live here:
 * values the thesis LEAVES UNSTATED (rho, "near c_rest", "c' is small", the limits of step 7,
   how far vertex 70 moves beyond a, how much lips thicken, the influence weights of the
   vertices around the lips). Each carries the reason for the value chosen, and a test in
-  ``tests/test_versions_lips*.py`` pins the behaviour it produces.
+  ``tests/versions/test_versions_lips*.py`` pins the behaviour it produces.
 
 Two rules the thesis leaves open are geometric rather than numeric and are documented where they
 act (``cassi.versions.lips.LipRest``): the corners 70 and 287 keep the face's own depth behind
@@ -77,7 +77,7 @@ OUTLINE_FRACTIONS: tuple[float, float, float] = (0.0, 1.0 / 3.0, 2.0 / 3.0)
 #: Reason: when OUTER_ABC_CALC leaves branch 3(a)/3(b) for 3(c) (c' leaves the band near
 #: c_rest) or leaves a vertical ellipse, prev_c is Eq. 4.14's c, which can lie far from c'; the
 #: width then jumps by about rho times that gap in one row. On a jaw-wagging trajectory (see
-#: tests/test_versions_lips_behaviour.py) the largest lip-vertex step per row was 2.7 times the
+#: tests/versions/test_versions_lips_behaviour.py) the largest lip-vertex step per row was 2.7 times the
 #: pellets' largest step with rho = 0.3, 1.8 with 0.2, 1.3 with 0.15 and 1.0 with 0.1
 #: (section 4.2.5: "smooth motion, without sudden changes" at the ellipse transitions). The
 #: price is lag: a time constant of about 9.5 rows (~65 ms at 6.9 ms a row), about two of the

@@ -125,7 +125,7 @@ PALATE_CLEARANCE_MM = 1.2
 #: frequency (Hz) of a slowly wandering error. The real files were resampled with smoothing
 #: splines (thesis 3.2.4), so their error is smooth from row to row: at rest, thesis Figure 3.9
 #: (real JW45) has second differences (RMS) of 0.9 um (UL), 5 um (LL), 4-7 um (tongue) and 2-3 um
-#: (jaw), which these reproduce within a factor of about 2 (tests/test_synth_corpus.py). The jaw
+#: (jaw), which these reproduce within a factor of about 2 (tests/data/synth/test_synth_corpus.py). The jaw
 #: pellets' error keeps the MNI-MNM distance within a few tenths of a millimetre (rigid jaw;
 #: real JW45: SD 0.09 mm over its 13 printed rows).
 NOISE = {"sd_mm": np.array([0.04, 0.06, 0.10, 0.10, 0.10, 0.10, 0.08, 0.08]),

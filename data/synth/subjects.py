@@ -34,7 +34,7 @@ Sources of the columns
   * gonion x = gnathion x - (79 mm + 1.3 x (jaw length - 34.5 mm) + sd 1.2 mm): the body of
     the mandible scales with the MNI-MNM spacing of the subject's own teeth; gonion 78-89 mm
     behind the incisors, 73-84 mm behind the gnathion (Go-Gn 76-88 mm).
-  * Checks against the rest of the table (tests/test_synth_model.py): MNI 32-37 mm and MNM
+  * Checks against the rest of the table (tests/data/synth/test_synth_model.py): MNI 32-37 mm and MNM
     20-25 mm above the mandibular plane (teeth on the body of the jaw); the gonion 33-42 mm
     below the jaw's centre of rotation (``condyle_mm`` of :mod:`cassi.data.synth.motion`) and
     within 12 mm of it front to back (the ramus hangs below the joint). That centre sits lower

@@ -89,7 +89,7 @@ def test_layout_and_metadata_say_synthetic(small, corpus):
     for name, m in hm.items():
         assert np.allclose(m.gonion_mm, SUBJECTS[name].gonion_mm)
         assert np.allclose(m.gnathion_mm, SUBJECTS[name].gnathion_mm)
-        # the angle of the jaw behind and above the chin (tests/test_synth_model.py has the rest)
+        # the angle of the jaw behind and above the chin (tests/data/synth/test_synth_model.py has the rest)
         assert 70.0 < m.gnathion_mm[0] - m.gonion_mm[0] < 100.0
         assert m.gonion_mm[1] > m.gnathion_mm[1] + 10.0
         rec = corpus.load(name, 13)

@@ -3,7 +3,7 @@
 The stand-in face has Parke-like lips (units and layout of Figure 4.4-4.5: 67 above 64, 61,
 58, 55, 52, 49 on the centre line, corner 70 and inside corner 287 to the side) so that the
 algorithm can be checked without the full face model; tests with the real face model live in
-tests/test_versions_cassi2x.py.
+tests/versions/test_versions_cassi2x.py.
 """
 from __future__ import annotations
 

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from testpaths import GOLDEN as GOLDEN_DIR
 from cassi.harness.cli import main as cli_main
 from cassi.harness.rubric import CHECKS
 from cassi.renderer.compare import compare_images
@@ -23,7 +24,7 @@ from cassi.reports.report import write_report
 
 pytestmark = [pytest.mark.browser, pytest.mark.render]
 
-GOLDEN = Path(__file__).resolve().parent / "golden" / "viewer_front_jw11_106_1023.png"
+GOLDEN = GOLDEN_DIR / "viewer_front_jw11_106_1023.png"
 REGEN = os.environ.get("CASSI_REGEN_VIEWER", "") not in ("", "0")
 ARGS = ["--no-sandbox", "--disable-background-networking", "--disable-component-update",
         "--disable-sync", "--no-first-run", "--disable-quic",

@@ -8,12 +8,12 @@ Elsewhere LLVM- and SIMD-compiled kernels round differently in the last bits (AV
 AVX-512, fused multiply-add), so there the comparison is: the same rows, the same negatives and
 ratings, the same rendered frames, and every value within 1e-6 relative (geometry: far below
 the 0.1 mm a check can resolve) or, for counts of mask pixels, within 1% + 2 px (a grazing ray
-flips a silhouette pixel or two between code paths; see tests/test_render_golden.py).
+flips a silhouette pixel or two between code paths; see tests/renderer/test_render_golden.py).
 
 It also checks the run's ratings files against the report's tables: one aggregation.
 
 Regenerate (only when a result is meant to change, and say why in the commit):
-``CASSI_REGEN_IDENTITY=1 python -m pytest tests/test_run_identity.py``.
+``CASSI_REGEN_IDENTITY=1 python -m pytest tests/harness/evaluation/test_run_identity.py``.
 """
 from __future__ import annotations
 
@@ -27,11 +27,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from testpaths import GOLDEN
 from cassi.harness.cli import main as cli_main
 
 pytestmark = pytest.mark.render
 
-HERE = Path(__file__).resolve().parent / "golden" / "identity"
+HERE = GOLDEN / "identity"
 REGEN = os.environ.get("CASSI_REGEN_IDENTITY", "") not in ("", "0")
 PACKAGES = ("numpy", "mitsuba", "drjit", "pandas", "pyarrow")
 VALUE_RTOL = 1e-6        # geometry values: last-bit rounding, far below any check's resolution

@@ -4,7 +4,7 @@ References live in tests/golden/: ``neutral_<view>.png`` (sRGB colour) and
 ``neutral_<view>.mask.png`` (part ids). They are regenerated only on purpose, after looking at
 them:
 
-    CASSI_REGEN_GOLDEN=1 python -m pytest tests/test_render_golden.py
+    CASSI_REGEN_GOLDEN=1 python -m pytest tests/renderer/test_render_golden.py
 
 (then the test skips, saying what it wrote). A missing reference skips, never passes. A failure
 writes the rendered, reference and difference images and names the folder (``CASSI_GOLDEN_OUT``
@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from testpaths import GOLDEN
 from cassi.data.face.model import render_topology
 from cassi.data.face.params import jaw_rotation
 from cassi.renderer import views
@@ -41,7 +42,6 @@ from other_machine import CPU_LEVELS, CPU_PIXELS, as_another_cpu, llvm_target
 
 pytestmark = pytest.mark.render
 
-GOLDEN = Path(__file__).resolve().parent / "golden"
 REGEN = os.environ.get("CASSI_REGEN_GOLDEN", "") not in ("", "0")
 VIEWS = ("front", "side", "half", "top")
 #: The jaw opened by 0.5 degrees moves its farthest vertex (the chin) by 4.0 Parke units: the

@@ -84,7 +84,7 @@ def _height_above(p, a, b):
 
 @pytest.mark.parametrize("name", list(SUBJECTS))
 def test_head_measures_are_anatomical_and_fit_the_jaw(name):
-    # Headmeasures.txt holds these (tests/test_synth_corpus.py): XRMB head frame, mm, origin at
+    # Headmeasures.txt holds these (tests/data/synth/test_synth_corpus.py): XRMB head frame, mm, origin at
     # the upper incisor tip, x forward along the occlusal plane, y up.
     fig = SUBJECTS[name]
     go, gn = np.array(fig.gonion_mm), np.array(fig.gnathion_mm)
