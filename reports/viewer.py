@@ -135,26 +135,32 @@ def _events(results: pd.DataFrame) -> dict[tuple, list[dict]]:
     keys = ["subject", "task", "rep", "version", "check"]
     fv = file_verdicts(results)
     fv = fv[fv["table"] == fv["own_table"]].sort_values("raw_negatives")  # the most wins
-    whole = {(s, int(t), int(p), v, c): (int(n), int(raw), str(note)) for s, t, p, v, c, n, raw, note
-             in fv[[*keys, "negatives", "raw_negatives", "note"]].itertuples(index=False, name=None)}
+    # The check's whole-file row is the one source of what a page says of it (the subject
+    # pages and tables read the same rows); an evidence row's value is a frame's, in the
+    # measure's own terms, and is never shown under the check's name.
+    whole = {(s, int(t), int(p), v, c): (int(n), int(raw), str(note), value, unit)
+             for s, t, p, v, c, n, raw, note, value, unit
+             in fv[[*keys, "negatives", "raw_negatives", "note", "value", "unit"]]
+             .itertuples(index=False, name=None)}
     found: dict[tuple, dict[str, dict]] = {}
     ev = r[r["frame"] >= 0]
-    for row in ev[[*keys, "table", "component", "frame", "value", "unit", "negatives"]] \
+    for row in ev[[*keys, "table", "component", "frame", "negatives"]] \
             .itertuples(index=False, name=None):
-        subject, task, rep, version, check, table, component, frame, value, unit, neg = row
+        subject, task, rep, version, check, table, component, frame, neg = row
         file = (subject, int(task), int(rep), version)
         e = found.setdefault(file, {}).get(check)
         if e is None:
             c = CHECKS.get(check)
-            charged, raw, note = whole.get((*file, check), (int(neg), int(neg), ""))
+            charged, raw, note, value, unit = whole.get((*file, check),
+                                                        (int(neg), int(neg), "", None, ""))
             e = found[file][check] = {
                 "negatives": charged, "raw_negatives": raw, "note": note,
                 "check": str(check), "table": str(table),
                 "component": "" if pd.isna(component) else str(component),
                 "text": c.text if c else str(check),
                 "frames": set(),
-                "value": None if pd.isna(value) else float(value),
-                "unit": "" if pd.isna(unit) else str(unit)}
+                "value": None if value is None or pd.isna(value) else float(value),
+                "unit": "" if unit is None or pd.isna(unit) else str(unit)}
         e["frames"].add(int(frame))
     out = {}
     for file, checks in found.items():

@@ -111,6 +111,19 @@ def test_the_viewer_charges_a_fault_once_as_the_report_does():
         "lips_never_touch", "lips_apart_at_start", "lips_pressed"]
 
 
+def test_an_event_shows_the_value_the_subject_page_shows():
+    """The viewer's event names a check and shows that check's whole-file value (the subject
+    pages' and tables' source), never an evidence row's value of a frame in another unit."""
+    base = dict(subject="JW11", task=19, rep=1, version="cassi-1.0", view="geometry", table="C",
+                component="lips", check="lips_do_not_close", unit="fraction", threshold=0.5,
+                detail="", synthetic=True)
+    res = pd.DataFrame([{**base, "frame": -1, "negatives": 0, "value": 0.0},
+                        {**base, "frame": 812, "negatives": 0, "value": 16.51, "unit": "J"},
+                        {**base, "frame": 900, "negatives": 0, "value": -6.69}])
+    (event,) = _events(res)[("JW11", 19, 1, "cassi-1.0")]
+    assert (event["value"], event["unit"], event["frames"]) == (0.0, "fraction", [812, 900])
+
+
 def test_the_page_escapes_what_it_is_given():
     html = _env().get_template("viewer.html.j2").render(
         subject="<script>alert(1)</script>", task=1, rep=1, synthetic=True,
@@ -140,6 +153,12 @@ def test_the_report_writes_one_viewer_per_task_file_with_its_events(tmp_path):
         assert set(events) == set(ev["check"])
         for check, g in ev.groupby("check"):
             assert events[check]["frames"] == sorted(set(g["frame"].astype(int)))
+        # every value shown is the results table's whole-file value of that check: 0 differ
+        whole = res[(res["version"] == version) & (res["frame"] == -1) & res["table"].notna()]
+        for check, row in whole.drop_duplicates("check").set_index("check").iterrows():
+            if check in events:
+                assert events[check]["value"] == pytest.approx(float(row["value"]), nan_ok=True)
+                assert events[check]["unit"] == ("" if pd.isna(row["unit"]) else row["unit"])
         # the renders beside the 3D view are linked from the page's folder
         for r in data["version_data"][version]["renders"]:
             assert (page.parent / r["href"]).is_file()
