@@ -55,7 +55,7 @@ DEFAULT_EXTREMES = 4
 #: the same for every version, and the versions' side-by-side video; real time: 145.6 / stride
 #: frames per second). No version gets the other views on that grid by default (`cassi export
 #: --format gltf` gives any view of any version from geometry); ``--video-versions`` asks for them
-#: (frames.py says why; README gives the night's size and time either way).
+#: (frames.py says why; docs/farm.md gives the night's size and time).
 NIGHTLY_STRIDE = 0
 NIGHTLY_EXTREMES = 2
 NIGHTLY_ANIMATE_STRIDE = 24

@@ -4,7 +4,7 @@ One home for every rule that picks frames, read by the geometry stage (what it k
 to render), the run's render budget (said before any work starts), the render stage (which
 views keep masks) and the report (which views a task's video shows).
 
-What a night keeps, and why (measured on the default nightly, README "Disk"):
+What a night keeps, and why (measured on the default nightly, docs/farm.md "Disk"):
 
 - every view: the first frame and the check frames of every task file and version: the
   subject pages' four views of a fault, and with every render the gates' comparisons with the

@@ -10,7 +10,7 @@ job (subject, task file, version), a deterministic ``.npz``:
   quantisation step (Parke units); ``q0`` int16 (M, 3) their first frame and ``dq`` int16
   (K - 1, M, 3) frame-to-frame changes, both in steps, so that frame k is
   ``(q0 + dq[:k].sum(0)) * step`` to within half a step (0.008 mm at :data:`STEP_UNITS`);
-  small changes deflate well, which is what makes the data small (README "Viewer");
+  small changes deflate well, which is what makes the data small (docs/reports.md, the task viewer);
 - ``gather`` int32 (W,), ``sign`` int8 (W,), ``triangles`` int32 (T, 3), ``part_of`` int16 (T,)
   and ``parts`` (P,) str: the render topology of the face the version animated, merged as in
   :meth:`cassi.data.face.topology.RenderTopology.mesh` (vertex w is face row gather[w], y times

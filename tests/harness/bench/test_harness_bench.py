@@ -16,7 +16,7 @@ from cassi.harness.bench.farm import bench_farm, cpu_stage
 from cassi.harness.bench.measure import guarded
 from cassi.harness.farm.jobs import Job, StageContext, State, execute_job
 
-#: The names `cassi bench --only` takes, as the README and `cassi bench --help` list them.
+#: The names `cassi bench --only` takes, as docs/benchmarks.md and `cassi bench --help` list them.
 NAMES = ["geometry", "render", "geometry_memory", "image_memory", "farm_preview", "farm",
          "incremental_night"]
 
@@ -92,6 +92,6 @@ def test_bench_headline_keys_come_from_the_entries_that_have_them():
                     "render": {"render_per_s": {"front/preview": 2.0},
                                "render_pipeline_efficiency": 0.8, "render_rss_growth_mb": 1.0}})
     assert set(out) == {"render_per_s", "render_pipeline_efficiency", "render_rss_growth_mb"}
-    # The farm's speed-up is copied to the top under the name the README gives it.
+    # The farm's speed-up is copied to the top under the name docs/benchmarks.md gives it.
     out = headline({"farm": {"speedup_2_workers": 1.8, "ray_overhead_vs_local": 0.1}})
     assert out == {"farm_speedup_2_workers": 1.8, "ray_overhead_vs_local": 0.1}
