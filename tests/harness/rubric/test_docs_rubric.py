@@ -2,16 +2,16 @@
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 
 import pytest
 
+from testpaths import REPO
 from cassi.common.errors import CassiInputError
 from cassi.harness.rubric.manual import BEGIN, END, REGENERATE, main, rubric_reference, with_reference
 from cassi.harness.rubric.model import TABLES
 from cassi.harness.rubric.registry import CHECKS
 
-PAGE = Path(__file__).resolve().parents[1] / "docs" / "rubric.md"
+PAGE = REPO / "docs" / "rubric.md"
 
 
 def test_the_rubric_page_is_what_the_registry_gives():
