@@ -14,6 +14,7 @@ from pathlib import Path
 from cassi.common.cliargs import seed_int
 from cassi.common.errors import CassiInputError
 from cassi.common.lazy import resolve
+from cassi.data.subject_name import SUBJECT_NAME_RE
 
 EXIT_OK, EXIT_BAD_INPUT = 0, 2
 
@@ -77,7 +78,7 @@ def register(subparsers) -> None:
 
 def _subject_list(text: str) -> list[str]:
     names = [s.strip() for s in text.split(",") if s.strip()]
-    bad = [n for n in names if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_-]{0,31}", n)]
+    bad = [n for n in names if not SUBJECT_NAME_RE.fullmatch(n)]
     if not names or bad:
         raise argparse.ArgumentTypeError(f"bad subject list {text!r}")
     return names

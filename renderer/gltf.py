@@ -76,12 +76,13 @@ def _gltf_positions(positions: np.ndarray, gather: np.ndarray, sign: np.ndarray)
 
 
 class _Bin:
-    """The BIN chunk, built as bufferViews, each 4-byte aligned."""
+    """The BIN chunk, built as bufferViews, each 4-byte aligned, and the accessors into it."""
 
     def __init__(self):
         self.chunks: list[bytes] = []
         self.size = 0
         self.views: list[dict] = []
+        self.accessors: list[dict] = []
 
     def view(self, data: bytes, *, target: int | None = None, stride: int | None = None) -> int:
         view = {"buffer": 0, "byteOffset": self.size, "byteLength": len(data)}
@@ -95,6 +96,11 @@ class _Bin:
         self.size += len(data) + pad
         self.views.append(view)
         return len(self.views) - 1
+
+    def accessor(self, **kw) -> int:
+        """Add an accessor; its index."""
+        self.accessors.append(kw)
+        return len(self.accessors) - 1
 
     def data(self) -> bytes:
         return b"".join(self.chunks)
@@ -122,13 +128,51 @@ def glb_bytes(topology: RenderTopology, neutral: np.ndarray, positions: np.ndarr
 
     glTF lengths are metres: a Parke unit is ``mm_per_unit`` mm, the subject's own size when it
     is ``1 / face.units_per_mm`` (d / p, thesis 4.1.1), else the model's nominal scale."""
+    neutral, positions, times, metres = _checked_inputs(topology, neutral, positions, times_s,
+                                                        mm_per_unit)
+    F = len(positions)
+    gather, sign = topology.merged_gather()
+    W = len(gather)
+    grid = _grid(_gltf_positions(neutral, gather, sign), _gltf_positions(positions, gather, sign),
+                 quantize, metres)
+    moving = np.flatnonzero(np.any(grid.deltas != 0, axis=(0, 2)))
+
+    _, tris, part_of = topology.mesh(neutral)
+    part_names = list(topology.parts)
+    buf = _Bin()
+    pos_acc, index_acc = _mesh_accessors(buf, grid, tris, part_of, len(part_names))
+    targets, per_frame = _morph_targets(buf, grid, moving)
+    meshes, nodes = _meshes_and_nodes(name, _animated_parts(tris, part_of, moving, W, part_names),
+                                      pos_acc, index_acc, targets, grid, metres)
+
+    gltf: dict = {"asset": {"version": "2.0", "generator": "cassi-farm cassi export"},
+                  "scene": 0, "scenes": [{"name": name, "nodes": [len(nodes) - 1]}],
+                  "nodes": nodes, "meshes": meshes, "materials": _materials(part_names)}
+    if targets:
+        gltf["animations"] = _animation(buf, times)
+    gltf["accessors"] = buf.accessors
+    gltf["bufferViews"] = buf.views
+    gltf["buffers"] = [{"byteLength": buf.size}]
+    if quantize:
+        gltf["extensionsUsed"] = [QUANTIZATION]
+        gltf["extensionsRequired"] = [QUANTIZATION]
+
+    text = json.dumps(gltf, separators=(",", ":")).encode()
+    data = _glb(text, buf.data())
+    return data, GlbSummary(frames=F, vertices=W, moving_vertices=int(len(moving)),
+                            quantized=quantize, step=float(grid.step), bytes=len(data),
+                            target_bytes_per_frame=int(per_frame))
+
+
+def _checked_inputs(topology: RenderTopology, neutral, positions, times_s, mm_per_unit):
+    """Refuse inputs a .glb cannot hold; the arrays as stored, and metres a Parke unit."""
     if not (np.isfinite(mm_per_unit) and mm_per_unit > 0):
         raise ValueError(f"mm_per_unit must be a positive number, not {mm_per_unit!r}")
     metres = float(mm_per_unit) / 1000.0
     # float32 like the positions, so that a vertex that does not move has a delta of exactly 0
     neutral = np.asarray(neutral, np.float32)
     positions = np.asarray(positions, np.float32)
-    times =  np.asarray(times_s, np.float64)
+    times = np.asarray(times_s, np.float64)
     V = topology.vertex_count
     if topology.half:
         raise ValueError("export the whole (mirrored) head, not the half topology")
@@ -141,11 +185,24 @@ def glb_bytes(topology: RenderTopology, neutral: np.ndarray, positions: np.ndarr
     F = len(positions)
     if F * F >= 2 ** 32:
         raise ValueError(f"{F} frames is too many for one weights accessor; use a stride")
+    return neutral, positions, times, metres
 
-    gather, sign = topology.merged_gather()
-    W = len(gather)
-    base = _gltf_positions(neutral, gather, sign)            # (W, 3)
-    frames = _gltf_positions(positions, gather, sign)        # (F, W, 3)
+
+@dataclass(frozen=True)
+class _Grid:
+    """The neutral face and the per-frame deltas as stored, and how to decode them."""
+
+    quantized: bool
+    origin: np.ndarray     # Parke units (zeros for float32)
+    step: float            # Parke units (0.0 for float32)
+    base: np.ndarray       # (W, 3) int16 grid steps, or float32 metres
+    deltas: np.ndarray     # (F, W, 3) likewise
+    ctype: int             # the glTF component type
+    dtype: type
+
+
+def _grid(base: np.ndarray, frames: np.ndarray, quantize: bool, metres: float) -> _Grid:
+    """Store the neutral face and the deltas: int16 on one grid, or float32 metres."""
     if quantize:
         lo = np.minimum(base.min(axis=0), frames.min(axis=(0, 1)))
         hi = np.maximum(base.max(axis=0), frames.max(axis=(0, 1)))
@@ -154,71 +211,86 @@ def glb_bytes(topology: RenderTopology, neutral: np.ndarray, positions: np.ndarr
         reach = max(float(np.max(hi - lo)) / 2, float(np.abs(frames - base).max()), 1e-9)
         step = reach / _QMAX
         q_base = np.rint((base - origin) / step)
-        stored_base = q_base.astype(np.int16)
-        deltas = (np.rint((frames - origin) / step) - q_base).astype(np.int16)
-        ctype, vdtype = _SHORT, np.int16
-    else:
-        origin, step = np.zeros(3), 0.0
-        stored_base = (base * metres).astype(np.float32)
-        deltas = (frames * metres - base * metres).astype(np.float32)
-        ctype, vdtype = _FLOAT, np.float32
-    moving = np.flatnonzero(np.any(deltas != 0, axis=(0, 2)))
+        return _Grid(True, origin, step, q_base.astype(np.int16),
+                     (np.rint((frames - origin) / step) - q_base).astype(np.int16),
+                     _SHORT, np.int16)
+    return _Grid(False, np.zeros(3), 0.0, (base * metres).astype(np.float32),
+                 (frames * metres - base * metres).astype(np.float32), _FLOAT, np.float32)
 
-    _, tris, part_of = topology.mesh(neutral)
-    part_names = list(topology.parts)
+
+def _animated_parts(tris: np.ndarray, part_of: np.ndarray, moving: np.ndarray, W: int,
+                    part_names: list[str]) -> tuple[list[int], list[int]]:
+    """Split the parts into those with a moving vertex and those that never move."""
     moving_set = np.zeros(W, bool)
     moving_set[moving] = True
     animated = [i for i in range(len(part_names)) if moving_set[tris[part_of == i]].any()]
     still = [i for i in range(len(part_names)) if i not in animated]
+    return animated, still
 
-    buf = _Bin()
-    accessors: list[dict] = []
 
-    def accessor(**kw) -> int:
-        accessors.append(kw)
-        return len(accessors) - 1
-
-    pos_view = buf.view(_vec3_rows(stored_base, vdtype), target=_ARRAY_BUFFER,
-                        stride=8 if quantize else 12)
-    lo_b, hi_b = _minmax(stored_base, quantize)
-    pos_acc = accessor(bufferView=pos_view, componentType=ctype, count=W, type="VEC3",
-                       min=lo_b, max=hi_b)
+def _mesh_accessors(buf: "_Bin", grid: _Grid, tris: np.ndarray, part_of: np.ndarray,
+                    n_parts: int) -> tuple[int, list[int]]:
+    """Write the neutral positions and each part's triangle indices; their accessors."""
+    W = len(grid.base)
+    pos_view = buf.view(_vec3_rows(grid.base, grid.dtype), target=_ARRAY_BUFFER,
+                        stride=8 if grid.quantized else 12)
+    lo_b, hi_b = _minmax(grid.base, grid.quantized)
+    pos_acc = buf.accessor(bufferView=pos_view, componentType=grid.ctype, count=W, type="VEC3",
+                           min=lo_b, max=hi_b)
 
     index_dtype, index_ctype = (np.uint16, _USHORT) if W < 65535 else (np.uint32, _UINT)
     index_view = buf.view(np.concatenate(
-        [tris[part_of == i].ravel() for i in range(len(part_names))]).astype(index_dtype).tobytes(),
+        [tris[part_of == i].ravel() for i in range(n_parts)]).astype(index_dtype).tobytes(),
         target=_ELEMENT_ARRAY_BUFFER)
     index_acc, offset = [], 0
-    for i in range(len(part_names)):
+    for i in range(n_parts):
         n = int((part_of == i).sum()) * 3
-        index_acc.append(accessor(bufferView=index_view, byteOffset=offset,
-                                  componentType=index_ctype, count=n, type="SCALAR"))
+        index_acc.append(buf.accessor(bufferView=index_view, byteOffset=offset,
+                                      componentType=index_ctype, count=n, type="SCALAR"))
         offset += n * np.dtype(index_dtype).itemsize
+    return pos_acc, index_acc
 
+
+def _morph_targets(buf: "_Bin", grid: _Grid, moving: np.ndarray) -> tuple[list[dict], int]:
+    """Write one sparse morph target a frame; the targets and one target's stored bytes."""
+    F, W = grid.deltas.shape[:2]
     targets: list[dict] = []
-    if len(moving):
-        sp_dtype, sp_ctype = (np.uint16, _USHORT) if W <= 65535 else (np.uint32, _UINT)
-        sp_view = buf.view(moving.astype(sp_dtype).tobytes())
-        per_frame = len(moving) * 3 * np.dtype(vdtype).itemsize
-        val_view = buf.view(np.ascontiguousarray(deltas[:, moving], vdtype).tobytes())
-        for k in range(F):
-            d = deltas[k, moving]
-            lo_d, hi_d = _minmax(np.vstack([d, np.zeros((1, 3), vdtype)]) if len(moving) < W
-                                 else d, quantize)
-            targets.append({"POSITION": accessor(
-                componentType=ctype, count=W, type="VEC3", min=lo_d, max=hi_d,
-                sparse={"count": int(len(moving)),
-                        "indices": {"bufferView": sp_view, "componentType": sp_ctype},
-                        "values": {"bufferView": val_view, "byteOffset": k * per_frame}})})
-    else:
-        per_frame = 0
+    if not len(moving):
+        return targets, 0
+    vdtype, deltas = grid.dtype, grid.deltas
+    # one index list, the moving vertices, serves every target
+    sp_dtype, sp_ctype = (np.uint16, _USHORT) if W <= 65535 else (np.uint32, _UINT)
+    sp_view = buf.view(moving.astype(sp_dtype).tobytes())
+    per_frame = len(moving) * 3 * np.dtype(vdtype).itemsize
+    val_view = buf.view(np.ascontiguousarray(deltas[:, moving], vdtype).tobytes())
+    for k in range(F):
+        d = deltas[k, moving]
+        lo_d, hi_d = _minmax(np.vstack([d, np.zeros((1, 3), vdtype)]) if len(moving) < W
+                             else d, grid.quantized)
+        targets.append({"POSITION": buf.accessor(
+            componentType=grid.ctype, count=W, type="VEC3", min=lo_d, max=hi_d,
+            sparse={"count": int(len(moving)),
+                    "indices": {"bufferView": sp_view, "componentType": sp_ctype},
+                    "values": {"bufferView": val_view, "byteOffset": k * per_frame}})})
+    return targets, per_frame
 
+
+def _materials(part_names: list[str]) -> list[dict]:
+    """One PBR material a part, in the part's render colour."""
     materials = []
     for pname in part_names:
         m = material_for(pname)
         materials.append({"name": pname, "doubleSided": True, "pbrMetallicRoughness": {
             "baseColorFactor": [*map(float, m.rgb), 1.0], "metallicFactor": 0.0,
             "roughnessFactor": float(min(1.0, max(m.alpha, 0.05) ** 0.5))}})
+    return materials
+
+
+def _meshes_and_nodes(name: str, parts: tuple[list[int], list[int]], pos_acc: int,
+                      index_acc: list[int], targets: list[dict], grid: _Grid,
+                      metres: float) -> tuple[list[dict], list[dict]]:
+    """The animated and the still mesh, a node each, under a root that holds the grid."""
+    animated, still = parts
 
     def primitive(i: int, with_targets: bool) -> dict:
         prim = {"attributes": {"POSITION": pos_acc}, "indices": index_acc[i], "material": i,
@@ -232,6 +304,7 @@ def glb_bytes(topology: RenderTopology, neutral: np.ndarray, positions: np.ndarr
         mesh = {"name": "animated parts", "primitives": [primitive(i, bool(targets))
                                                          for i in animated]}
         if targets:
+            F = len(targets)
             mesh["weights"] = [0.0] * F
             mesh["extras"] = {"targetNames": [f"frame {k}" for k in range(F)]}
         meshes.append(mesh)
@@ -241,39 +314,28 @@ def glb_bytes(topology: RenderTopology, neutral: np.ndarray, positions: np.ndarr
         nodes.append({"name": mesh["name"], "mesh": mi})
         children.append(mi)
     root = {"name": name, "children": children}
-    if quantize:
-        root["translation"] = [float(x * metres) for x in origin]
-        root["scale"] = [float(step * metres)] * 3
+    if grid.quantized:
+        root["translation"] = [float(x * metres) for x in grid.origin]
+        root["scale"] = [float(grid.step * metres)] * 3
     nodes.append(root)
+    return meshes, nodes
 
-    gltf: dict = {"asset": {"version": "2.0", "generator": "cassi-farm cassi export"},
-                  "scene": 0, "scenes": [{"name": name, "nodes": [len(nodes) - 1]}],
-                  "nodes": nodes, "meshes": meshes, "materials": materials}
-    if targets:
-        t = (times - times[0]).astype(np.float32)
-        t_acc = accessor(bufferView=buf.view(t.tobytes()), componentType=_FLOAT, count=F,
+
+def _animation(buf: "_Bin", times: np.ndarray) -> list[dict]:
+    """Write the keys and the weights (1 on target k at key k, sparse); the one animation."""
+    F = len(times)
+    t = (times - times[0]).astype(np.float32)
+    t_acc = buf.accessor(bufferView=buf.view(t.tobytes()), componentType=_FLOAT, count=F,
                          type="SCALAR", min=[float(t[0])], max=[float(t[-1])])
-        diag = np.arange(F, dtype=np.uint64) * (F + 1)   # key k: weight 1 on target k
-        w_acc = accessor(componentType=_FLOAT, count=F * F, type="SCALAR", sparse={
-            "count": F,
-            "indices": {"bufferView": buf.view(diag.astype(np.uint32).tobytes()),
-                        "componentType": _UINT},
-            "values": {"bufferView": buf.view(np.ones(F, np.float32).tobytes())}})
-        gltf["animations"] = [{"name": "task", "samplers": [
-            {"input": t_acc, "output": w_acc, "interpolation": "LINEAR"}],
-            "channels": [{"sampler": 0, "target": {"node": 0, "path": "weights"}}]}]
-    gltf["accessors"] = accessors
-    gltf["bufferViews"] = buf.views
-    gltf["buffers"] = [{"byteLength": buf.size}]
-    if quantize:
-        gltf["extensionsUsed"] = [QUANTIZATION]
-        gltf["extensionsRequired"] = [QUANTIZATION]
-
-    text = json.dumps(gltf, separators=(",", ":")).encode()
-    data = _glb(text, buf.data())
-    return data, GlbSummary(frames=F, vertices=W, moving_vertices=int(len(moving)),
-                            quantized=quantize, step=float(step), bytes=len(data),
-                            target_bytes_per_frame=int(per_frame))
+    diag = np.arange(F, dtype=np.uint64) * (F + 1)   # key k: weight 1 on target k
+    w_acc = buf.accessor(componentType=_FLOAT, count=F * F, type="SCALAR", sparse={
+        "count": F,
+        "indices": {"bufferView": buf.view(diag.astype(np.uint32).tobytes()),
+                    "componentType": _UINT},
+        "values": {"bufferView": buf.view(np.ones(F, np.float32).tobytes())}})
+    return [{"name": "task", "samplers": [
+        {"input": t_acc, "output": w_acc, "interpolation": "LINEAR"}],
+        "channels": [{"sampler": 0, "target": {"node": 0, "path": "weights"}}]}]
 
 
 def _glb(text: bytes, binary: bytes) -> bytes:

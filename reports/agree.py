@@ -23,6 +23,7 @@ import io
 import json
 import os
 import re
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
@@ -62,16 +63,55 @@ def read_human_ratings(path: str | os.PathLike, run: Run,
         Naming the file and line of the first bad line.
     """
     path = Path(path)
-    levels = level_ratings(run.results) if levels is None else levels
-    have = {(r.subject, r.file, r.version, r.table, r.component): (r.rating, int(r.negatives))
-            for r in levels.itertuples(index=False)}
-    subjects, versions = set(levels["subject"]), set(levels["version"])
-    files = {(r.subject, r.version, r.table): set() for r in levels.itertuples(index=False)}
-    comps = {key: set() for key in files}
-    for r in levels.itertuples(index=False):
-        files[(r.subject, r.version, r.table)].add(r.file)
-        comps[(r.subject, r.version, r.table)].add(r.component)
-    words = {w.upper(): w for w in RATINGS}
+    rated = _RunLevels.of(level_ratings(run.results) if levels is None else levels)
+    reader, header = _ratings_reader(path)
+    col = {c: header.index(c) for c in RATING_FILE_COLUMNS}
+    rows, seen = [], {}
+    try:
+        for cells in reader:
+            line = reader.line_num
+            if not any(c.strip() for c in cells):
+                continue
+            row = _rating_row(cells, header, col, rated, path=path, line=line)
+            key = tuple(row[c] for c in ("subject", "task", "version", "table", "component"))
+            if key in seen:
+                raise CassiInputError(f"duplicate of line {seen[key]} (same subject, task, "
+                                      f"version, table and component)", path=path, line=line)
+            seen[key] = line
+            rows.append(row)
+    except csv.Error as err:
+        raise CassiInputError(f"malformed CSV: {err}", path=path, line=reader.line_num) from err
+    if not rows:
+        raise CassiInputError("no ratings: the file has a header and nothing else", path=path,
+                              line=1)
+    return pd.DataFrame(rows)
+
+
+@dataclass(frozen=True)
+class _RunLevels:
+    """What the run rated: each level's rating, and the names a ratings line may use."""
+
+    have: dict        # (subject, file, version, table, component) -> (rating, negatives)
+    subjects: set
+    versions: set
+    files: dict       # (subject, version, table) -> the task files it judged
+    comps: dict       # (subject, version, table) -> its components
+
+    @classmethod
+    def of(cls, levels: pd.DataFrame) -> "_RunLevels":
+        """Index :func:`level_ratings`'s rows."""
+        have = {(r.subject, r.file, r.version, r.table, r.component): (r.rating, int(r.negatives))
+                for r in levels.itertuples(index=False)}
+        files = {(r.subject, r.version, r.table): set() for r in levels.itertuples(index=False)}
+        comps = {key: set() for key in files}
+        for r in levels.itertuples(index=False):
+            files[(r.subject, r.version, r.table)].add(r.file)
+            comps[(r.subject, r.version, r.table)].add(r.component)
+        return cls(have, set(levels["subject"]), set(levels["version"]), files, comps)
+
+
+def _ratings_reader(path: Path) -> tuple:
+    """Open the ratings file and check its header; the CSV reader after it, and the header."""
     try:
         text = path.read_text(encoding="utf-8-sig")
     except FileNotFoundError as err:
@@ -96,73 +136,69 @@ def read_human_ratings(path: str | os.PathLike, run: Run,
     if missing:
         raise CassiInputError(f"the header lacks column(s) {', '.join(missing)} (expected "
                               f"{','.join(RATING_FILE_COLUMNS)})", path=path, line=1)
-    col = {c: header.index(c) for c in RATING_FILE_COLUMNS}
-    rows, seen = [], {}
-    try:
-        for cells in reader:
-            line = reader.line_num
-            if not any(c.strip() for c in cells):
-                continue
+    return reader, header
 
-            def bad(why: str):
-                return CassiInputError(why, path=path, line=line)
-            # blank cells beyond the header are a spreadsheet's trailing commas; a filled one
-            # or a missing one is a comma out of place, which would shift the columns
-            if len(cells) < len(header) or any(c.strip() for c in cells[len(header):]):
-                raise bad(f"{len(cells)} fields, the header has {len(header)}")
-            v = {c: cells[i].strip() for c, i in col.items()}
-            for need in ("subject", "version", "table", "rating"):
-                if not v[need]:
-                    raise bad(f"no {need}")
-            word = words.get(_level(v["rating"]).upper())
-            if word is None:
-                raise bad(f"unknown rating {v['rating']!r}: a word of the thesis's scale "
-                          f"({', '.join(RATINGS)})")
-            table = v["table"].upper()
-            if table not in TABLES:
-                raise bad(f"unknown table {v['table']!r} (the rubric's tables: {', '.join(TABLES)})")
-            if v["subject"] not in subjects:
-                raise bad(f"unknown subject {v['subject']!r}: the run rated "
-                          f"{', '.join(sorted(subjects))}")
-            if v["version"] not in versions:
-                raise bad(f"unknown version {v['version']!r}: the run rated "
-                          f"{', '.join(order_versions(versions))}")
-            where = (v["subject"], v["version"], table)
-            if where not in files:
-                raise bad(f"the run has no Table {table} for {v['subject']}, {v['version']}")
-            task = v["task"]
-            if task:
-                parts = task.split("_")
-                if not all(re.fullmatch(r"[0-9]{1,4}", p) for p in parts) or len(parts) > 2:
-                    raise bad(f"task {task!r} is not a task number (21) or task_repetition (21_2)")
-                task = str(int(parts[0])) if len(parts) == 1 or int(parts[1]) == 1 else \
-                    f"{int(parts[0])}_{int(parts[1])}"
-                if task not in files[where]:
-                    raise bad(f"the run judged no task file {v['task']} in Table {table} for "
-                              f"{v['subject']}, {v['version']}")
-            component = v["component"].lower()
-            if component and component not in comps[where]:
-                raise bad(f"unknown component {v['component']!r} of Table {table} (the run's: "
-                          f"{', '.join(sorted(c for c in comps[where] if c))})")
-            key = (v["subject"], task, v["version"], table, component)
-            if key not in have:
-                raise bad(f"the run has no rating at this level ({v['subject']}, task "
-                          f"{task or 'all'}, {v['version']}, Table {table}, "
-                          f"{component or 'whole table'})")
-            if key in seen:
-                raise bad(f"duplicate of line {seen[key]} (same subject, task, version, table "
-                          f"and component)")
-            seen[key] = line
-            run_rating, negatives = have[key]
-            rows.append(dict(line=line, subject=key[0], task=task, version=key[2], table=table,
-                             component=component, human=word, run=run_rating,
-                             run_negatives=negatives))
-    except csv.Error as err:
-        raise CassiInputError(f"malformed CSV: {err}", path=path, line=reader.line_num) from err
-    if not rows:
-        raise CassiInputError("no ratings: the file has a header and nothing else", path=path,
-                              line=1)
-    return pd.DataFrame(rows)
+
+_WORDS = {w.upper(): w for w in RATINGS}
+
+
+def _rating_row(cells: list[str], header: list[str], col: dict, rated: _RunLevels, *,
+                path: Path, line: int) -> dict:
+    """Check one line's fields against the run; its row, with the run's rating beside it."""
+    def bad(why: str):
+        return CassiInputError(why, path=path, line=line)
+    # blank cells beyond the header are a spreadsheet's trailing commas; a filled one
+    # or a missing one is a comma out of place, which would shift the columns
+    if len(cells) < len(header) or any(c.strip() for c in cells[len(header):]):
+        raise bad(f"{len(cells)} fields, the header has {len(header)}")
+    v = {c: cells[i].strip() for c, i in col.items()}
+    for need in ("subject", "version", "table", "rating"):
+        if not v[need]:
+            raise bad(f"no {need}")
+    word = _WORDS.get(_level(v["rating"]).upper())
+    if word is None:
+        raise bad(f"unknown rating {v['rating']!r}: a word of the thesis's scale "
+                  f"({', '.join(RATINGS)})")
+    table = v["table"].upper()
+    if table not in TABLES:
+        raise bad(f"unknown table {v['table']!r} (the rubric's tables: {', '.join(TABLES)})")
+    if v["subject"] not in rated.subjects:
+        raise bad(f"unknown subject {v['subject']!r}: the run rated "
+                  f"{', '.join(sorted(rated.subjects))}")
+    if v["version"] not in rated.versions:
+        raise bad(f"unknown version {v['version']!r}: the run rated "
+                  f"{', '.join(order_versions(rated.versions))}")
+    where = (v["subject"], v["version"], table)
+    if where not in rated.files:
+        raise bad(f"the run has no Table {table} for {v['subject']}, {v['version']}")
+    task = _task_file(v, table, rated.files[where], bad)
+    component = v["component"].lower()
+    if component and component not in rated.comps[where]:
+        raise bad(f"unknown component {v['component']!r} of Table {table} (the run's: "
+                  f"{', '.join(sorted(c for c in rated.comps[where] if c))})")
+    key = (v["subject"], task, v["version"], table, component)
+    if key not in rated.have:
+        raise bad(f"the run has no rating at this level ({v['subject']}, task "
+                  f"{task or 'all'}, {v['version']}, Table {table}, "
+                  f"{component or 'whole table'})")
+    run_rating, negatives = rated.have[key]
+    return dict(line=line, subject=key[0], task=task, version=key[2], table=table,
+                component=component, human=word, run=run_rating, run_negatives=negatives)
+
+
+def _task_file(v: dict, table: str, judged: set, bad) -> str:
+    """A line's task as the run names its files ("" for all; ``21``, ``21_2``), if judged."""
+    task = v["task"]
+    if task:
+        parts = task.split("_")
+        if not all(re.fullmatch(r"[0-9]{1,4}", p) for p in parts) or len(parts) > 2:
+            raise bad(f"task {task!r} is not a task number (21) or task_repetition (21_2)")
+        task = str(int(parts[0])) if len(parts) == 1 or int(parts[1]) == 1 else \
+            f"{int(parts[0])}_{int(parts[1])}"
+        if task not in judged:
+            raise bad(f"the run judged no task file {v['task']} in Table {table} for "
+                      f"{v['subject']}, {v['version']}")
+    return task
 
 
 def agreement(run: Run, ratings_path: str | os.PathLike,

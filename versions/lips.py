@@ -286,7 +286,42 @@ def lip_frames(
     ll = np.asarray(ll, dtype=np.float64).reshape(-1, 2)
     if ul.shape != ll.shape:
         raise ValueError(f"ul and ll differ in shape: {ul.shape} != {ll.shape}")
-    n = ul.shape[0]
+    line = _centre_line(ul, ll, rest, subject, rule, params, state)
+    out = _LipColumns(ul.shape[0])
+    x70, y70 = _outer_outline(out, line, rest, corner)
+    inner = _inner_outline(out, line, rest, x70, y70, blend_inner_corner)
+    middle = _middle_outline(out, line)
+    diagnostics = _diagnostics(line, inner, middle)
+    if blend_inner_corner:
+        diagnostics["blend_t"] = rounding_t(line.cp)
+    return LipFrames(vertices=LIP_VERTICES, xyz=out.xyz(), diagnostics=diagnostics)
+
+
+@dataclass(frozen=True, eq=False)
+class _CentreLine:
+    """Steps 1-10 over F frames: the centre line, the outer ellipse and currthick."""
+
+    x67: np.ndarray
+    x49: np.ndarray
+    k: np.ndarray             # the outer ellipse's centre z
+    b_signed: np.ndarray
+    height: np.ndarray
+    cp_raw: np.ndarray
+    cp: np.ndarray
+    track: object             # OUTER_ABC_CALC's sequence (a, c before the limits)
+    a: np.ndarray
+    c: np.ndarray
+    vertical: np.ndarray
+    currthick: np.ndarray
+    upper_thick: np.ndarray
+    lower_thick: np.ndarray
+    xc: dict                  # centre-line vertex -> x (F,)
+    zc: dict                  # centre-line vertex -> z (F,)
+
+
+def _centre_line(ul, ll, rest: LipRest, subject: LipSubject, rule: ThicknessRule,
+                 params: OuterAbcParams | None, state: OuterAbcState | None) -> _CentreLine:
+    """Steps 1-10: the centre line from the pellets, the outer ellipse, the lips' thickness."""
     # Steps 1-4: the centre line follows the pellets.
     x67, z67 = ul[:, 0], ul[:, 1]
     x49, z49 = ll[:, 0], ll[:, 1]
@@ -310,24 +345,49 @@ def lip_frames(
     for v, dx in rest.dx_lower.items():
         xc[v] = x49 + dx
     zc[67], zc[49] = z67, z49
+    return _CentreLine(x67=x67, x49=x49, k=k, b_signed=b_signed, height=height, cp_raw=cp_raw,
+                       cp=cp, track=track, a=a, c=c, vertical=vertical, currthick=currthick,
+                       upper_thick=upper_thick, lower_thick=lower_thick, xc=xc, zc=zc)
 
-    X = np.empty((n, len(LIP_VERTICES)))
-    Y = np.empty_like(X)
-    Z = np.empty_like(X)
 
-    def put(v, x, y, z):
+class _LipColumns:
+    """X, Y, Z (F, len(LIP_VERTICES)) of the lip vertices, filled a vertex at a time."""
+
+    def __init__(self, n: int):
+        self.X = np.empty((n, len(LIP_VERTICES)))
+        self.Y = np.empty_like(self.X)
+        self.Z = np.empty_like(self.X)
+
+    def put(self, v: int, x, y, z) -> None:
+        """Place vertex ``v`` over the frames."""
         j = _COL[v]
-        X[:, j], Y[:, j], Z[:, j] = x, y, z
+        self.X[:, j], self.Y[:, j], self.Z[:, j] = x, y, z
 
-    # Step 11-12, outer outline: 67/49 at 0, 68/50 at a/3, 69/51 at 2a/3, 70 at or beyond a.
+    def xyz(self) -> np.ndarray:
+        """float64 (F, len(LIP_VERTICES), 3)."""
+        return np.stack([self.X, self.Y, self.Z], axis=-1)
+
+
+def _outer_outline(out: _LipColumns, line: _CentreLine, rest: LipRest,
+                   corner: CornerReading | str) -> tuple[np.ndarray, np.ndarray]:
+    """Steps 11-12 on the outer outline and the corner 70; 70's x and y."""
+    # 67/49 at 0, 68/50 at a/3, 69/51 at 2a/3, 70 at or beyond a.
+    a, b_signed, k = line.a, line.b_signed, line.k
+    x67, x49 = line.x67, line.x49
     for frac, vu, vl in zip(K.OUTLINE_FRACTIONS, OUTER_UPPER, OUTER_LOWER):
         y = frac * a
-        put(vu, track_x(y, x67), y, ellipse_z(y, a, b_signed, k, upper=True))
-        put(vl, track_x(y, x49), y, ellipse_z(y, a, b_signed, k, upper=False))
-    y70 = a + corner_stretch(c, vertical, corner)
+        out.put(vu, track_x(y, x67), y, ellipse_z(y, a, b_signed, k, upper=True))
+        out.put(vl, track_x(y, x49), y, ellipse_z(y, a, b_signed, k, upper=False))
+    y70 = a + corner_stretch(line.c, line.vertical, corner)
     x70 = track_x(y70, 0.5 * (x67 + x49)) + rest.corner_dx
-    put(V_CORNER, x70, y70, k)
+    out.put(V_CORNER, x70, y70, k)
+    return x70, y70
 
+
+def _inner_outline(out: _LipColumns, line: _CentreLine, rest: LipRest, x70, y70,
+                   blend_inner_corner: bool) -> tuple:
+    """Steps 11-12 on the inner outline, its corner 287 and 300; its (a, b, c) and overlap."""
+    xc, zc, k = line.xc, line.zc, line.k
     # Inside corner 287 (the inner outline's corner point) and the new vertex 300 midway to 70.
     y287 = rest.inner_corner_ratio * y70
     z287 = k + rest.inner_corner_dz
@@ -342,18 +402,23 @@ def lip_frames(
         y = frac * a_in
         zu = np.where(overlap, zc[61], ellipse_z(y, a_in, b_in, k_in, upper=True))
         zl = np.where(overlap, zc[58], ellipse_z(y, a_in, b_in, k_in, upper=False))
-        put(vu, track_x(y, xc[61]), y, zu)
-        put(vl, track_x(y, xc[58]), y, zl)
+        out.put(vu, track_x(y, xc[61]), y, zu)
+        out.put(vl, track_x(y, xc[58]), y, zl)
 
     # CASSI 2.1: 287's z blended toward 60's as c' goes from 50 to 0 (Eqs. 4.20-4.21).
     if blend_inner_corner:
-        z287 = blend_inner_corner_z(z287, Z[:, _COL[60]], cp)
-    put(V_INNER_CORNER, x287, y287, z287)
-    put(V_MID_CORNER, 0.5 * (x287 + x70), 0.5 * (y287 + y70), 0.5 * (z287 + k))
+        z287 = blend_inner_corner_z(z287, out.Z[:, _COL[60]], line.cp)
+    out.put(V_INNER_CORNER, x287, y287, z287)
+    out.put(V_MID_CORNER, 0.5 * (x287 + x70), 0.5 * (y287 + y70), 0.5 * (z287 + k))
+    return a_in, b_in, c_in, overlap
 
-    # Middle outline: upper 64, 65, 66; lower pairs either side of the ellipse, gap tapering.
+
+def _middle_outline(out: _LipColumns, line: _CentreLine) -> tuple:
+    """Steps 11-12 on the middle outline (after 300 is placed); its (a, b, c)."""
+    # Upper 64, 65, 66; lower pairs either side of the ellipse, gap tapering.
+    xc, zc = line.xc, line.zc
     z_low_mid = 0.5 * (zc[52] + zc[55])
-    a_mid, b_mid, c_mid = mid_inner_abc(zc[64], z_low_mid, Y[:, _COL[V_MID_CORNER]])
+    a_mid, b_mid, c_mid = mid_inner_abc(zc[64], z_low_mid, out.Y[:, _COL[V_MID_CORNER]])
     a_mid = np.maximum(a_mid, 1e-9)
     k_mid = 0.5 * (zc[64] + z_low_mid)
     half_gap = 0.5 * (zc[55] - zc[52])
@@ -361,25 +426,30 @@ def lip_frames(
         K.OUTLINE_FRACTIONS, K.MIDDLE_PAIR_TAPER, MIDDLE_UPPER, MIDDLE_PAIR_TOP, MIDDLE_PAIR_BOTTOM
     ):
         y = frac * a_mid
-        put(vu, track_x(y, xc[64]), y, ellipse_z(y, a_mid, b_mid, k_mid, upper=True))
+        out.put(vu, track_x(y, xc[64]), y, ellipse_z(y, a_mid, b_mid, k_mid, upper=True))
         z_on = ellipse_z(y, a_mid, b_mid, k_mid, upper=False)
-        put(vt, track_x(y, xc[55]), y, z_on + taper * half_gap)
-        put(vb, track_x(y, xc[52]), y, z_on - taper * half_gap)
+        out.put(vt, track_x(y, xc[55]), y, z_on + taper * half_gap)
+        out.put(vb, track_x(y, xc[52]), y, z_on - taper * half_gap)
+    return a_mid, b_mid, c_mid
 
-    xyz = np.stack([X, Y, Z], axis=-1)
-    diagnostics = {
-        "a": a,
-        "b": height,
-        "c": c,
-        "c_prime": cp,
-        "c_prime_unclipped": cp_raw,
-        "a_unlimited": track.a,
-        "c_unlimited": track.c,
-        "outer_abc_branch": track.branch_labels,
-        "ellipse": np.where(vertical, "vertical", "horizontal").astype(object),
-        "currthick": currthick,
-        "currthick_upper": upper_thick,
-        "currthick_lower": lower_thick,
+
+def _diagnostics(line: _CentreLine, inner: tuple, middle: tuple) -> dict:
+    """The per-frame values :class:`LipFrames` reports beside the positions."""
+    a_in, b_in, c_in, overlap = inner
+    a_mid, b_mid, c_mid = middle
+    return {
+        "a": line.a,
+        "b": line.height,
+        "c": line.c,
+        "c_prime": line.cp,
+        "c_prime_unclipped": line.cp_raw,
+        "a_unlimited": line.track.a,
+        "c_unlimited": line.track.c,
+        "outer_abc_branch": line.track.branch_labels,
+        "ellipse": np.where(line.vertical, "vertical", "horizontal").astype(object),
+        "currthick": line.currthick,
+        "currthick_upper": line.upper_thick,
+        "currthick_lower": line.lower_thick,
         "a_middle": a_mid,
         "b_middle": b_mid,
         "c_middle": c_mid,
@@ -388,9 +458,6 @@ def lip_frames(
         "c_inner": c_in,
         "lips_overlap": overlap,
     }
-    if blend_inner_corner:
-        diagnostics["blend_t"] = rounding_t(cp)
-    return LipFrames(vertices=LIP_VERTICES, xyz=xyz, diagnostics=diagnostics)
 
 
 def _c_prime(x67, subject: LipSubject) -> tuple[np.ndarray, np.ndarray]:

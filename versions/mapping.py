@@ -14,7 +14,7 @@ import numpy as np
 
 from cassi.common.errors import CassiInputError
 from cassi.data.face import numbering as N
-from cassi.data.face.model import FaceModel, build_face, jaw_length_units
+from cassi.data.face.model import FaceModel, build_face, jaw_length_units, subject_units_per_mm
 from cassi.data.xrmb.files import check_palate_length
 from cassi.versions import constants as K
 
@@ -68,7 +68,8 @@ class XrmbToParke:
         p = model_jaw_length(v)
         if not np.isfinite(p) or p <= 0:
             raise CassiInputError("the face model's jaw length (vertex 258 to 281/286) is zero")
-        return cls(scale=p / d, origin=v[K.V_UPPER_INCISOR_TIP - 1, [0, 2]].copy())
+        return cls(scale=subject_units_per_mm(v, d),
+                   origin=v[K.V_UPPER_INCISOR_TIP - 1, [0, 2]].copy())
 
     def to_parke(self, xy_mm: np.ndarray) -> np.ndarray:
         """XRMB (..., 2) mm (x forward, y up) -> Parke (..., 2) units (x forward, z up)."""

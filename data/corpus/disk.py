@@ -33,10 +33,10 @@ from cassi.data.xrmb.headmeasures import HEAD_MEASURES_FILE, HeadMeasures, read_
 from cassi.data.xrmb.mis import MistrackEntry, read_mis
 from cassi.data.xrmb.textlines import read_bytes
 from cassi.data.xrmb.files import PELLETS, TaskRecording, parse_task_name, read_pha, read_pal, read_txy
+from cassi.data.subject_name import SUBJECT_NAME_RE
 
 METADATA_FILE = "corpus.json"
 SUBJECT_FILES = {"pal": "PAL.DAT", "pha": "PHA.DAT", "mis": "Mis.dat"}
-SUBJECT_NAME_RE = re.compile(r"[A-Za-z][A-Za-z0-9_-]{0,31}", re.ASCII)
 
 
 def natural_key(name: str):

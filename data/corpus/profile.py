@@ -35,9 +35,9 @@ import numpy as np
 import pandas as pd
 
 from cassi.common.atomic import atomic_write_text
-from cassi.data.corpus.disk import (SUBJECT_FILES, SUBJECT_NAME_RE, Corpus, SubjectData,
-                                    natural_key)
+from cassi.data.corpus.disk import SUBJECT_FILES, Corpus, SubjectData, natural_key
 from cassi.common.errors import CassiInputError
+from cassi.data.subject_name import SUBJECT_NAME_RE
 from cassi.data.xrmb.headmeasures import HeadMeasures
 from cassi.data.xrmb.textlines import decode_ascii, numbered_rows, parse_num, read_bytes
 from cassi.data.xrmb.files import MAX_PROTRUSION_TASK, PELLETS, TaskRecording

@@ -74,121 +74,162 @@ def _fixed_row(lay, name, numbers, phi_back, extra_thetas, extra_wants, *, zs=No
 def build_layout(*, palate_xz: np.ndarray | None = None) -> Layout:
     """Generate the nodes and polygons (before numbering). See :func:`build_geometry`."""
     lay = Layout()
+    # (lower path, upper path) per row, from the base of the neck to the crown
+    rows = _neck_rows(lay) + _chin_rows(lay)
+    mouth_rows = _mouth_rows(lay)
+    rows += mouth_rows + _nose_rows(lay, below=mouth_rows[-1][1])
+    eye_row, eye = _eye_row(lay)
+    rows += [eye_row] + _upper_head_rows(lay)
+    _stitch_rows(lay, rows, eye)
+    _teeth(lay)
+    _tongue(lay)
+    _palate(lay, palate_xz)
+    lay.add("pivot", JAW_PIVOT_POS, N.JAW_PIVOT)
+    return lay
 
-    def merge(own, base, from_theta):
-        return _merge(lay, own, base, from_theta)
 
-    rows: list[tuple[list[str], list[str]]] = []  # (lower path, upper path) per row
+_FREE = "free"
 
-    def plain(keys):
-        rows.append((keys, keys))
-        return keys
 
-    # --- neck and under the chin: Parke's excerpt vertices, continued round the back -------
-    F = "free"
+def _plain(keys: list[str]) -> tuple[list[str], list[str]]:
+    """A row that does not split: the same path below and above."""
+    return (keys, keys)
+
+
+def _mixed_row(lay: Layout, name: str, numbers, spec) -> list[str]:
+    """Excerpt vertices, then nodes at (azimuth, ("phi", elevation) | ("z", height))."""
+    keys = [lay.add(f"{name}.p{n}", PARKE_EXCERPT[n], n) for n in numbers]
+    ts = np.array([t for t, _, _ in spec], float)
+    vals = np.array([v for _, (_, v), _ in spec], float)
+    by_phi = surface_point(ts, vals)
+    by_z = surface_at_z(ts, vals)
+    for k, (t, (kind, val), w) in enumerate(spec):
+        p = (by_phi if kind == "phi" else by_z)[k].copy()
+        if abs(t - 180.0) < 1e-9:
+            p[1] = 0.0
+        keys.append(lay.add(f"{name}.{k}", p, w))
+    return keys
+
+
+def _elevation_row(lay: Layout, name: str, phi_f, phi_b, thetas, wants, knee=90.0) -> list[str]:
+    """A row on the surface at elevations from ``phi_f`` in front to ``phi_b`` behind."""
+    phis = _row_angles(phi_f, phi_b, thetas, knee=knee)
+    return _surface_row(lay, name, thetas, list(phis), wants)
+
+
+def _height_row(lay: Layout, name: str, thetas, zs, wants) -> list[str]:
+    """A row on the surface at the heights ``zs``."""
+    keys = []
+    pts = surface_at_z(np.asarray(thetas, float), np.asarray(zs, float))
+    for k, (t, p, w) in enumerate(zip(thetas, pts, wants)):
+        if abs(t) < 1e-9 or abs(t - 180.0) < 1e-9:
+            p[1] = 0.0
+        keys.append(lay.add(f"{name}.{k}", p, w))
+    return keys
+
+
+def _neck_rows(lay: Layout) -> list[tuple]:
+    """The neck and under the chin: Parke's excerpt vertices, continued round the back."""
+    F = _FREE
     # the base of the neck rises from the front (z = -594) round to the back, like a bust's cut
-    plain(_fixed_row(lay, "r0", [1, 2, 3, 4, 5], 0, [145.0, 180.0], [F] * 2,
-                     zs=[-492.0, -485.0]))
-    plain(_fixed_row(lay, "r1", [6, 7, 8, 9, 10], 0, [140.0, 180.0], [F] * 2,
-                     zs=[-400.0, -395.0]))
-    r2 = plain(_fixed_row(lay, "r2", [11, 12, 13], 0, [58.0, 84.0, 128.0, 180.0], [F] * 4,
-                          zs=[-392.0, -320.0, -322.0, -325.0]))
-    def mixed(name, numbers, spec):
-        """Excerpt vertices, then nodes at (azimuth, ("phi", elevation) | ("z", height))."""
-        keys = [lay.add(f"{name}.p{n}", PARKE_EXCERPT[n], n) for n in numbers]
-        ts = np.array([t for t, _, _ in spec], float)
-        vals = np.array([v for _, (_, v), _ in spec], float)
-        by_phi = surface_point(ts, vals)
-        by_z = surface_at_z(ts, vals)
-        for k, (t, (kind, val), w) in enumerate(spec):
-            p = (by_phi if kind == "phi" else by_z)[k].copy()
-            if abs(t - 180.0) < 1e-9:
-                p[1] = 0.0
-            keys.append(lay.add(f"{name}.{k}", p, w))
-        return keys
-
-    plain(merge(mixed("r3", [14, 15], [(30.0, ("phi", -57.5), "jaw"),
-                                       (46.0, ("z", -380.0), "jaw")]), r2, 84.0))
+    r0 = _fixed_row(lay, "r0", [1, 2, 3, 4, 5], 0, [145.0, 180.0], [F] * 2, zs=[-492.0, -485.0])
+    r1 = _fixed_row(lay, "r1", [6, 7, 8, 9, 10], 0, [140.0, 180.0], [F] * 2, zs=[-400.0, -395.0])
+    r2 = _fixed_row(lay, "r2", [11, 12, 13], 0, [58.0, 84.0, 128.0, 180.0], [F] * 4,
+                    zs=[-392.0, -320.0, -322.0, -325.0])
+    r3 = _merge(lay, _mixed_row(lay, "r3", [14, 15], [(30.0, ("phi", -57.5), "jaw"),
+                                                      (46.0, ("z", -380.0), "jaw")]), r2, 84.0)
     # the jaw line: from the chin (16) back to the angle of the jaw (22), then round the nape.
     # The gonion (22) sits ~85 mm behind the upper incisor tip (226) and ~27 mm above the
     # gnathion (26), so the mandibular plane 26 -> 22 rises ~18 degrees backward, as a real
     # jaw's does (15-25 degrees); CASSI 1.0 turns the chin from here onto the head measures.
-    r4 = plain(mixed("r4", [16, 17], [
+    r4 = _mixed_row(lay, "r4", [16, 17], [
         (23.0, ("z", -394.0), "jaw"), (34.0, ("z", -376.0), "jaw"),
         (47.0, ("z", -357.0), "jaw"), (63.0, ("z", -332.0), "jaw"),
         (GONION_THETA, ("z", GONION_Z), N.GONION),
-        (110.0, ("z", -285.0), F), (140.0, ("z", -275.0), F), (180.0, ("z", -270.0), F)]))
+        (110.0, ("z", -285.0), F), (140.0, ("z", -275.0), F), (180.0, ("z", -270.0), F)])
+    return [_plain(r) for r in (r0, r1, r2, r3, r4)]
 
-    # --- chin and jaw: rows given by height at the side (the jaw line rises to the ear) -------
-    def srow(name, phi_f, phi_b, thetas, wants, knee=90.0):
-        phis = _row_angles(phi_f, phi_b, thetas, knee=knee)
-        return _surface_row(lay, name, thetas, list(phis), wants)
 
-    def zrow(name, thetas, zs, wants):
-        keys = []
-        pts = surface_at_z(np.asarray(thetas, float), np.asarray(zs, float))
-        for k, (t, p, w) in enumerate(zip(thetas, pts, wants)):
-            if abs(t) < 1e-9 or abs(t - 180.0) < 1e-9:
-                p[1] = 0.0
-            keys.append(lay.add(f"{name}.{k}", p, w))
-        return keys
-
+def _chin_rows(lay: Layout) -> list[tuple]:
+    """The chin and jaw: rows given by height at the side (the jaw line rises to the ear)."""
+    F = _FREE
     # 30 above the gonion on the back of the ramus (the pair CASSI 1.0 moves to the 3rd zone)
-    r5 = plain(zrow("r5", [0, 7, 15, 24, 35, 49, 66, GONION_THETA, 108, 132, 156, 180],
-                    [GNATHION_Z, -411, -401, -381, -357, -332, -306, -262, -240, -228, -223,
-                     -220],
-                    ["jaw"] * 7 + [30, F, F, F, F]))
-    plain(merge(zrow("r6", [0, 7, 14, 22, 31, 42, 56],
-                     [-358, -357, -355, -350, -340, -325, -302],
-                     [24, "jaw", "jaw", "jaw", "jaw", F, F]), r5, 74.0))
+    r5 = _height_row(lay, "r5", [0, 7, 15, 24, 35, 49, 66, GONION_THETA, 108, 132, 156, 180],
+                     [GNATHION_Z, -411, -401, -381, -357, -332, -306, -262, -240, -228, -223,
+                      -220],
+                     ["jaw"] * 7 + [30, F, F, F, F])
+    r6 = _merge(lay, _height_row(lay, "r6", [0, 7, 14, 22, 31, 42, 56],
+                                 [-358, -357, -355, -350, -340, -325, -302],
+                                 [24, "jaw", "jaw", "jaw", "jaw", F, F]), r5, 74.0)
+    return [_plain(r5), _plain(r6)]
 
-    # --- the mouth: below-lip row, lips, above-lip row ---------------------------------------
+
+def _mouth_rows(lay: Layout) -> list[tuple]:
+    """The lips, the row below them, the mouth row (split round the lips) and the row above."""
+    F = _FREE
     lip = _lips(lay)
     corner_theta = lip["corner_theta"]
     _mouth_expression(lay)
-    r7 = plain(zrow("r7", [0.0, lip["col_theta"][1], lip["col_theta"][2], corner_theta + 6.0,
-                           34, 46, 60, 82, 106, 142, 180],
-                    [-306, -304, -299, -292, -286, -276, -262, -215, -190, -175, -170],
-                    [41, 42, 43, 45, "jaw", "jaw", "jaw", F, F, F, F]))
+    r7 = _height_row(lay, "r7", [0.0, lip["col_theta"][1], lip["col_theta"][2],
+                                 corner_theta + 6.0, 34, 46, 60, 82, 106, 142, 180],
+                     [-306, -304, -299, -292, -286, -276, -262, -215, -190, -175, -170],
+                     [41, 42, 43, 45, "jaw", "jaw", "jaw", F, F, F, F])
     # the mouth row: the lower and upper outer lip outlines share the corner and the cheek
-    mouth_tail = zrow("rm", [corner_theta + 9.0, 36, 48, 62], [-250, -248, -243, -235],
-                      [44, 46, 47, 48])
-    mouth_tail = merge(mouth_tail, r7, 82.0)
+    mouth_tail = _height_row(lay, "rm", [corner_theta + 9.0, 36, 48, 62],
+                             [-250, -248, -243, -235], [44, 46, 47, 48])
+    mouth_tail = _merge(lay, mouth_tail, r7, 82.0)
     lower_path = list(lip["lower_outer"]) + [lip["corner"]] + mouth_tail
     upper_path = list(lip["upper_outer"]) + [lip["corner"]] + mouth_tail
-    rows.append((lower_path, upper_path))
-    r8 = plain(zrow("r8", [0.0, lip["col_theta"][1], lip["col_theta"][2], corner_theta + 4.0,
-                           35, 48, 64, 84, 108, 143, 180],
-                    [-194, -195, -198, -204, -212, -210, -202, -178, -150, -130, -125],
-                    [71, 72, 73] + [F] * 8))
+    r8 = _height_row(lay, "r8", [0.0, lip["col_theta"][1], lip["col_theta"][2],
+                                 corner_theta + 4.0, 35, 48, 64, 84, 108, 143, 180],
+                     [-194, -195, -198, -204, -212, -210, -202, -178, -150, -130, -125],
+                     [71, 72, 73] + [F] * 8)
+    return [_plain(r7), (lower_path, upper_path), _plain(r8)]
 
-    # --- nose rows ---------------------------------------------------------------------------
-    plain(merge(srow("r9", -16.0, -3.0, [0, 5, 10, 15, 24, 36, 50],
-                     [80, 81, "nose", "nose", F, F, F]), r8, 64.0))
-    r10 = plain(srow("r10", -13.0, 4.0, [0, 5, 9.5, 14, 22, 34, 50, 68, 88, 110, 135, 158, 180],
-                     ["nose"] * 5 + [F] * 8))
-    plain(merge(srow("r11", -9.5, 9.0, [0, 4.5, 8.5, 13, 21, 33],
-                     [82, "nose", "nose", "nose", "nose", F]), r10, 50.0))
-    plain(merge(srow("r12", -3.0, 15.0, [0, 4.5, 8.5, 13, 22, 34, 50],
-                     ["nose"] * 4 + [F] * 3), r10, 68.0))
 
-    # --- the eye row: split round the eye -----------------------------------------------------
+def _nose_rows(lay: Layout, below: list[str]) -> list[tuple]:
+    """The nose's rows, above the row ``below`` the nose."""
+    F = _FREE
+    r9 = _merge(lay, _elevation_row(lay, "r9", -16.0, -3.0, [0, 5, 10, 15, 24, 36, 50],
+                                    [80, 81, "nose", "nose", F, F, F]), below, 64.0)
+    r10 = _elevation_row(lay, "r10", -13.0, 4.0,
+                         [0, 5, 9.5, 14, 22, 34, 50, 68, 88, 110, 135, 158, 180],
+                         ["nose"] * 5 + [F] * 8)
+    r11 = _merge(lay, _elevation_row(lay, "r11", -9.5, 9.0, [0, 4.5, 8.5, 13, 21, 33],
+                                     [82, "nose", "nose", "nose", "nose", F]), r10, 50.0)
+    r12 = _merge(lay, _elevation_row(lay, "r12", -3.0, 15.0, [0, 4.5, 8.5, 13, 22, 34, 50],
+                                     ["nose"] * 4 + [F] * 3), r10, 68.0)
+    return [_plain(r) for r in (r9, r10, r11, r12)]
+
+
+def _eye_row(lay: Layout) -> tuple[tuple, dict]:
+    """The eye row, split round the eye; the row and the eye's nodes."""
     eye = _eye(lay)
-    head = srow("re", 8.0, 24.0, [0.0, 5.0], ["nose", "nose"])
-    tail = srow("ret", 8.0, 30.0, [45.0, 58.0, 76.0, 98.0, 122.0, 150.0, 180.0], [F] * 7)
-    rows.append((head + eye["lower"] + tail, head + eye["upper"] + tail))
+    head = _elevation_row(lay, "re", 8.0, 24.0, [0.0, 5.0], ["nose", "nose"])
+    tail = _elevation_row(lay, "ret", 8.0, 30.0, [45.0, 58.0, 76.0, 98.0, 122.0, 150.0, 180.0],
+                          [_FREE] * 7)
+    return (head + eye["lower"] + tail, head + eye["upper"] + tail), eye
 
-    # --- brows, forehead, crown ----------------------------------------------------------------
-    r13 = plain(srow("r13", 22.0, 40.0, [0, 7, 14, 22, 31, 41, 53, 68, 90, 118, 148, 180],
-                     ["nose", "nose"] + [F] * 10))
+
+def _upper_head_rows(lay: Layout) -> list[tuple]:
+    """The brows, the forehead and the crown."""
+    F = _FREE
+    r13 = _elevation_row(lay, "r13", 22.0, 40.0, [0, 7, 14, 22, 31, 41, 53, 68, 90, 118, 148, 180],
+                         ["nose", "nose"] + [F] * 10)
     _brows(lay, r13[2:7])
-    plain(srow("r14", 34.0, 51.0, [0, 12, 25, 38, 53, 72, 95, 122, 150, 180], [F] * 10))
-    plain(srow("r15", 48.0, 62.0, [0, 15, 31, 48, 68, 92, 120, 150, 180], [F] * 9))
-    plain(srow("r16", 63.0, 72.0, [0, 20, 44, 72, 104, 140, 180], [F] * 7))
-    plain(srow("r17", 76.0, 80.0, [0, 38, 76, 114, 150, 180], [F] * 6))
-    top = [lay.add("top", surface_point(90.0, 89.9) * np.array([1, 0, 1]), F)]
-    rows.append((top, top))
+    rows = [r13,
+            _elevation_row(lay, "r14", 34.0, 51.0, [0, 12, 25, 38, 53, 72, 95, 122, 150, 180],
+                           [F] * 10),
+            _elevation_row(lay, "r15", 48.0, 62.0, [0, 15, 31, 48, 68, 92, 120, 150, 180],
+                           [F] * 9),
+            _elevation_row(lay, "r16", 63.0, 72.0, [0, 20, 44, 72, 104, 140, 180], [F] * 7),
+            _elevation_row(lay, "r17", 76.0, 80.0, [0, 38, 76, 114, 150, 180], [F] * 6),
+            [lay.add("top", surface_point(90.0, 89.9) * np.array([1, 0, 1]), F)]]
+    return [_plain(r) for r in rows]
 
+
+def _stitch_rows(lay: Layout, rows: list[tuple], eye: dict) -> None:
+    """Stitch consecutive rows into polygons; the brow's material and the skin's regions."""
     for (_, up), (low, _) in zip(rows[:-1], rows[1:]):
         _stitch(lay, up, low)
     # the brow: the band between the brow row and the orbit ring's upper nodes
@@ -200,12 +241,6 @@ def build_layout(*, palate_xz: np.ndarray | None = None) -> Layout:
     lay.regions["cheek"] = [k for k in lay.nodes if k.split(".")[0] in
                             ("r8", "r9", "r10", "r11", "r12", "rm") and
                             22.0 <= angles_of(lay.nodes[k].pos)[0] <= 62.0]
-
-    _teeth(lay)
-    _tongue(lay)
-    _palate(lay, palate_xz)
-    lay.add("pivot", JAW_PIVOT_POS, N.JAW_PIVOT)
-    return lay
 
 
 #: The gonion (vertex 22, the angle of the jaw): azimuth (degrees) and height (Parke units) on

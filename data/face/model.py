@@ -30,7 +30,8 @@ from cassi.data.face.topology import RenderTopology, render_topology  # noqa: F4
 from cassi.common.atomic import atomic_write_text
 
 __all__ = ["FaceModel", "Material", "build_face", "parke_parameters", "RenderTopology",
-           "render_topology", "default_gaze_target", "jaw_pellet_sites", "jaw_length_units"]
+           "render_topology", "default_gaze_target", "jaw_pellet_sites", "jaw_length_units",
+           "subject_units_per_mm"]
 
 
 def jaw_pellet_sites(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -47,6 +48,13 @@ def jaw_length_units(vertices: np.ndarray) -> float:
     pellets are measured; Parke units, for vertices (V, 3)."""
     mani, manm = jaw_pellet_sites(vertices)
     return float(np.hypot(*(mani - manm)))
+
+
+def subject_units_per_mm(vertices: np.ndarray, jaw_length_mm: float) -> float:
+    """p / d (thesis 4.1.1): Parke units per millimetre of a subject whose jaw length is d mm,
+    on the face ``vertices`` (V, 3) whose jaw distance is p; the scale the pellets are mapped by
+    (:class:`cassi.versions.mapping.XrmbToParke`)."""
+    return jaw_length_units(vertices) / float(jaw_length_mm)
 
 
 def parke_parameters(face: "FaceModel", values: dict[int, float] | None = None, *,
@@ -137,12 +145,12 @@ class FaceModel:
 
     @property
     def units_per_mm(self) -> float:
-        """Parke units per millimetre of this face: p / d for a subject's face (thesis 4.1.1, the
-        scale its pellets are mapped by: :class:`cassi.versions.mapping.XrmbToParke`), the
-        model's nominal :data:`~cassi.data.face.numbering.UNITS_PER_MM` without a jaw length."""
+        """Parke units per millimetre of this face: p / d for a subject's face
+        (:func:`subject_units_per_mm`), the model's nominal
+        :data:`~cassi.data.face.numbering.UNITS_PER_MM` without a jaw length."""
         if self.jaw_length_mm is None:
             return float(N.UNITS_PER_MM)
-        return self.jaw_length / float(self.jaw_length_mm)
+        return subject_units_per_mm(self.vertices, self.jaw_length_mm)
 
     def vertex(self, number: int) -> np.ndarray:
         """Position (3,) of vertex ``number`` (1-based)."""

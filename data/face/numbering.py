@@ -195,7 +195,6 @@ PARKE_JAW_ZONES: tuple[tuple[str, float, tuple[int, ...], str], ...] = (
 )
 #: CASSI 1.0's zones (Table 4.3): Parke's fractions x 1.11111, 22 and 30 moved to the 3rd zone,
 #: lower lip no longer rotated. The table gives 0.999999 for the teeth (0.9 x 1.11111).
-CASSI_FACTOR = 1.11111
 CASSI10_JAW_ZONES: tuple[tuple[str, float, tuple[int, ...], str], ...] = (
     ("1st", 1.11111, tuple(v for v in JAW if v not in JAW_BACK), "xz"),
     ("2nd", 0.999999, LOWER_TEETH, "xz"),

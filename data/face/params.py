@@ -88,6 +88,10 @@ def start_values() -> dict[int, float]:
     return {n: p.start for n, p in PARAMETERS.items()}
 
 
+#: Each parameter's start value (its effect is often relative to it).
+_START = start_values()
+
+
 def check_parameters(values: dict[int, float], *, clamp: bool = False) -> dict[int, float]:
     """Validate (or clamp) parameter values; returns the full set with start values filled in.
 
@@ -190,38 +194,55 @@ def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
     Regions that a model lacks (Parke's own files carry no region names) are left alone.
     """
     vals = check_parameters(values, clamp=clamp)
-    st1 = face.st1
-    v = st1.copy()
+    v = face.st1.copy()
     n_parke = min(len(v), N.EYES_FIRST - 1)
-    start = {k: p.start for k, p in PARAMETERS.items()}
-
-    def ix(numbers):
-        """0-based rows of vertex numbers this model has (Parke's own files stop at 287)."""
-        a = np.asarray(numbers, np.int64).reshape(-1) - 1
-        return a[a < len(v)]
-
-    def changed(*numbers):
-        return any(vals[k] != start[k] for k in numbers)
     centre = face.eye_centres[0] if len(face.eye_centres) else EYE_CENTRE
-
-    # --- interpolation ---------------------------------------------------------------------
-    lid, lid_lip = _region(face, "eyelid"), _region(face, "eyelid_lip")
+    lids = (_region(face, "eyelid"), _region(face, "eyelid_lip"))
     brow = _region(face, "brow")
     _interpolate(v, face, brow, vals[2])
     _interpolate(v, face, _region(face, "mouth_expression"), vals[13])
+    _eyelids_and_brow(v, face, vals, centre, lids, brow)
+    _nose(v, vals)
+    _mouth(v, vals)
+    _chin_jaw_cheeks(v, face, vals)
+    # 47-48: the teeth (relative to their start values)
+    teeth = _rows(v, N.TEETH)
+    v[teeth, 0] += vals[47] - _START[47]
+    v[teeth, 2] += vals[48] - _START[48]
+    _vertical_proportions(v, vals, n_parke, centre, lids)
+    # 4: jaw rotation with Parke's zones (last of the face's own deformations)
+    if vals[4] != 0.0 and n_parke >= N.PARKE_VERTEX_COUNT:
+        v = jaw_rotation(v, vals[4])
+    _eyeballs(v, face, vals, centre[2], gaze_target, light, viewer)
+    # 7-9: head scales about the origin (last, so they scale everything)
+    v *= np.array([vals[7], vals[8], vals[9]])
+    return replace(face, vertices=v, parameters=vals)
 
-    # --- eyes region -----------------------------------------------------------------------
+
+def _rows(v: np.ndarray, numbers) -> np.ndarray:
+    """0-based rows of vertex numbers this model has (Parke's own files stop at 287)."""
+    a = np.asarray(numbers, np.int64).reshape(-1) - 1
+    return a[a < len(v)]
+
+
+def _changed(vals: dict[int, float], *numbers: int) -> bool:
+    """Whether any of these parameters is off its start value."""
+    return any(vals[k] != _START[k] for k in numbers)
+
+
+def _eyelids_and_brow(v, face, vals, centre, lids, brow) -> None:
+    """1, 5-6, 38-40, 44-45: the eyelids on their spheres; 3: the brow's separation."""
     # Eyelids (dissertation 3.1.2): the lid vertices' two dimensions (width y, height z about
     # the eyeball's centre) are interpolated between closed (st2) and open (st1), scaled by
     # parameters 5 and 6, and projected back onto the sphere that carries each ring: the lid
     # sphere (radius parameter 45) for the lid and its margin, the eyeball (parameter 44) for
     # the lid's inner lip. Parameters 38-40 move the lids with the eyeballs.
-    for idx, radius_param in ((lid, 45), (lid_lip, 44)):
+    for idx, radius_param in zip(lids, (45, 44)):
         if not len(idx):
             continue
         rel1 = face.st1[idx] - centre
         rel2 = face.st2[idx] - centre
-        radius = np.linalg.norm(rel1, axis=1) * vals[radius_param] / start[radius_param]
+        radius = np.linalg.norm(rel1, axis=1) * vals[radius_param] / _START[radius_param]
         yz = rel2[:, 1:] + (rel1[:, 1:] - rel2[:, 1:]) * vals[1]
         yz = yz * np.array([vals[5], vals[6]])
         rr = np.linalg.norm(yz, axis=1)
@@ -234,21 +255,25 @@ def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
         w = np.linspace(1.0, 0.0, len(brow))
         v[brow, 1] += vals[3] * w
 
-    # --- nose ------------------------------------------------------------------------------
-    if changed(10, 11):
-        nose = ix(N.NOSE)
+
+def _nose(v, vals) -> None:
+    """10-11: the nose's tip and bridge widths; 26-27: the nose tip's offsets."""
+    if _changed(vals, 10, 11):
+        nose = _rows(v, N.NOSE)
         tipz = v[N.NOSE_TIP_CENTRE - 1, 2]
         lower = nose[v[nose, 2] <= tipz + 40.0]
         upper = np.setdiff1d(nose, lower)
         v[lower, 1] *= vals[10]
         v[upper, 1] *= vals[11]
-    tip = ix(N.NOSE_TIP)
+    tip = _rows(v, N.NOSE_TIP)
     v[tip, 0] += vals[26]
     v[tip, 2] += vals[27]
 
-    # --- mouth -----------------------------------------------------------------------------
-    corners = ix((N.CORNER, N.CORNER_MIDDLE, N.INNER_CORNER))
-    lips = ix(N.UPPER_LIP + N.LOWER_LIP)
+
+def _mouth(v, vals) -> None:
+    """12, 14-18: the mouth's width, lips forward, corners; 21 f tuck; 22 upper lip raise."""
+    corners = _rows(v, (N.CORNER, N.CORNER_MIDDLE, N.INNER_CORNER))
+    lips = _rows(v, N.UPPER_LIP + N.LOWER_LIP)
     mouth = np.concatenate([lips, corners])
     v[mouth, 1] *= vals[12]
     v[mouth, 0] += vals[14]
@@ -264,67 +289,61 @@ def apply_parameters(face, values: dict[int, float], *, clamp: bool = False,
     # 22: raise the upper lip; full effect at the centre, none at the corner (dissertation 3.3)
     for row in N.UPPER_LIP_ROWS:
         for j, n in enumerate(row):
-            v[n - 1, 2] += (vals[22] - start[22]) * (1.0 - j / 3.0)
+            v[n - 1, 2] += (vals[22] - _START[22]) * (1.0 - j / 3.0)
 
-    # --- chin, jaw, cheeks -----------------------------------------------------------------
-    jaw = ix(N.JAW)
+
+def _chin_jaw_cheeks(v, face, vals) -> None:
+    """31-32: the chin's offsets; 19: the jaw's width; 20: the cheeks'; 46: growth."""
+    jaw = _rows(v, N.JAW)
     v[jaw, 0] += vals[31]
     v[jaw, 2] += vals[32]
-    if changed(19):
+    if _changed(vals, 19):
         x_back, x_front = np.nanmin(v[jaw, 0]), np.nanmax(v[jaw, 0])
         w = (v[jaw, 0] - x_back) / max(x_front - x_back, 1e-9)
         v[jaw, 1] *= 1.0 + (vals[19] - 1.0) * w
-    cheek = np.union1d(_region(face, "cheek"), ix(N.LOWER_CHEEK))
-    if changed(20):
+    cheek = np.union1d(_region(face, "cheek"), _rows(v, N.LOWER_CHEEK))
+    if _changed(vals, 20):
         y_c = v[N.CORNER - 1, 1]
         v[cheek, 1] = y_c + (v[cheek, 1] - y_c) * vals[20]
-    if changed(46):
+    if _changed(vals, 46):
         grow = np.union1d(cheek, jaw)
         v[grow, 1] *= 1.0 + vals[46]
         v[grow, 0] += vals[46] * 0.25 * np.abs(v[grow, 1])
 
-    # --- teeth -----------------------------------------------------------------------------
-    teeth = ix(N.TEETH)
-    v[teeth, 0] += vals[47] - start[47]
-    v[teeth, 2] += vals[48] - start[48]
 
-    # --- vertical proportions (35-37), about the mouth and the eyes ----------------------------
+def _vertical_proportions(v, vals, n_parke, centre, lids) -> None:
+    """35-37: the face's heights scaled about the mouth and the eyes."""
     face_only = np.arange(n_parke)
     z_mouth = v[N.TEETH_TIP - 1, 2]
     z_eye = centre[2]
-    if changed(35):
+    if _changed(vals, 35):
         below_m = face_only[v[face_only, 2] < z_mouth]
         v[below_m, 2] = z_mouth + (v[below_m, 2] - z_mouth) * vals[35]
-    if changed(36):
+    if _changed(vals, 36):
         below_e = face_only[v[face_only, 2] < z_eye]
         v[below_e, 2] = z_eye + (v[below_e, 2] - z_eye) * vals[36]
-    if changed(37):
+    if _changed(vals, 37):
         above_e = face_only[v[face_only, 2] > z_eye]
-        above_e = np.setdiff1d(above_e, np.concatenate([lid, lid_lip]))
+        above_e = np.setdiff1d(above_e, np.concatenate(lids))
         v[above_e, 2] = z_eye + (v[above_e, 2] - z_eye) * vals[37]
 
-    # --- 4: jaw rotation with Parke's zones (last of the face's own deformations) ------------
-    if vals[4] != 0.0 and n_parke >= N.PARKE_VERTEX_COUNT:
-        v = jaw_rotation(v, vals[4])
 
-    # --- eyeballs --------------------------------------------------------------------------
+def _eyeballs(v, face, vals, z_eye, gaze_target, light, viewer) -> None:
+    """28-30, 38-40: the eyeballs' place; 41-44 rebuild them looking at ``gaze_target``."""
     centres = np.asarray(face.eye_centres, np.float64).copy()
-    if face.eyes_first is not None and len(centres) == 2:
-        shift = np.array([vals[28] + vals[38], vals[29] + vals[39],
-                          vals[30] - start[30] + vals[40]])
-        params = E.EyeParams(pupil_fraction=vals[41], fringe_fraction=vals[42],
-                             iris_fraction=vals[43], radius=vals[44])
-        target = E.default_gaze_target() if gaze_target is None else np.asarray(gaze_target, float)
-        for k in range(2):
-            c = centres[k] + shift * np.array([1.0, 1.0 if k == 0 else -1.0, 1.0])
-            c[2] = z_eye + (c[2] - z_eye) * 1.0
-            first = face.eyes_first + k * E.VERTS_PER_EYE
-            v[first - 1:first - 1 + E.VERTS_PER_EYE] = E.place_eye(c, target, params,
-                                                                    light=light, viewer=viewer)
-
-    # --- 7-9: head scales about the origin (last, so they scale everything) -----------------
-    v *= np.array([vals[7], vals[8], vals[9]])
-    return replace(face, vertices=v, parameters=vals)
+    if face.eyes_first is None or len(centres) != 2:
+        return
+    shift = np.array([vals[28] + vals[38], vals[29] + vals[39],
+                      vals[30] - _START[30] + vals[40]])
+    params = E.EyeParams(pupil_fraction=vals[41], fringe_fraction=vals[42],
+                         iris_fraction=vals[43], radius=vals[44])
+    target = E.default_gaze_target() if gaze_target is None else np.asarray(gaze_target, float)
+    for k in range(2):
+        c = centres[k] + shift * np.array([1.0, 1.0 if k == 0 else -1.0, 1.0])
+        c[2] = z_eye + (c[2] - z_eye) * 1.0
+        first = face.eyes_first + k * E.VERTS_PER_EYE
+        v[first - 1:first - 1 + E.VERTS_PER_EYE] = E.place_eye(c, target, params,
+                                                                light=light, viewer=viewer)
 
 
 def look_at(face, target, *, light=None, viewer=None):

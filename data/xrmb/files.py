@@ -207,6 +207,26 @@ def parse_txy(data: bytes | str, *, path: str | os.PathLike | None = None,
     CassiInputError
         Empty file, wrong column count, non-numeric field, time not increasing, no valid row.
     """
+    subject, task, rep = _recording_names(path, subject, task, rep)
+    warnings: list[str] = []
+
+    def warn(msg: str, line: int | None = None) -> None:
+        line = None if line is None else int(line)
+        warnings.append(str(CassiInputError(msg, path=path, line=line)))
+
+    values, line_numbers = _table(decode_ascii(data, path=path), path=path, warn=warn)
+    time_us = values[:, 0].astype(np.int64)
+    _check_times(time_us, line_numbers, path=path, warn=warn)
+    xy_mm, valid = _pellet_samples(values, line_numbers, warn=warn)
+    _check_valid_rows(valid, time_us, line_numbers, path=path, warn=warn,
+                      require_valid=require_valid)
+    return TaskRecording(path=None if path is None else Path(path), subject=str(subject),
+                         task=int(task), rep=int(rep), time_us=time_us, xy_mm=xy_mm,
+                         valid=valid, warnings=tuple(warnings))
+
+
+def _recording_names(path, subject, task, rep) -> tuple[str, int, int]:
+    """Subject, task and repetition: as given, else from the file's name (and its folder's)."""
     name_subject, name_task, name_rep = None, None, None
     if path is not None:
         try:
@@ -222,28 +242,26 @@ def parse_txy(data: bytes | str, *, path: str | os.PathLike | None = None,
         subject = name_subject
         if subject is None and path is not None:
             subject = Path(path).resolve().parent.name.upper() or None
-    subject = subject or "UNKNOWN"
+    return subject or "UNKNOWN", task, rep
 
-    text = decode_ascii(data, path=path)
-    warnings: list[str] = []
 
-    def warn(msg: str, line: int | None = None) -> None:
-        line = None if line is None else int(line)
-        warnings.append(str(CassiInputError(msg, path=path, line=line)))
-
+def _table(text: str, *, path, warn) -> tuple[np.ndarray, np.ndarray]:
+    """The integer table int64 (N, N_COLUMNS) and each row's line number (1-based)."""
     # NumPy's C text reader parses the table without a Python string per number (an hour-long
     # file has ten million of them); every row has matched _ROW_RE (integers only) first.
     if text.strip() and _FILE_RE.fullmatch(text):
         flat = np.fromstring(text, dtype=np.int64, sep=" ")
-        del text
         line_numbers = np.arange(1, flat.size // N_COLUMNS + 1)
     else:  # a header, blank lines or a bad row: line by line, to say which line is wrong
         rows, line_numbers = _table_rows(split_lines(text), path=path, warn=warn)
         flat = np.fromstring(" ".join(rows), dtype=np.int64, sep=" ")
     if flat.size != len(line_numbers) * N_COLUMNS:  # pragma: no cover - defensive: rows matched
         raise CassiInputError("malformed rows", path=path)
-    values = flat.reshape(len(line_numbers), N_COLUMNS)
-    time_us = values[:, 0].astype(np.int64)
+    return flat.reshape(len(line_numbers), N_COLUMNS), line_numbers
+
+
+def _check_times(time_us: np.ndarray, line_numbers: np.ndarray, *, path, warn) -> None:
+    """Refuse a time that does not increase; warn of intervals off the nominal period."""
     dt = np.diff(time_us)
     bad_dt = np.flatnonzero(dt <= 0)
     if bad_dt.size:
@@ -258,6 +276,10 @@ def parse_txy(data: bytes | str, *, path: str | os.PathLike | None = None,
             warn(f"{off.size} sample interval(s) differ from the nominal {NOMINAL_PERIOD_US} us "
                  f"(first: {int(dt[k - 1])} us)", line_numbers[k])
 
+
+def _pellet_samples(values: np.ndarray, line_numbers: np.ndarray, *,
+                    warn) -> tuple[np.ndarray, np.ndarray]:
+    """The pellets in mm (NaN where invalid) and which samples are valid."""
     coords = values[:, 1:].reshape(len(line_numbers), len(PELLETS), 2)
     bad = coords == BAD_VALUE
     valid = ~bad.any(axis=2)
@@ -277,7 +299,12 @@ def parse_txy(data: bytes | str, *, path: str | os.PathLike | None = None,
     xy_mm = coords.astype(np.float64)  # in place from here: no temporary of the whole table
     xy_mm /= 1000.0
     xy_mm[~valid] = np.nan
+    return xy_mm, valid
 
+
+def _check_valid_rows(valid: np.ndarray, time_us: np.ndarray, line_numbers: np.ndarray, *,
+                      path, warn, require_valid: bool) -> None:
+    """Refuse (or warn of) a file with no all-valid row; warn of pellets lost after the first."""
     all_valid = valid.all(axis=1)
     if not all_valid.any():
         never = [PELLETS[p] for p in range(len(PELLETS)) if not valid[:, p].any()]
@@ -286,23 +313,20 @@ def parse_txy(data: bytes | str, *, path: str | os.PathLike | None = None,
         if require_valid:
             raise CassiInputError(msg, path=path, line=int(line_numbers[-1]))
         warn(msg)
-    else:
-        first = int(np.flatnonzero(all_valid)[0])
-        # A pellet lost part-way and never recovered (the thesis's JW29/JW32 cases): record it.
-        for p, name in enumerate(PELLETS):
-            after = valid[first:, p]
-            if not after.all():
-                lost = first + int(np.flatnonzero(~after)[0])
-                if not valid[lost:, p].any():
-                    warn(f"pellet {name} invalid from time {time_us[lost]} us to the end",
-                         line_numbers[lost])
-                else:
-                    n = int((~after).sum())
-                    warn(f"pellet {name} invalid in {n} row(s) after the first valid row",
-                         line_numbers[lost])
-    return TaskRecording(path=None if path is None else Path(path), subject=str(subject),
-                         task=int(task), rep=int(rep), time_us=time_us, xy_mm=xy_mm,
-                         valid=valid, warnings=tuple(warnings))
+        return
+    first = int(np.flatnonzero(all_valid)[0])
+    # A pellet lost part-way and never recovered (the thesis's JW29/JW32 cases): record it.
+    for p, name in enumerate(PELLETS):
+        after = valid[first:, p]
+        if not after.all():
+            lost = first + int(np.flatnonzero(~after)[0])
+            if not valid[lost:, p].any():
+                warn(f"pellet {name} invalid from time {time_us[lost]} us to the end",
+                     line_numbers[lost])
+            else:
+                n = int((~after).sum())
+                warn(f"pellet {name} invalid in {n} row(s) after the first valid row",
+                     line_numbers[lost])
 
 
 def _table_rows(lines: list[str], *, path, warn) -> tuple[list[str], np.ndarray]:

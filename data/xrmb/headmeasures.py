@@ -30,18 +30,17 @@ takes precedence). :func:`read_head_measures` returns ``{subject: HeadMeasures}`
 from __future__ import annotations
 
 import os
-import re
 from dataclasses import dataclass
 
 import numpy as np
 
 from cassi.common.atomic import atomic_write_text
 from cassi.common.errors import CassiInputError
+from cassi.data.subject_name import SUBJECT_NAME_RE
 from cassi.data.xrmb.textlines import decode_ascii, parse_num, read_bytes, split_lines, tokens
 
 HEAD_MEASURES_FILE = "Headmeasures.txt"
 HEADER = ("SUBJECT", "GONION_X", "GONION_Y", "GNATHION_X", "GNATHION_Y")
-_SUBJECT_RE = re.compile(r"[A-Za-z][A-Za-z0-9_-]{0,31}", re.ASCII)
 _MAX_ABS_UM = 500_000
 
 
@@ -90,7 +89,7 @@ def parse_head_measures(data: bytes | str, *,
                 f"expected 5 columns (subject gonion_x gonion_y gnathion_x gnathion_y), found "
                 f"{len(toks)}", path=path, line=line_no)
         subject = toks[0]
-        if not _SUBJECT_RE.fullmatch(subject):
+        if not SUBJECT_NAME_RE.fullmatch(subject):
             raise CassiInputError(f"bad subject name {subject[:40]!r}", path=path, line=line_no)
         key = subject.upper()
         if key in seen_line:
@@ -121,7 +120,7 @@ def format_head_measures(measures: dict[str, HeadMeasures]) -> str:
     lines = ["# cassi-farm head measures v1: XRMB head frame, micrometres",
              "Subject GONION_X GONION_Y GNATHION_X GNATHION_Y"]
     for subject in sorted(measures):
-        if not _SUBJECT_RE.fullmatch(subject):
+        if not SUBJECT_NAME_RE.fullmatch(subject):
             raise CassiInputError(f"bad subject name {subject!r}")
         hm = measures[subject]
         vals = np.concatenate([np.asarray(hm.gonion_mm, float).reshape(2),
