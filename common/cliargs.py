@@ -33,3 +33,26 @@ def positive_number(text: str) -> float:
     if not (math.isfinite(value) and value > 0):
         raise argparse.ArgumentTypeError(f"{text[:40]!r} is not a positive number")
     return value
+
+
+_TASK_RANGE = re.compile(r"([0-9]{1,3})(?:-([0-9]{1,3}))?", re.ASCII)
+
+
+def task_range(text: str) -> list[int]:
+    """Task numbers as people write them: ``105``, ``102-105`` (both ends included) or a
+    comma-separated mix (``1-118`` is every XRMB task). ValueError names what is wrong."""
+    out: list[int] = []
+    for part in (p.strip() for p in str(text).split(",")):
+        m = _TASK_RANGE.fullmatch(part)
+        if not m or int(m.group(2) or m.group(1)) < int(m.group(1)):
+            raise ValueError(f"bad task list {str(text)[:40]!r} (e.g. 105 or 102-105,13)")
+        out.extend(range(int(m.group(1)), int(m.group(2) or m.group(1)) + 1))
+    return out
+
+
+def task_list(text: str) -> list[int]:
+    """:func:`task_range` as an argparse type."""
+    try:
+        return task_range(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None

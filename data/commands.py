@@ -6,12 +6,11 @@ stderr), 1 other failures.
 from __future__ import annotations
 
 import argparse
-import re
 import sys
 from pathlib import Path
 
 
-from cassi.common.cliargs import seed_int
+from cassi.common.cliargs import seed_int, task_list
 from cassi.common.errors import CassiInputError
 from cassi.common.lazy import resolve
 from cassi.data.subject_name import SUBJECT_NAME_RE
@@ -70,7 +69,7 @@ def register(subparsers) -> None:
     st.add_argument("path", type=Path, help="a corpus directory, a subject directory or one file")
     st.add_argument("--compare", type=Path, default=None, metavar="PATH2",
                     help="a second corpus, subject directory or task file")
-    st.add_argument("--tasks", type=_task_list, default=None,
+    st.add_argument("--tasks", type=task_list, default=None,
                     help="only these tasks, e.g. 105 or 102-105,13")
     st.add_argument("--json", action="store_true", help="print JSON")
     st.set_defaults(func="cassi.data.actions:cmd_stats")
@@ -82,16 +81,6 @@ def _subject_list(text: str) -> list[str]:
     if not names or bad:
         raise argparse.ArgumentTypeError(f"bad subject list {text!r}")
     return names
-
-
-def _task_list(text: str) -> list[int]:
-    out: list[int] = []
-    for part in (p.strip() for p in text.split(",")):
-        m = re.fullmatch(r"([0-9]{1,3})(?:-([0-9]{1,3}))?", part, re.ASCII)
-        if not m or int(m.group(2) or m.group(1)) < int(m.group(1)):
-            raise argparse.ArgumentTypeError(f"bad task list {text!r} (e.g. 105 or 102-105,13)")
-        out.extend(range(int(m.group(1)), int(m.group(2) or m.group(1)) + 1))
-    return out
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -21,7 +21,8 @@ def add_run_options(p: argparse.ArgumentParser, defaults: C.RunConfig) -> None:
                                                 "corpus)")
     p.add_argument("--subjects", nargs="+", metavar="NAME", help="default: every subject")
     p.add_argument("--tasks", nargs="+", metavar="N",
-                   help="task numbers (default: the thesis's evaluation set, Table 5.1 + 106, 118)")
+                   help="task numbers or ranges, e.g. 19 21 or 1-118 (default: the thesis's "
+                        "evaluation set, Table 5.1 + 106, 118)")
     p.add_argument("--versions", nargs="+", metavar="NAME", help="default: every version")
     p.add_argument("--views", nargs="+", metavar="NAME",
                    help="front side half top (default: all four); 'geometry' alone: no renders")

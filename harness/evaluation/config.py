@@ -36,6 +36,7 @@ from typing import Any, Mapping
 
 import yaml
 
+from cassi.common.cliargs import task_range
 from cassi.common.cores import usable_cores
 from cassi.common.errors import CassiInputError
 
@@ -171,6 +172,17 @@ def _as_int(value: Any, key: str, where: dict) -> int:
     return value
 
 
+def _as_ints(value: Any, key: str, where: dict) -> list[int]:
+    """One list item: an integer, or task numbers as a range (``"1-118"``, ``"102-105,13"``)."""
+    if key == "tasks" and isinstance(value, str) and re.fullmatch(r"[0-9, -]+", value, re.ASCII) \
+            and re.search(r"[-,]", value.strip().lstrip("+-")):
+        try:
+            return task_range(value)
+        except ValueError as err:
+            raise CassiInputError(f"{key}: {err}", **where) from None
+    return [_as_int(value, key, where)]
+
+
 class _UniqueKeyLoader(yaml.SafeLoader):
     """PyYAML's safe loader, refusing a key set twice in one mapping (PyYAML keeps the last)."""
 
@@ -221,7 +233,7 @@ def validate(raw: Mapping[str, Any], *, source: str | Path | None = None,
                 values[key] = None if list(items) == [EVERY_VERSION] else ()
                 continue
             if _LISTS[key] is int:
-                items = [_as_int(v, key, where) for v in items]
+                items = [n for v in items for n in _as_ints(v, key, where)]
             else:
                 bad = [v for v in items if not isinstance(v, str) or not v.strip()]
                 if bad:

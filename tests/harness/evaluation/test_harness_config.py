@@ -224,3 +224,16 @@ def test_nightly_reads_a_run_file_over_its_own_defaults(tmp_path):
     with pytest.raises(CassiInputError, match="stride: must be at least 0"):
         config_from_args(_parser().parse_args(["nightly", "--out", "n", "--stride", "-1"]),
                          C.NIGHTLY, need_out=False)
+
+
+def test_task_ranges_work_wherever_tasks_are_taken(tmp_path):
+    """`cassi run --tasks 1-118` (refused before as "expected an integer"), a run file's
+    "102-105" and corpus stats' --tasks all read ranges by one rule (cliargs.task_range)."""
+    cfg = config_from_args(_parser().parse_args(["run", "--out", "o", "--tasks", "1-3", "19,102-104"]))
+    assert cfg.tasks == (1, 2, 3, 19, 102, 103, 104)
+    (tmp_path / "run.toml").write_text('out = "o"\ntasks = ["102-105", 13]\n')
+    assert C.load_config(tmp_path / "run.toml").tasks == (102, 103, 104, 105, 13)
+    with pytest.raises(CassiInputError, match=r"tasks: bad task list '5-2'"):
+        config_from_args(_parser().parse_args(["run", "--out", "o", "--tasks", "5-2"]))
+    with pytest.raises(CassiInputError, match="tasks: expected an integer"):
+        config_from_args(_parser().parse_args(["run", "--out", "o", "--tasks", "1-x"]))
