@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -335,6 +335,120 @@ def job_gates(run: Run) -> list[GateResult]:
     return out
 
 
+@dataclass
+class _Baseline:
+    """What a gate compares a run with: a baseline run (``run``, whose renders are the
+    reference images) or a golden directory (``golden``, with the results snapshot
+    :func:`update_golden` stores, if any)."""
+
+    path: Path
+    meta: dict
+    results: pd.DataFrame | None
+    summary: dict
+    run: Run | None = None
+    golden: Path | None = None
+
+
+def _load_baseline(path: Path) -> _Baseline:
+    """A run directory or a golden directory; a clear refusal for anything else."""
+    if (path / GOLDEN_MARK).is_file():
+        meta = json.loads((path / GOLDEN_MARK).read_text(encoding="utf-8")).get("run", {})
+        snap = path / "results.parquet"
+        # cassi golden refuses runs with failed jobs: a golden directory has none
+        return _Baseline(path, meta, pd.read_parquet(snap) if snap.is_file() else None, {},
+                         golden=path)
+    if (path / "results.parquet").is_file():
+        run = load_run(path)
+        return _Baseline(path, run.meta, run.results, run.summary, run=run)
+    raise CassiInputError("baseline is neither a run directory (results.parquet) nor a "
+                          f"golden directory ({GOLDEN_MARK})", path=path)
+
+
+@dataclass
+class _Comparison:
+    """What a gate compares: the run's results and renders and the baseline's results, all
+    restricted to ``keys`` (subject, task, rep, version; None: everything) when the two differ
+    and ``--common-only`` allows it; ``differences`` says how they differ, ``notes`` what
+    gate.md says about the comparison."""
+
+    results: pd.DataFrame
+    renders: pd.DataFrame
+    base_results: pd.DataFrame | None
+    keys: set[tuple] | None = None
+    differences: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+
+def _like_with_like(run: Run, base: _Baseline, common_only: bool) -> _Comparison:
+    """Compare the scopes and the corpus files of the run and its baseline; refuse when they
+    differ (unless ``common_only``: then only what both share is compared)."""
+    out = _Comparison(run.results, run.renders, base.results)
+    scope, base_scope = run_scope(run.meta), run_scope(base.meta)
+    known = all(m.get("tasks_resolved") is not None for m in (run.meta, base.meta))
+    out.differences = scope_differences(scope, base_scope) if known else []
+    digests, base_digests = input_digests(run.meta), input_digests(base.meta)
+    changed: set[tuple] = set()
+    if digests is None or base_digests is None:
+        who = " and ".join(w for w, d in (("the run", digests), ("the baseline", base_digests))
+                           if d is None)
+        out.notes.append(f"The corpus files were not compared: {who} does not record their "
+                         "digests (run.json from before they were recorded).")
+    else:
+        changed = {t for t in set(digests) & set(base_digests) if digests[t] != base_digests[t]}
+        if changed:
+            out.differences.append(f"corpus files differ for {len(changed)} task file(s) "
+                                   f"({_fmt(changed)}): the runs read other data")
+    if out.differences and not common_only:
+        raise MismatchedBaseline("the baseline does not cover what the run covers, so their "
+                                 "gates cannot compare like with like: "
+                                 + "; ".join(out.differences) + " (rerun with the same "
+                                 "settings, or pass --common-only to compare only what both "
+                                 "share)", path=base.path)
+    if out.differences:
+        out.keys = {(s, t, r, v) for s, t, r in (scope["tasks"] & base_scope["tasks"]) - changed
+                    for v in scope["versions"] & base_scope["versions"]}
+        views = scope["views"] & base_scope["views"]
+        out.results = _restrict(out.results, out.keys, views)
+        out.base_results = (None if out.base_results is None
+                            else _restrict(out.base_results, out.keys, views))
+        out.renders = _restrict(out.renders, out.keys, views)
+        out.notes.append("Compared on the common task files, versions and views only "
+                         "(--common-only): " + "; ".join(out.differences) + ".")
+    return out
+
+
+def _require_complete(run: Run, base: _Baseline, keys: set[tuple] | None) -> None:
+    """Refuse a baseline with failed or missing jobs among ``keys``, and a run with missing
+    ones (the run's failed jobs are failed gates)."""
+    base_failed, base_missing = incomplete_jobs(base.meta, base.summary, base.results, keys)
+    if base_failed or base_missing:
+        raise IncompleteRun("the baseline has failed or missing jobs, so its results cannot "
+                            "stand for what the run is compared with: "
+                            + _fmt_list(base_failed + base_missing) + " (gate against a "
+                            "complete run or golden directory)", path=base.path)
+    _, missing = incomplete_jobs(run.meta, run.summary, run.results, keys)
+    if missing:
+        raise IncompleteRun("the run lacks jobs it planned (neither results nor a job record): "
+                            + _fmt_list(missing), path=run.root)
+
+
+def _compare(run: Run, base: _Baseline, what: _Comparison) -> list[GateResult]:
+    """The metric gates (where the baseline has results) and the image gates; a gate that
+    compared nothing refuses."""
+    results = [] if what.base_results is None else metric_gates(what.results, what.base_results)
+    reference = base.golden or _renders_as_golden(base.run, run.root / ".gate-baseline")
+    images = image_gates(Run(run.root, what.results, run.ratings, run.meta, what.renders),
+                         reference)
+    if not any(r.status != "skip" for r in results + images):
+        where = " on what both share (--common-only)" if what.differences else ""
+        raise NothingCompared(
+            f"nothing was compared with the baseline {base.path}{where}: {len(what.results)} "
+            f"result rows and {len(what.renders)} renders gave no metric or image gate "
+            f"({len(images)} renders without a baseline image); a gate that compares nothing "
+            "is not a pass", path=run.root)
+    return results + images
+
+
 def gate(run_dir: str | os.PathLike, baseline: str | os.PathLike, *,
          out_dir: str | os.PathLike | None = None,
          common_only: bool = False, jobs: bool = True) -> tuple[bool, list[GateResult]]:
@@ -361,80 +475,13 @@ def gate(run_dir: str | os.PathLike, baseline: str | os.PathLike, *,
         When no metric or image gate could be applied.
     """
     run = load_run(run_dir)
-    base_path = Path(baseline)
-    if (base_path / GOLDEN_MARK).is_file():
-        base_meta = json.loads((base_path / GOLDEN_MARK).read_text(encoding="utf-8")).get("run", {})
-        snap = base_path / "results.parquet"
-        base_results = pd.read_parquet(snap) if snap.is_file() else None
-        base_summary: dict = {}  # cassi golden refuses runs with failed jobs
-        reference = base_path
-    elif (base_path / "results.parquet").is_file():
-        base_run = load_run(base_path)
-        base_meta, base_results = base_run.meta, base_run.results
-        base_summary = base_run.summary
-        reference = None
-    else:
-        raise CassiInputError("baseline is neither a run directory (results.parquet) nor a "
-                              f"golden directory ({GOLDEN_MARK})", path=base_path)
-    notes: list[str] = []
-    run_results, renders = run.results, run.renders
-    scope, base_scope = run_scope(run.meta), run_scope(base_meta)
-    known = all(m.get("tasks_resolved") is not None for m in (run.meta, base_meta))
-    differences = scope_differences(scope, base_scope) if known else []
-    digests, base_digests = input_digests(run.meta), input_digests(base_meta)
-    changed: set[tuple] = set()
-    if digests is None or base_digests is None:
-        who = " and ".join(w for w, d in (("the run", digests), ("the baseline", base_digests))
-                           if d is None)
-        notes.append(f"The corpus files were not compared: {who} does not record their digests "
-                     "(run.json from before they were recorded).")
-    else:
-        changed = {t for t in set(digests) & set(base_digests) if digests[t] != base_digests[t]}
-        if changed:
-            differences.append(f"corpus files differ for {len(changed)} task file(s) "
-                               f"({_fmt(changed)}): the runs read other data")
-    if differences and not common_only:
-        raise MismatchedBaseline("the baseline does not cover what the run covers, so their "
-                                 "gates cannot compare like with like: " + "; ".join(differences)
-                                 + " (rerun with the same settings, or pass --common-only to "
-                                 "compare only what both share)", path=base_path)
-    keys = None
-    if differences:
-        keys = {(s, t, r, v) for s, t, r in (scope["tasks"] & base_scope["tasks"]) - changed
-                for v in scope["versions"] & base_scope["versions"]}
-        views = scope["views"] & base_scope["views"]
-        run_results = _restrict(run_results, keys, views)
-        base_results = None if base_results is None else _restrict(base_results, keys, views)
-        renders = _restrict(renders, keys, views)
-        notes.append("Compared on the common task files, versions and views only (--common-only): "
-                     + "; ".join(differences) + ".")
-    base_failed, base_missing = incomplete_jobs(base_meta, base_summary, base_results, keys)
-    if base_failed or base_missing:
-        raise IncompleteRun("the baseline has failed or missing jobs, so its results cannot "
-                            "stand for what the run is compared with: "
-                            + _fmt_list(base_failed + base_missing) + " (gate against a "
-                            "complete run or golden directory)", path=base_path)
-    _, missing = incomplete_jobs(run.meta, run.summary, run.results, keys)
-    if missing:
-        raise IncompleteRun("the run lacks jobs it planned (neither results nor a job record): "
-                            + _fmt_list(missing), path=run.root)
-    results = job_gates(run) if jobs else []
-    if base_results is not None:
-        results += metric_gates(run_results, base_results)
-    if reference is None:
-        reference = _renders_as_golden(base_run, run.root / ".gate-baseline")
-    results += image_gates(Run(run.root, run_results, run.ratings, run.meta, renders), reference)
-    compared = [r for r in results if r.gate in ("metric", "image") and r.status != "skip"]
-    if not compared:
-        where = " on what both share (--common-only)" if differences else ""
-        raise NothingCompared(
-            f"nothing was compared with the baseline {base_path}{where}: {len(run_results)} "
-            f"result rows and {len(renders)} renders gave no metric or image gate "
-            f"({sum(r.gate == 'image' for r in results)} renders without a baseline image); "
-            "a gate that compares nothing is not a pass", path=run.root)
+    base = _load_baseline(Path(baseline))
+    what = _like_with_like(run, base, common_only)
+    _require_complete(run, base, what.keys)
+    results = (job_gates(run) if jobs else []) + _compare(run, base, what)
     passed = not any(r.status == "fail" for r in results)
-    write_gate_report(Path(out_dir or run.root), passed, results, baseline=str(base_path),
-                      notes=notes)
+    write_gate_report(Path(out_dir or run.root), passed, results, baseline=str(base.path),
+                      notes=what.notes)
     return passed, results
 
 
