@@ -40,7 +40,7 @@ def _with_path(err: OSError, path: Path) -> OSError:
 
 @contextlib.contextmanager
 def atomic_open(path: str | os.PathLike, mode: str = "w", *, durable: bool = True,
-                **kwargs) -> Iterator[IO]:
+                read_only: bool = False, **kwargs) -> Iterator[IO]:
     """Open a temporary sibling of ``path`` for writing; rename it over ``path`` on success.
 
     ``mode`` is ``"w"`` (text, UTF-8 unless ``encoding`` is given) or ``"wb"``.
@@ -48,7 +48,8 @@ def atomic_open(path: str | os.PathLike, mode: str = "w", *, durable: bool = Tru
     ``durable=False`` skips the ``fsync`` before the rename: the write stays atomic for every
     reader and against a killed process, but a power loss may leave the file empty or short.
     Only for files whose readers detect that (content-addressed blobs checked against their
-    hash); an fsync costs about 2 ms on this machine's disk.
+    hash); an fsync costs about 2 ms on this machine's disk. ``read_only``: the file appears
+    without write permission (0444 less the umask), for files nobody may write into again.
     """
     if mode not in ("w", "wb"):
         raise ValueError(f"atomic_open mode must be 'w' or 'wb', not {mode!r}")
@@ -64,7 +65,7 @@ def atomic_open(path: str | os.PathLike, mode: str = "w", *, durable: bool = Tru
     except OSError as err:
         raise _with_path(err, path) from None
     try:
-        os.fchmod(fd, 0o666 & ~current_umask())
+        os.fchmod(fd, (0o444 if read_only else 0o666) & ~current_umask())
         with os.fdopen(fd, mode, **kwargs) as fh:
             yield fh
             fh.flush()
@@ -86,8 +87,9 @@ def atomic_write_text(path: str | os.PathLike, text: str, *, encoding: str = "ut
         fh.write(text)
 
 
-def atomic_write_bytes(path: str | os.PathLike, data: bytes, *, durable: bool = True) -> None:
-    with atomic_open(path, "wb", durable=durable) as fh:
+def atomic_write_bytes(path: str | os.PathLike, data: bytes, *, durable: bool = True,
+                       read_only: bool = False) -> None:
+    with atomic_open(path, "wb", durable=durable, read_only=read_only) as fh:
         fh.write(data)
 
 
@@ -126,7 +128,8 @@ def link_or_copy(src: str | os.PathLike, dest: str | os.PathLike) -> Path:
 
     A new ``dest`` is linked directly (a link appears whole or not at all; a report's 20,548
     renders take about 1 s so against 5 s through a temporary name); an existing one is
-    replaced through a temporary name, a copy goes through one."""
+    replaced through a temporary name, a copy goes through one and keeps ``src``'s
+    permissions (a read-only blob stays read-only)."""
     dest = Path(dest)
     try:
         os.link(src, dest)
@@ -146,6 +149,7 @@ def link_or_copy(src: str | os.PathLike, dest: str | os.PathLike) -> Path:
             os.link(src, tmp)
         except OSError:
             shutil.copyfile(src, tmp)
+            shutil.copymode(src, tmp)
         os.replace(tmp, dest)
     finally:
         with contextlib.suppress(FileNotFoundError):

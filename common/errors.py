@@ -23,3 +23,9 @@ class CassiInputError(ValueError):
         if self.line is None:
             return f"{self.path}: {self.reason}"
         return f"{self.path}:{self.line}: {self.reason}"
+
+
+def first_few(items: list[str], n: int = 6) -> str:
+    """The first ``n`` of ``items`` "; "-separated, and how many more: a message names what
+    went wrong without growing with a night's thousands of jobs."""
+    return "; ".join(items[:n]) + (f"; and {len(items) - n} more" if len(items) > n else "")

@@ -8,15 +8,15 @@ from __future__ import annotations
 import json
 import os
 import shutil
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from cassi.common.atomic import atomic_write_text, replacing, writable_dir
-from cassi.common.errors import CassiInputError
-from cassi.harness.farm.store import sha256_file
+from cassi.common.atomic import atomic_tmp_path, atomic_write_text, replacing, writable_dir
+from cassi.common.errors import CassiInputError, first_few
+from cassi.harness.farm.store import sha256_file_once
 from cassi.reports.media import read_rgb8
 from cassi.reports.runio import Run, load_run
 from cassi.renderer.compare import MAX_CHANGED_SHARE, compare_images
@@ -34,6 +34,9 @@ GATE_IMAGES = "gate-images"
 DEFAULT_TOLERANCE = 0
 
 GOLDEN_MARK = "golden.json"
+#: A golden directory's list of its images (RENDER_COLUMNS less ``path``), so that a gate
+#: sees the renders a run lacks.
+GOLDEN_RENDERS = "renders.parquet"
 
 
 @dataclass
@@ -146,9 +149,13 @@ def image_gates(run: Run, reference_dir: Path, *,
             out.append(GateResult("image", row["subject"], row["version"], item, "skip",
                                   f"no golden image {ref}"))
             continue
+        corrupt = _not_its_name(Path(row["path"])) or _not_its_name(ref)
+        if corrupt:
+            out.append(GateResult("image", row["subject"], row["version"], item, "fail", corrupt))
+            continue
         same = _same_bytes(Path(row["path"]), ref)
         if same:
-            # content-addressed renders: equal digests are equal images, nothing to decode
+            # equal digests are equal images, nothing to decode
             out.append(GateResult("image", row["subject"], row["version"], item, "pass",
                                   f"the same bytes as {ref} (SHA-256 {same[:12]})", 0.0,
                                   MAX_CHANGED_SHARE))
@@ -182,17 +189,31 @@ def _content_name(path: Path) -> str | None:
     return stem if len(stem) == 64 and all(c in "0123456789abcdef" for c in stem) else None
 
 
+def _not_its_name(path: Path) -> str | None:
+    """Why a content-addressed file is not what its name says (its bytes hash to another
+    digest: a write into a blob the store and its runs share), or None (it is, or it is
+    named otherwise). Hashed once per process (:func:`sha256_file_once`)."""
+    name = _content_name(path)
+    if name is None:
+        return None
+    try:
+        digest = sha256_file_once(path)
+    except OSError as err:
+        return f"{path} cannot be read: {err.strerror or err}"
+    if digest == name:
+        return None
+    return (f"{path} is corrupt: its bytes hash to {digest[:12]}, not to the digest it is "
+            f"named by ({name[:12]}); every run that links this blob shares the damage (rerun "
+            "without the damaged blob)")
+
+
 def _same_bytes(a: Path, b: Path) -> str | None:
     """The SHA-256 both files share, or None (unequal or unreadable: the comparison rule
-    then decides, or says why it cannot). Two renders of run stores named by the same digest
-    are the same bytes without reading them (the store verified each against its name); a
-    golden image, named by what it shows, is hashed."""
-    name = _content_name(a)
-    if name is not None and name == _content_name(b) and a.is_file() and b.is_file():
-        return name
+    then decides, or says why it cannot). Each file is hashed once per process: renders
+    linked from one store blob are one file, hashed once."""
     try:
-        digest = sha256_file(a)
-        return digest if sha256_file(b) == digest else None
+        digest = sha256_file_once(a)
+        return digest if sha256_file_once(b) == digest else None
     except OSError:
         return None
 
@@ -231,7 +252,8 @@ _KEY = ["subject", "task", "rep", "version"]
 
 
 class MismatchedBaseline(CassiInputError):
-    """The baseline was run on other tasks, versions, views or preset than the run."""
+    """The baseline was run on other tasks, versions, views or preset than the run, or holds
+    other checks or renders."""
 
 
 class IncompleteRun(CassiInputError):
@@ -296,10 +318,6 @@ def incomplete_jobs(meta: dict, summary: dict, results: pd.DataFrame | None,
     return failed, missing
 
 
-def _fmt_list(items: list[str]) -> str:
-    return "; ".join(items[:6]) + (f"; and {len(items) - 6} more" if len(items) > 6 else "")
-
-
 def _fmt(items: set) -> str:
     items = sorted(items, key=str)
     text = ", ".join("/".join(map(str, i)) if isinstance(i, tuple) else str(i) for i in items[:6])
@@ -335,6 +353,199 @@ def job_gates(run: Run) -> list[GateResult]:
     return out
 
 
+@dataclass
+class _Baseline:
+    """What a gate compares a run with: a baseline run (``run``, whose renders are the
+    reference images) or a golden directory (``golden``, with the results snapshot
+    :func:`update_golden` stores, if any)."""
+
+    path: Path
+    meta: dict
+    results: pd.DataFrame | None
+    summary: dict
+    #: RENDER_COLUMNS less ``path``; None for a golden directory that does not list them
+    renders: pd.DataFrame | None
+    run: Run | None = None
+    golden: Path | None = None
+
+
+def _load_baseline(path: Path) -> _Baseline:
+    """A run directory or a golden directory; a clear refusal for anything else."""
+    if (path / GOLDEN_MARK).is_file():
+        meta = json.loads((path / GOLDEN_MARK).read_text(encoding="utf-8")).get("run", {})
+        snap, listed = path / "results.parquet", path / GOLDEN_RENDERS
+        # cassi golden refuses runs with failed jobs: a golden directory has none
+        return _Baseline(path, meta, pd.read_parquet(snap) if snap.is_file() else None, {},
+                         pd.read_parquet(listed) if listed.is_file() else None, golden=path)
+    if (path / "results.parquet").is_file():
+        run = load_run(path)
+        return _Baseline(path, run.meta, run.results, run.summary, run.renders, run=run)
+    raise CassiInputError("baseline is neither a run directory (results.parquet) nor a "
+                          f"golden directory ({GOLDEN_MARK})", path=path)
+
+
+@dataclass
+class _Comparison:
+    """What a gate compares: the run's results and renders and the baseline's results, all
+    restricted to ``keys`` (subject, task, rep, version; None: everything) when the two differ
+    and ``--common-only`` allows it; ``differences`` says how they differ, ``notes`` what
+    gate.md says about the comparison."""
+
+    results: pd.DataFrame
+    renders: pd.DataFrame
+    base_results: pd.DataFrame | None
+    base_renders: pd.DataFrame | None
+    keys: set[tuple] | None = None
+    differences: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+
+def _like_with_like(run: Run, base: _Baseline, common_only: bool) -> _Comparison:
+    """Compare the scopes and the corpus files of the run and its baseline; refuse when they
+    differ (unless ``common_only``: then only what both share is compared)."""
+    out = _Comparison(run.results, run.renders, base.results, base.renders)
+    scope, base_scope = run_scope(run.meta), run_scope(base.meta)
+    known = all(m.get("tasks_resolved") is not None for m in (run.meta, base.meta))
+    out.differences = scope_differences(scope, base_scope) if known else []
+    digests, base_digests = input_digests(run.meta), input_digests(base.meta)
+    changed: set[tuple] = set()
+    if digests is None or base_digests is None:
+        who = " and ".join(w for w, d in (("the run", digests), ("the baseline", base_digests))
+                           if d is None)
+        out.notes.append(f"The corpus files were not compared: {who} does not record their "
+                         "digests (run.json from before they were recorded).")
+    else:
+        changed = {t for t in set(digests) & set(base_digests) if digests[t] != base_digests[t]}
+        if changed:
+            out.differences.append(f"corpus files differ for {len(changed)} task file(s) "
+                                   f"({_fmt(changed)}): the runs read other data")
+    if out.differences and not common_only:
+        raise MismatchedBaseline("the baseline does not cover what the run covers, so their "
+                                 "gates cannot compare like with like: "
+                                 + "; ".join(out.differences) + " (rerun with the same "
+                                 "settings, or pass --common-only to compare only what both "
+                                 "share)", path=base.path)
+    if out.differences:
+        out.keys = {(s, t, r, v) for s, t, r in (scope["tasks"] & base_scope["tasks"]) - changed
+                    for v in scope["versions"] & base_scope["versions"]}
+        views = scope["views"] & base_scope["views"]
+        out.results = _restrict(out.results, out.keys, views)
+        out.base_results = (None if out.base_results is None
+                            else _restrict(out.base_results, out.keys, views))
+        out.renders = _restrict(out.renders, out.keys, views)
+        out.base_renders = (None if out.base_renders is None
+                            else _restrict(out.base_renders, out.keys, views))
+        out.notes.append("Compared on the common task files, versions and views only "
+                         "(--common-only): " + "; ".join(out.differences) + ".")
+    return out
+
+
+def _require_complete(run: Run, base: _Baseline, keys: set[tuple] | None) -> None:
+    """Refuse a baseline with failed or missing jobs among ``keys``, and a run with missing
+    ones (the run's failed jobs are failed gates)."""
+    base_failed, base_missing = incomplete_jobs(base.meta, base.summary, base.results, keys)
+    if base_failed or base_missing:
+        raise IncompleteRun("the baseline has failed or missing jobs, so its results cannot "
+                            "stand for what the run is compared with: "
+                            + first_few(base_failed + base_missing) + " (gate against a "
+                            "complete run or golden directory)", path=base.path)
+    _, missing = incomplete_jobs(run.meta, run.summary, run.results, keys)
+    if missing:
+        raise IncompleteRun("the run lacks jobs it planned (neither results nor a job record): "
+                            + first_few(missing), path=run.root)
+
+
+def _check_rows(results: pd.DataFrame):
+    """Each row's (subject, task, rep, version, view, check), in order."""
+    return zip(results["subject"].astype(str), results["task"].astype(int),
+               results["rep"].astype(int), results["version"].astype(str),
+               results["view"].astype(str), results["check"].astype(str))
+
+
+def _checks(results: pd.DataFrame | None, failed: set[tuple]) -> set[tuple] | None:
+    """(subject, task, rep, version, view, check) of every check in ``results`` outside the
+    ``failed`` (subject, task, rep, version)."""
+    return None if results is None else {k for k in _check_rows(results) if k[:4] not in failed}
+
+
+def _render_keys(renders: pd.DataFrame | None, failed: set[tuple]) -> set[tuple] | None:
+    """(subject, task, rep, version, view, frame) of every PNG render outside ``failed``."""
+    if renders is None:
+        return None
+    if "path" in renders:
+        renders = renders[renders["path"].astype(str).str.endswith(".png")]
+    return {(str(s), int(t), int(r), str(v), str(view), int(f)) for s, t, r, v, view, f in
+            zip(*(renders[c] for c in ("subject", "task", "rep", "version", "view", "frame")))
+            if (str(s), int(t), int(r), str(v)) not in failed}
+
+
+def _lacking(what: str, unit: str, run: set[tuple], base: set[tuple]) -> str:
+    """One sentence on the ``what`` (checks, renders) one side has and the other lacks, by
+    task file, version and view (``unit``: what the last field names); '' when both have the
+    same."""
+    def grouped(keys: set[tuple]) -> str:
+        by: dict[str, list[str]] = {}
+        for s, t, r, v, view, item in sorted(keys, key=str):
+            by.setdefault(f"{s}/{int(t):03d}-{int(r)}/{v}/{view}", []).append(str(item))
+        return first_few([f"{k} ({unit} {i[0]})" if len(i) == 1 else
+                          f"{k} ({len(i)} {unit}s: {', '.join(i[:3])}{', ...' * (len(i) > 3)})"
+                          for k, i in by.items()])
+
+    parts = [f"only in the run: {grouped(run - base)}" if run - base else "",
+             f"only in the baseline: {grouped(base - run)}" if base - run else ""]
+    return f"{what} differ ({'; '.join(p for p in parts if p)})" if any(parts) else ""
+
+
+def _same_coverage(run: Run, base: _Baseline, what: _Comparison, common_only: bool) -> None:
+    """Refuse when one side lacks checks or renders the other has (a job that animated
+    nothing, a version that dropped a check): compared on the rest, it would pass what it never
+    saw. With ``common_only`` only the checks both have are compared; a render the baseline
+    lacks is a skipped gate. The run's failed jobs are failed gates of their own."""
+    failed = {k for k in map(_job_task, run.failed) if k is not None}
+    checks = (_checks(what.results, failed), _checks(what.base_results, failed))
+    renders = (_render_keys(what.renders, failed), _render_keys(what.base_renders, failed))
+    found = [_lacking(name, unit, *sides) for name, unit, sides in
+             (("checks", "check", checks), ("renders", "frame", renders)) if None not in sides]
+    found = [f for f in found if f]
+    if renders[1] is None:
+        what.notes.append("The renders were not compared as sets: the golden directory does "
+                          f"not list its images (no {GOLDEN_RENDERS}: written before goldens "
+                          "listed them); a render it lacks is a skipped gate.")
+    if found and not common_only:
+        raise MismatchedBaseline("the run and its baseline do not hold the same checks and "
+                                 "renders, so a gate on the rest would pass what it never saw: "
+                                 + "; ".join(found) + " (find why a side lacks them, or pass "
+                                 "--common-only to compare only what both have)",
+                                 path=base.path)
+    if found:
+        common = checks[0] & checks[1] if None not in checks else None
+        if common is not None:
+            what.results, what.base_results = (
+                df[np.fromiter((k in common or k[:4] in failed for k in _check_rows(df)), bool,
+                               count=len(df))].reset_index(drop=True)
+                for df in (what.results, what.base_results))
+        what.differences += found
+        what.notes.append("Compared on the checks and renders both have only (--common-only): "
+                          + "; ".join(found) + ".")
+
+
+def _compare(run: Run, base: _Baseline, what: _Comparison) -> list[GateResult]:
+    """The metric gates (where the baseline has results) and the image gates; a gate that
+    compared nothing refuses."""
+    results = [] if what.base_results is None else metric_gates(what.results, what.base_results)
+    reference = base.golden or _renders_as_golden(base.run, run.root / ".gate-baseline")
+    images = image_gates(Run(run.root, what.results, run.ratings, run.meta, what.renders),
+                         reference)
+    if not any(r.status != "skip" for r in results + images):
+        where = " on what both share (--common-only)" if what.differences else ""
+        raise NothingCompared(
+            f"nothing was compared with the baseline {base.path}{where}: {len(what.results)} "
+            f"result rows and {len(what.renders)} renders gave no metric or image gate "
+            f"({len(images)} renders without a baseline image); a gate that compares nothing "
+            "is not a pass", path=run.root)
+    return results + images
+
+
 def gate(run_dir: str | os.PathLike, baseline: str | os.PathLike, *,
          out_dir: str | os.PathLike | None = None,
          common_only: bool = False, jobs: bool = True) -> tuple[bool, list[GateResult]]:
@@ -352,8 +563,9 @@ def gate(run_dir: str | os.PathLike, baseline: str | os.PathLike, *,
     Raises
     ------
     MismatchedBaseline
-        When the scopes or the corpus files (their digests) differ and ``common_only`` is
-        False (the message says what differs).
+        When the scopes or the corpus files (their digests) differ, or one side lacks checks
+        or renders the other has (outside the run's failed jobs), and ``common_only`` is False
+        (the message says what differs).
     IncompleteRun
         When the baseline has failed or missing jobs among what is compared, or the run has
         missing ones (its failed jobs are failed gates, listed).
@@ -361,80 +573,14 @@ def gate(run_dir: str | os.PathLike, baseline: str | os.PathLike, *,
         When no metric or image gate could be applied.
     """
     run = load_run(run_dir)
-    base_path = Path(baseline)
-    if (base_path / GOLDEN_MARK).is_file():
-        base_meta = json.loads((base_path / GOLDEN_MARK).read_text(encoding="utf-8")).get("run", {})
-        snap = base_path / "results.parquet"
-        base_results = pd.read_parquet(snap) if snap.is_file() else None
-        base_summary: dict = {}  # cassi golden refuses runs with failed jobs
-        reference = base_path
-    elif (base_path / "results.parquet").is_file():
-        base_run = load_run(base_path)
-        base_meta, base_results = base_run.meta, base_run.results
-        base_summary = base_run.summary
-        reference = None
-    else:
-        raise CassiInputError("baseline is neither a run directory (results.parquet) nor a "
-                              f"golden directory ({GOLDEN_MARK})", path=base_path)
-    notes: list[str] = []
-    run_results, renders = run.results, run.renders
-    scope, base_scope = run_scope(run.meta), run_scope(base_meta)
-    known = all(m.get("tasks_resolved") is not None for m in (run.meta, base_meta))
-    differences = scope_differences(scope, base_scope) if known else []
-    digests, base_digests = input_digests(run.meta), input_digests(base_meta)
-    changed: set[tuple] = set()
-    if digests is None or base_digests is None:
-        who = " and ".join(w for w, d in (("the run", digests), ("the baseline", base_digests))
-                           if d is None)
-        notes.append(f"The corpus files were not compared: {who} does not record their digests "
-                     "(run.json from before they were recorded).")
-    else:
-        changed = {t for t in set(digests) & set(base_digests) if digests[t] != base_digests[t]}
-        if changed:
-            differences.append(f"corpus files differ for {len(changed)} task file(s) "
-                               f"({_fmt(changed)}): the runs read other data")
-    if differences and not common_only:
-        raise MismatchedBaseline("the baseline does not cover what the run covers, so their "
-                                 "gates cannot compare like with like: " + "; ".join(differences)
-                                 + " (rerun with the same settings, or pass --common-only to "
-                                 "compare only what both share)", path=base_path)
-    keys = None
-    if differences:
-        keys = {(s, t, r, v) for s, t, r in (scope["tasks"] & base_scope["tasks"]) - changed
-                for v in scope["versions"] & base_scope["versions"]}
-        views = scope["views"] & base_scope["views"]
-        run_results = _restrict(run_results, keys, views)
-        base_results = None if base_results is None else _restrict(base_results, keys, views)
-        renders = _restrict(renders, keys, views)
-        notes.append("Compared on the common task files, versions and views only (--common-only): "
-                     + "; ".join(differences) + ".")
-    base_failed, base_missing = incomplete_jobs(base_meta, base_summary, base_results, keys)
-    if base_failed or base_missing:
-        raise IncompleteRun("the baseline has failed or missing jobs, so its results cannot "
-                            "stand for what the run is compared with: "
-                            + _fmt_list(base_failed + base_missing) + " (gate against a "
-                            "complete run or golden directory)", path=base_path)
-    _, missing = incomplete_jobs(run.meta, run.summary, run.results, keys)
-    if missing:
-        raise IncompleteRun("the run lacks jobs it planned (neither results nor a job record): "
-                            + _fmt_list(missing), path=run.root)
-    results = job_gates(run) if jobs else []
-    if base_results is not None:
-        results += metric_gates(run_results, base_results)
-    if reference is None:
-        reference = _renders_as_golden(base_run, run.root / ".gate-baseline")
-    results += image_gates(Run(run.root, run_results, run.ratings, run.meta, renders), reference)
-    compared = [r for r in results if r.gate in ("metric", "image") and r.status != "skip"]
-    if not compared:
-        where = " on what both share (--common-only)" if differences else ""
-        raise NothingCompared(
-            f"nothing was compared with the baseline {base_path}{where}: {len(run_results)} "
-            f"result rows and {len(renders)} renders gave no metric or image gate "
-            f"({sum(r.gate == 'image' for r in results)} renders without a baseline image); "
-            "a gate that compares nothing is not a pass", path=run.root)
+    base = _load_baseline(Path(baseline))
+    what = _like_with_like(run, base, common_only)
+    _require_complete(run, base, what.keys)
+    _same_coverage(run, base, what, common_only)
+    results = (job_gates(run) if jobs else []) + _compare(run, base, what)
     passed = not any(r.status == "fail" for r in results)
-    write_gate_report(Path(out_dir or run.root), passed, results, baseline=str(base_path),
-                      notes=notes)
+    write_gate_report(Path(out_dir or run.root), passed, results, baseline=str(base.path),
+                      notes=what.notes)
     return passed, results
 
 
@@ -479,28 +625,57 @@ def write_gate_report(out_dir: Path, passed: bool, results: list[GateResult], *,
 def update_golden(run_dir: str | os.PathLike, golden_dir: str | os.PathLike) -> int:
     """Make ``run_dir``'s renders and results the golden baseline (the only way goldens change).
 
+    A run with failed or missing jobs, or one that evaluated nothing, is refused; so is a render
+    that is not what its name says or that does not decode, before any golden image changes.
     Returns the number of images written.
     """
     run = load_run(run_dir)
     failed, missing = incomplete_jobs(run.meta, run.summary, run.results)
     if failed or missing:
         raise IncompleteRun("a run with failed or missing jobs cannot be the golden baseline: "
-                            + _fmt_list(failed + missing) + " (rerun it to completion first)",
+                            + first_few(failed + missing) + " (rerun it to completion first)",
                             path=run.root)
+    if run.results.empty:
+        skipped = [f"{k}: {why}" for k, why in sorted(run.skipped.items())]
+        raise IncompleteRun("the run evaluated nothing (0 result rows"
+                            + (f"; every job skipped: {first_few(skipped)}" if skipped else "")
+                            + "), so it cannot be the golden baseline", path=run.root)
     golden = writable_dir(golden_dir, "golden directory")
-    n = 0
-    for _, row in run.renders.iterrows():
-        if not str(row["path"]).endswith(".png"):
-            continue
-        dest = golden / golden_key(row)
-        with replacing(dest) as tmp:
-            shutil.copyfile(row["path"], tmp)
-        n += 1
+    listed = run.renders[run.renders["path"].astype(str).str.endswith(".png")]
+    for tmp, dest in _staged_images(listed, golden):
+        os.replace(tmp, dest)
     with replacing(golden / "results.parquet") as tmp:
         run.results.to_parquet(tmp, index=False)
+    with replacing(golden / GOLDEN_RENDERS) as tmp:
+        listed.drop(columns="path").to_parquet(tmp, index=False)
     scope = {k: run.meta.get(k) for k in ("tasks_resolved", "versions_resolved",
                                           "views_resolved", "preset")}
     atomic_write_text(golden / GOLDEN_MARK, json.dumps(
-        {"from_run": str(Path(run_dir).resolve()), "images": n, "synthetic": run.synthetic,
-         "run": scope}, indent=2) + "\n")
-    return n
+        {"from_run": str(Path(run_dir).resolve()), "images": len(listed),
+         "synthetic": run.synthetic, "run": scope}, indent=2) + "\n")
+    return len(listed)
+
+
+def _staged_images(renders: pd.DataFrame, golden: Path) -> list[tuple[Path, Path]]:
+    """Each render copied to a temporary name beside its golden image, checked against its
+    name and decoded as written: (temporary, golden image) pairs, or a refusal naming the
+    render with every temporary removed."""
+    staged: list[tuple[Path, Path]] = []
+    try:
+        for _, row in renders.iterrows():
+            src, dest = Path(row["path"]), golden / golden_key(row)
+            corrupt = _not_its_name(src)
+            if corrupt:  # names the render
+                raise CassiInputError(f"{corrupt}; a golden image must be what the run rendered")
+            staged.append((atomic_tmp_path(dest), dest))
+            shutil.copyfile(src, staged[-1][0])
+            try:
+                read_rgb8(staged[-1][0])
+            except Exception as err:  # noqa: BLE001 - any decoder error: the image is unusable
+                raise CassiInputError(f"the render does not decode ({err}); a golden image "
+                                      "must be one", path=src) from err
+    except BaseException:
+        for tmp, _ in staged:
+            tmp.unlink(missing_ok=True)
+        raise
+    return staged

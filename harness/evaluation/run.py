@@ -11,7 +11,7 @@ import time
 
 from cassi.common.atomic import atomic_write_text
 from cassi.common.cores import usable_cores
-from cassi.common.errors import CassiInputError
+from cassi.common.errors import CassiInputError, first_few
 
 from cassi.harness.evaluation import config as C
 from cassi.harness.evaluation.evalset import default_tasks, explicit_tasks
@@ -104,6 +104,11 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
     checked = check_inputs(corpus, tasks, get_profile=get_profile)
     _warn(checked.warnings)
     tasks = checked.tasks
+    if not any(t.usable for t in tasks):
+        raise CassiInputError("nothing to evaluate: no task file of the run is usable ("
+                              + first_few([f"{t.subject}/{t.task:03d}-{t.rep}: {t.reason}"
+                                        for t in tasks]) + "), and a run that evaluates nothing "
+                              "would prove nothing", path=corpus.root)
     synthetic = bool(getattr(corpus, "is_synthetic", False))
     pipeline = pipeline or cassi_pipeline(render=bool(views))
     provenance = code_provenance(versions)
@@ -122,8 +127,15 @@ def run(cfg: C.RunConfig, *, progress: bool = True, pipeline: Pipeline | None = 
                              retries=cfg.retries, initializer=worker_env,
                              initargs=(cfg.threads,), threads=cfg.threads)
     with executor:
-        return _run(cfg, executor, corpus, tasks, versions, views, variant, synthetic, pipeline,
-                    provenance, workers, progress)
+        result = _run(cfg, executor, corpus, tasks, versions, views, variant, synthetic,
+                      pipeline, provenance, workers, progress)
+    if result.ok and result.results.empty:
+        # every job skipped in its worker (the plan thought the files usable): no failure, and
+        # nothing to show for it
+        raise CassiInputError("the run evaluated nothing: every job was skipped ("
+                              + first_few([f"{r.key}: {r.reason}" for r in result.summary.skipped])
+                              + "), so its empty tables prove nothing", path=cfg.out)
+    return result
 
 
 def run_options(cfg: C.RunConfig) -> tuple[tuple[str, object], ...]:

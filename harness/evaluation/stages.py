@@ -108,6 +108,11 @@ def load_usable(subject_data, job: Job, data: bytes | None = None):
     return rec
 
 
+class NoFrameAnimated(RuntimeError):
+    """A version animated no frame of a usable task file: the version failed (the job fails),
+    the file was not unusable (which would skip it)."""
+
+
 def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> StageOutput:
     """Animate every frame (and again with T2, then T3, withheld: Table G's leave-one-out
     tongue), run the geometric checks, choose and keep the frames to render.
@@ -174,8 +179,8 @@ def animate_to_file(version, profile, face, rec, tmp: Path) -> StreamedAnimation
         times.append(np.asarray(anim.time_us, np.int64))
         diags.append(anim.diagnostics.filter(items=kept))
         name = anim.version
-    if store is None:
-        raise SkipJob("the version animated no frame")
+    if store is None or not sum(f.size for f in frames):
+        raise NoFrameAnimated(f"{name or 'the version'} animated no frame of a usable task file")
     return StreamedAnimation(name, np.concatenate(frames), np.concatenate(times), store,
                              pd.concat(diags, ignore_index=True))
 
@@ -184,8 +189,6 @@ def _geometry_output(job: Job, ctx: StageContext, rec, anim: StreamedAnimation,
                      rows: pd.DataFrame) -> StageOutput:
     """Pick the frames to render from the checks' rows and keep their positions."""
     frames = np.asarray(anim.frames, dtype=np.int64)
-    if frames.size == 0:
-        raise SkipJob("the version animated no frame")
     step = int(ctx.option("animate_stride", 0) or 0)
     pick, by_view = frames_to_render(
         frames, rows, task=job.task, version=job.version, stride=ctx.stride,

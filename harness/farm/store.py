@@ -18,6 +18,9 @@ Then a blob is written into the cache and hard-linked into ``OUT/objects`` (copi
 two are on different file systems), so a run directory stays whole by itself and costs no
 more disk; a job whose digest the cache holds is reused from it (its manifest and blobs linked
 into OUT) instead of run. :func:`collect_garbage` removes what no kept run links any more.
+Blobs are read-only: a hard link shares its bytes with the store and every run that links
+them, so a write into one run's copy would change them all (readers that trust a blob's name
+verify it too: :func:`sha256_file_once`).
 
 A job is done when its manifest exists, names the same input digest as the job about to run,
 and every blob it lists exists and hashes to its name. The manifest is written last, so a
@@ -84,6 +87,27 @@ def sha256_file(path: str | os.PathLike) -> str:
     return h.hexdigest()
 
 
+#: (device, inode, size, mtime, ctime) -> SHA-256 of the files hashed by sha256_file_once.
+_HASHED: dict[tuple[int, ...], str] = {}
+
+
+def _identity(st: os.stat_result) -> tuple[int, ...]:
+    return st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns
+
+
+def sha256_file_once(path: str | os.PathLike) -> str:
+    """:func:`sha256_file`, hashed once per process while the file stays the same (its
+    device, inode, size, modification and change times: any write changes the change time),
+    so a blob linked under several names (a store and the runs linking it) is read once."""
+    before = _identity(os.stat(path))
+    digest = _HASHED.get(before)
+    if digest is None:
+        digest = sha256_file(path)
+        if _identity(os.stat(path)) == before:  # not written to while it was read
+            _HASHED[before] = digest
+    return digest
+
+
 def _safe_key(key: str) -> str:
     """Check a job key before it becomes a path: relative, no '..', plain characters."""
     parts = key.split("/")
@@ -117,6 +141,14 @@ def _hashes_to_its_name(base: Path, ref: BlobRef, good: set[str]) -> bool:
     if ok:
         good.add(ref.relpath)
     return ok
+
+
+def _read_only(path: Path) -> None:
+    """Take the write permissions off a blob (where this user may: else it stays as it is)."""
+    with contextlib.suppress(OSError):
+        mode = path.stat().st_mode
+        if mode & 0o222:
+            os.chmod(path, mode & ~0o222)
 
 
 class OutputStore:
@@ -193,13 +225,13 @@ class OutputStore:
         ref = BlobRef(sha256_bytes(data), suffix)
         if self.cache is not None:
             if not self._cache_blob_ok(ref):
-                atomic_write_bytes(self.cache / ref.relpath, data, durable=False)
+                atomic_write_bytes(self.cache / ref.relpath, data, durable=False, read_only=True)
                 self._cache_good.add(ref.relpath)
             if not self._blob_ok(ref):
                 self._link_from_cache(ref)
             return ref
         if not self._blob_ok(ref):
-            atomic_write_bytes(self.root / ref.relpath, data, durable=False)
+            atomic_write_bytes(self.root / ref.relpath, data, durable=False, read_only=True)
             self._good.add(ref.relpath)
         return ref
 
@@ -208,7 +240,9 @@ class OutputStore:
 
     def _link_from_cache(self, ref: BlobRef) -> None:
         """Put the cache's (verified) blob into this run directory: a hard link, or a copy
-        where the cache is on another file system; atomic either way."""
+        where the cache is on another file system; atomic either way, read-only (a blob a
+        store from before read-only blobs holds is made so first)."""
+        _read_only(self.cache / ref.relpath)
         link_or_copy(self.cache / ref.relpath, self.root / ref.relpath)
         self._good.add(ref.relpath)
 

@@ -49,3 +49,19 @@ def test_replacing_renames_on_success_and_leaves_nothing_when_the_writer_fails(t
             raise RuntimeError("writer failed")
     assert dest.read_bytes() == b"new"                       # the old file intact
     assert sorted(p.name for p in tmp_path.iterdir()) == ["plot.png"]   # no .tmp left
+
+
+def test_a_copy_across_file_systems_keeps_a_read_only_blob_read_only(tmp_path, monkeypatch):
+    import errno
+
+    src, dest = tmp_path / "a.bin", tmp_path / "run" / "b.bin"
+    src.write_bytes(b"render")
+    src.chmod(0o444)
+
+    def other_file_system(*_):
+        raise OSError(errno.EXDEV, "Invalid cross-device link")
+
+    monkeypatch.setattr(os, "link", other_file_system)
+    link_or_copy(src, dest)
+    assert dest.read_bytes() == b"render" and not os.path.samefile(src, dest)
+    assert dest.stat().st_mode & 0o777 == 0o444    # a write into the copy is refused too

@@ -12,7 +12,8 @@ from cassi.data.face.model import build_face, render_topology
 from cassi.data.face.params import jaw_rotation
 from cassi.harness.cli import main
 from cassi.renderer.render import FaceRenderer
-from cassi.reports.gates import gate, image_metrics, metric_gates, update_golden
+from cassi.reports.gates import (MismatchedBaseline, gate, image_metrics, metric_gates,
+                                 update_golden)
 
 KEY = ("JW11", 19, "cassi-2.0", "front", 0)
 
@@ -64,7 +65,11 @@ def test_golden_roundtrip_pass_fail_and_skip(tmp_path):
 
     moved = write_run(tmp_path / "run2", res, images={KEY: np.roll(image(1), 8, axis=0),
                                                       ("JW12", 19, "cassi-2.0", "side", 0): image(3)})
-    ok, results = gate(moved, golden)
+    # a render the golden lacks is refused, or (--common-only) a skipped gate, never a pass
+    with pytest.raises(MismatchedBaseline, match=r"renders differ \(only in the run: "
+                                                 r"JW12/019-1/cassi-2.0/side \(frame 0\)\)"):
+        gate(moved, golden)
+    ok, results = gate(moved, golden, common_only=True)
     statuses = sorted(r.status for r in results if r.gate == "image")
     assert not ok and statuses == ["fail", "skip"]
     report = json.loads((moved / "gate.json").read_text())

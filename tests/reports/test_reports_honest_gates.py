@@ -16,6 +16,7 @@ from cassi.harness.cli import main
 from cassi.harness.evaluation.config import RunConfig
 from cassi.harness.evaluation.nightly import previous_night
 from cassi.harness.evaluation.run import run
+from cassi.harness.farm import store
 from cassi.harness.farm.tableset import TableSetError
 from cassi.reports import gates
 from cassi.reports.gates import (IncompleteRun, MismatchedBaseline, NothingCompared, gate,
@@ -203,9 +204,11 @@ def test_an_identical_render_passes_without_being_decoded(tmp_path, monkeypatch)
         gate(c, golden)
 
 
-def test_renders_named_by_the_same_digest_pass_without_being_read(corpus, tmp_path, monkeypatch):
-    """Night against night: both renders are store blobs named by their SHA-256, so equal
-    names are equal bytes; the gate neither decodes nor hashes them."""
+def test_renders_named_by_the_same_digest_pass_undecoded_and_each_hashed_once(corpus, tmp_path,
+                                                                            monkeypatch):
+    """Night against night: both renders are store blobs named by their SHA-256; the gate
+    verifies each file's bytes against its name once (a name alone is no proof: a write into
+    a linked blob keeps it) and decodes none of them."""
     cfg = RunConfig(out=tmp_path / "a", corpus=corpus, subjects=("JW45",), tasks=(2,),
                     versions=("cassi-1.0",), views=("front",), stride=0, extremes=1, workers=1)
     run(cfg, progress=False)
@@ -213,11 +216,15 @@ def test_renders_named_by_the_same_digest_pass_without_being_read(corpus, tmp_pa
     paths = pd.read_parquet(tmp_path / "a" / "renders.parquet")["path"]
     assert len(paths) and all(len(Path(p).stem) == 64 for p in paths)  # content-addressed
 
-    def no_reading(*_):
-        raise AssertionError("a render named by its digest was read")
+    def no_decoding(*_):
+        raise AssertionError("a render named by its digest was decoded")
 
-    monkeypatch.setattr(gates, "read_rgb8", no_reading)
-    monkeypatch.setattr(gates, "sha256_file", no_reading)
+    hashed, real = [], store.sha256_file
+    monkeypatch.setattr(gates, "read_rgb8", no_decoding)
+    monkeypatch.setattr(store, "sha256_file", lambda p: hashed.append(Path(p).resolve()) or real(p))
     passed, results = gate(tmp_path / "a", tmp_path / "b")
     image_gates = [r for r in results if r.gate == "image"]
     assert passed and image_gates and {r.status for r in image_gates} == {"pass"}
+    assert len(hashed) == len(set(hashed)) == 2 * len(paths)   # a's and b's, once each
+    hashed.clear()
+    assert gate(tmp_path / "a", tmp_path / "b")[0] and not hashed  # unchanged: not read again

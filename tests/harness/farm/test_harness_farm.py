@@ -159,6 +159,7 @@ def test_rerun_skips_everything_and_gives_identical_tables(reference, tmp_path):
 def test_corrupt_output_is_recomputed(reference, tmp_path):
     out, first = reference
     blobs = sorted((out / "objects").rglob("*.npz"))
+    blobs[0].chmod(0o644)  # blobs are read-only: this is damage done on purpose
     blobs[0].write_bytes(b"garbage")
     res = _run(out, workers=1)
     assert res.summary.counts()["done"] >= 1

@@ -27,6 +27,7 @@ def test_a_blob_left_short_is_not_trusted_and_is_rewritten(tmp_path, left):
     store.prepare()
     ref = store.put(b"frame bytes", ".png")
     store.write_manifest("a/job", "d1", {"render": ref})
+    store.path(ref).chmod(0o644)   # read-only as written: here the damage is the test's
     store.path(ref).write_bytes(left)  # what a power loss before the data reached disk leaves
 
     fresh = OutputStore(tmp_path)  # the process that resumes the run
