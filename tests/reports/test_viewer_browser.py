@@ -323,3 +323,34 @@ def test_a_lost_webgl_context_is_restored_and_drawn(report, browser):
     assert compare_images(after, before).passed, "the canvas is not drawn again after a restore"
     assert p.page.text_content("#status") == "ready"
     p.page.close()
+
+
+@pytest.fixture(scope="module")
+def report19(tmp_path_factory):
+    """JW11 task 19, where cassi-1.0's Table A cell names three faults."""
+    root = tmp_path_factory.mktemp("viewer19")
+    assert cli_main(["run", "--subjects", "JW11", "--versions", "cassi-1.0", "--tasks", "19",
+                     "--views", "front", "--no-progress", "--out", str(root / "run")]) == 0
+    write_report(root / "run", root / "report")
+    return root / "run", root / "report"
+
+
+def test_each_fault_a_table_cell_names_opens_its_own_frame(report19, browser):
+    run, rep = report19
+    p = Page(browser, (rep / "index.html").as_uri())
+    cells = [c for c in p.page.locator("td").all() if c.locator("a.fault").count() >= 2]
+    assert cells, "no table cell names several faults in this run"
+    links = cells[0].locator("a.fault")
+    hrefs = [links.nth(i).get_attribute("href") for i in range(links.count())]
+    checks = [re.search(r"check=([^&]+)", h).group(1) for h in hrefs]
+    assert len(set(checks)) == len(checks), hrefs
+    # each link's text is its own check's, and the second opens on its own event
+    for i, check in enumerate(checks):
+        assert CHECKS[check].text in links.nth(i).text_content()
+    frame = int(re.search(r"frame=(\d+)", hrefs[1]).group(1))
+    links.nth(1).click()
+    p.ready()
+    assert p.frame() == frame
+    assert p.page.locator("#events li.hl").get_attribute("data-check") == checks[1]
+    assert p.errors == []
+    p.page.close()
