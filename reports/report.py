@@ -12,6 +12,7 @@ import re
 from pathlib import Path
 
 import jinja2
+import numpy as np
 import pandas as pd
 
 from cassi.common.atomic import atomic_write_text
@@ -26,10 +27,12 @@ from cassi.harness.evaluation.stages import MASKS_OUTPUT
 from cassi.harness.farm.executors import LocalExecutor
 from cassi.harness.farm.workers import thread_env
 from cassi.harness.rubric import (AGGREGATION_RULES, CHECKS, RATINGS, component_ratings,
-                                  file_verdicts, rating_counts, table_c_rule, table_title,
-                                  shown_beside, version_comparisons)
+                                  file_verdicts, negatives_text, rating_counts, table_c_rule,
+                                  table_title, table_totals, shown_beside, verdicts,
+                                  version_comparisons, version_totals)
 from cassi.harness.rubric.paired import (BOOTSTRAP_N, BOOTSTRAP_SEED, TIE_TOLERANCE,
-                                         paired_comparisons, paired_sentence)
+                                         bootstrap_median, paired_comparisons, paired_sentence,
+                                         sign_test)
 from cassi.reports.tables import markdown_table
 from cassi.reports.viewer import mask_overlay, viewer_href, write_viewers
 from cassi.data.corpus.disk import Corpus
@@ -72,10 +75,12 @@ def evidence_href(subject: str, version: str, table: str) -> str:
 
 
 def _table_sections(run: Run, cr: pd.DataFrame, out: Path,
-                    faults: dict | None = None) -> list[dict]:
-    """The thesis tables; ``faults`` maps (subject, version, table, component) to the viewer
-    at the frame of the cell's first fault (:func:`_first_faults`)."""
-    faults = faults or {}
+                    links: dict | None = None) -> list[dict]:
+    """The thesis tables; each fault a cell names links to the viewer at its frame
+    (``links``: :func:`_fault_links`)."""
+    links = links or {}
+    verdict_rows = {k: g for k, g in verdicts(run.results).groupby(
+        ["subject", "version", "table", "component"], sort=True)}
     sections = []
     for table in sorted(cr["table"].unique()):
         tid = slug(table)
@@ -106,7 +111,11 @@ def _table_sections(run: Run, cr: pd.DataFrame, out: Path,
                         "reason": lookup.at[key, "reason"],
                         "level": RATINGS.index(lookup.at[key, "rating"]),
                         "href": f"{page}#{evidence_anchor(version, table)}",
-                        "viewer": faults.get((subject, version, table, c))})
+                        "faults": _cell_faults(verdict_rows.get((subject, version, table, c),
+                                                                pd.DataFrame(columns=["check",
+                                                                                      "negatives"])),
+                                               lookup.at[key, "text"], links,
+                                               (subject, version, table, c))})
             rows.append({"subject": subject, "href": page, "cells": cells})
         grid = {"versions": versions, "components": components, "rows": rows, "files": files}
         sections.append({"id": tid, "table": table, "title": table_title(table),
@@ -161,7 +170,8 @@ def _criterion(run: Run, out: Path) -> dict | None:
                      for (v, s, t, r), (m, d) in zip(table.index, table.itertuples(index=False))]}
 
 
-def _comparison(run: Run, previous: Run | None, out: Path) -> dict | None:
+def _comparison(run: Run, previous: Run | None, out: Path, diff: pd.DataFrame | None) -> dict | None:
+    """The changes since ``previous`` (``diff``: :func:`cmp.compare_components` of the two)."""
     if previous is None:
         return None
     checks = cmp.compare_checks(previous.results, run.results)
@@ -171,9 +181,72 @@ def _comparison(run: Run, previous: Run | None, out: Path) -> dict | None:
     changed["subject_href"] = [f"subjects/{slug(s)}.html" for s in changed["subject"]]
     changed = changed.astype(object).where(changed.notna(), "")
     return {"name": previous.name,
-            "summary": cmp.change_summary(cmp.compare_components(previous.results, run.results))
-            .to_dict("records"),
+            "summary": cmp.change_summary(diff).to_dict("records"),
             "changed": changed.to_dict("records")}
+
+
+def _best(totals: pd.Series) -> dict:
+    """The versions with the fewest negatives of ``totals`` (version -> negatives)."""
+    low = int(totals.min())
+    best = [v for v, n in totals.items() if int(n) == low]
+    return {"versions": best, "negatives": low, "tie": len(best) > 1}
+
+
+def _overview(run: Run, previous: Run | None, cr: pd.DataFrame, diff: pd.DataFrame | None,
+              gate: dict | None) -> dict | None:
+    """The report's first screen: negatives per version and table and overall (the rubric's
+    one count, :func:`table_totals`), each table's ratings, the best version per table, the
+    change since the previous run with a paired test over the table cells, and the gate."""
+    totals = table_totals(run.results, ratings=cr)
+    if totals.empty:
+        return None
+    tables = sorted(totals["table"].unique())
+    versions = order_versions(totals["version"].unique())
+    grid = totals.pivot(index="version", columns="table", values="negatives").reindex(versions)
+    overall = version_totals(run.results, ratings=cr).set_index("version")["negatives"]
+    before = before_overall = None
+    if previous is not None:
+        prev = table_totals(previous.results)
+        before = prev.set_index(["version", "table"])["negatives"] if len(prev) else None
+        before_overall = prev.groupby("version")["negatives"].sum() if len(prev) else None
+    counts = {t: rating_counts(run.results, t, ratings=cr) for t in tables}
+    rows = []
+    for v in versions:
+        cells = []
+        for t in tables:
+            n = grid.at[v, t]
+            if pd.isna(n):
+                cells.append(None)
+                continue
+            c = counts[t].loc[v]
+            was = before.get((v, t)) if before is not None else None
+            cells.append({"negatives": int(n), "href": f"#table-{slug(t)}",
+                          "delta": None if was is None else int(n) - int(was),
+                          "ratings": ", ".join(f"{int(k)} {r}" for r, k in c.items() if k)})
+        was = before_overall.get(v) if before_overall is not None else None
+        rows.append({"version": v, "cells": cells, "negatives": int(overall[v]),
+                     "delta": None if was is None else int(overall[v]) - int(was),
+                     "change": _change(diff, v) if diff is not None else None})
+    best = [_best(grid[t].dropna()) for t in tables]
+    return {"tables": [{"id": slug(t), "name": t, "title": table_title(t)} for t in tables],
+            "rows": rows, "best": best, "best_overall": _best(overall),
+            "previous": previous.name if previous is not None else None,
+            "n_boot": BOOTSTRAP_N, "seed": BOOTSTRAP_SEED, "gate": gate}
+
+
+def _change(diff: pd.DataFrame, version: str) -> dict | None:
+    """A version's change over the table cells both runs rated: cells better and worse, the
+    sign test on them, and the median change per cell with its bootstrap 95% interval (the
+    paired comparisons' tests, :mod:`cassi.harness.rubric.paired`)."""
+    d = diff[(diff["version"] == version) & diff["negatives_before"].notna()
+             & diff["negatives_after"].notna()]["delta"].astype(float).to_numpy()
+    if not len(d):
+        return None
+    low, high = bootstrap_median(d)
+    better, worse = int((d < 0).sum()), int((d > 0).sum())
+    return {"cells": len(d), "better": better, "worse": worse, "net": int(d.sum()),
+            "median": float(np.median(d)), "low": low, "high": high,
+            "p": sign_test(better, worse)}
 
 
 def _evidence_frames(results: pd.DataFrame) -> dict[tuple, int]:
@@ -197,14 +270,14 @@ def _image_dest(out: Path, subject: str, version: str, task: int, rep: int, fram
         f"{int(task):03d}_{int(rep)}_{int(frame):05d}_{slug(view)}.png"
 
 
-def _first_faults(run: Run, fv: pd.DataFrame, viewers: dict) -> dict[tuple, str]:
-    """(subject, version, table, component) -> the task viewer at the first frame of the
-    cell's worst fault, its event highlighted (relative to the report)."""
+def _fault_links(run: Run, fv: pd.DataFrame, viewers: dict) -> dict[tuple, str]:
+    """(subject, version, table, component, check) -> the task viewer at the frame of the
+    check's worst file, its event highlighted (relative to the report)."""
     evidence = _evidence_frames(run.results)
     present = set(fv["version"])
     out: dict[tuple, str] = {}
     for r in _worst_first(fv[fv["raw_negatives"] > 0]).itertuples(index=False):
-        key = (r.subject, r.version, r.table, r.component)
+        key = (r.subject, r.version, r.table, r.component, r.check)
         file = (r.subject, int(r.task), int(r.rep))
         frame = evidence.get((*file, r.version, r.check))
         if key in out or frame is None or file not in viewers:
@@ -212,6 +285,23 @@ def _first_faults(run: Run, fv: pd.DataFrame, viewers: dict) -> dict[tuple, str]
         out[key] = viewer_href(slug(r.subject), *file[1:], frame=frame, a=r.version,
                                b=shown_beside(r.table, r.version, present), check=r.check)
     return out
+
+
+def _cell_faults(v: pd.DataFrame, text: str, links: dict, key: tuple) -> list[dict]:
+    """A table cell's text as its faults, each linked to its own frame (``links``:
+    :func:`_fault_links`): the pieces of :func:`negatives_text`, one per charged check, then
+    what the cell's text says beyond them (Table C's comparison), unlinked."""
+    faults, said = [], []
+    for r in v.itertuples(index=False):
+        piece = negatives_text(pd.DataFrame({"check": [r.check], "negatives": [r.negatives]}))
+        if piece:
+            said.append(piece)
+            faults.append({"text": piece, "href": links.get((*key, r.check))})
+    joined = "; ".join(said)
+    rest = text[len(joined):].lstrip("; ") if text.startswith(joined) else text
+    if rest:
+        faults.append({"text": rest, "href": None})
+    return faults
 
 
 def _viewer_images(run: Run, out: Path):
@@ -547,11 +637,13 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
     if gate is not None:
         atomic_write_text(out / "gate.md", (run.root / "gate.md").read_text()
                           if (run.root / "gate.md").is_file() else "")
+    diff = cmp.compare_components(previous.results, run.results) if previous is not None else None
     return env.get_template("index.html.j2").render(
         run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
+        overview=_overview(run, previous, cr, diff, gate),
         summaries=_summaries(run), paired=_paired(run, out), agreement=agree,
-        comparison=_comparison(run, previous, out),
-        tables=_table_sections(run, cr, out, _first_faults(run, fv, viewers)),
+        comparison=_comparison(run, previous, out, diff),
+        tables=_table_sections(run, cr, out, _fault_links(run, fv, viewers)),
         criterion=_criterion(run, out), rescored=_rescored(run, cr),
         videos=encoding.videos(),
         rules=AGGREGATION_RULES,

@@ -21,14 +21,14 @@ from cassi.harness.rubric.measures import DIAGNOSTICS_READ
 from cassi.harness.rubric.run import run_geometry_checks, run_image_checks
 from cassi.harness.rubric.tables import (RATING_COLUMNS, component_ratings, ratings_table, file_verdicts, negatives_text, order_versions,
                      rating_counts, table_c_rule, verdicts, version_comparisons,
-                     version_summaries, version_totals, level_ratings, LEVEL_COLUMNS)
+                     version_summaries, version_totals, table_totals, level_ratings, LEVEL_COLUMNS)
 
 __all__ = [
     "Check", "Measurement", "CHECKS", "TABLES", "TABLE_TOPICS", "RATINGS", "GOOD_RATINGS",
     "VERSION_ORDER", "shown_beside", "MIN_FRAMES", "AGGREGATION_RULES", "rate", "table_title", "get_check",
     "checks_for", "registry_table", "DIAGNOSTICS_READ", "run_geometry_checks",
     "run_image_checks", "file_verdicts",
-    "verdicts", "table_c_rule", "component_ratings", "rating_counts", "version_totals",
+    "verdicts", "table_c_rule", "component_ratings", "rating_counts", "version_totals", "table_totals",
     "version_summaries", "version_comparisons", "negatives_text", "order_versions",
     "ratings_table", "RATING_COLUMNS", "level_ratings", "LEVEL_COLUMNS",
 ]

@@ -19,7 +19,7 @@ from cassi.harness.rubric.model import GOOD_RATINGS, RATINGS, TABLE_TOPICS, TABL
 from cassi.harness.rubric.registry import CHECKS, MARKED_SHARE, TABLE_C_FROM_A
 
 __all__ = ["ratings_table", "RATING_COLUMNS", "file_verdicts", "verdicts", "table_c_rule", "component_ratings", "rating_counts",
-           "version_totals", "version_summaries", "version_comparisons", "negatives_text", "order_versions",
+           "version_totals", "table_totals", "version_summaries", "version_comparisons", "negatives_text", "order_versions",
            "VERDICT_COLUMNS", "LEVEL_COLUMNS", "level_ratings"]
 
 VERDICT_COLUMNS = ["version", "table", "own_table", "subject", "component", "check", "negatives",
@@ -281,13 +281,26 @@ def rating_counts(results: pd.DataFrame, table: str, *, ratings: pd.DataFrame | 
     return counts.reindex(order_versions(cr["version"].unique()), fill_value=0).astype(int)
 
 
-def version_totals(results: pd.DataFrame) -> pd.DataFrame:
-    """Per version: total negatives over every table cell (the nightly history's number)."""
-    cr = component_ratings(results)
+def table_totals(results: pd.DataFrame, *, ratings: pd.DataFrame | None = None) -> pd.DataFrame:
+    """Per version and table: negatives summed over the table's cells (columns version, table,
+    negatives; versions in the thesis's order)."""
+    cr = component_ratings(results) if ratings is None else ratings
     if cr.empty:
+        return pd.DataFrame(columns=["version", "table", "negatives"])
+    t = cr.groupby(["version", "table"])["negatives"].sum().astype(int).reset_index()
+    rank = {v: i for i, v in enumerate(order_versions(t["version"].unique()))}
+    return t.sort_values(["version", "table"], key=lambda c: c.map(rank) if c.name == "version"
+                         else c, kind="mergesort").reset_index(drop=True)
+
+
+def version_totals(results: pd.DataFrame, *, ratings: pd.DataFrame | None = None) -> pd.DataFrame:
+    """Per version: total negatives over every table cell (the nightly history's number), the
+    sum of :func:`table_totals`."""
+    t = table_totals(results, ratings=ratings)
+    if t.empty:
         return pd.DataFrame(columns=["version", "negatives"])
-    t = cr.groupby("version")["negatives"].sum()
-    return t.reindex(order_versions(t.index)).rename("negatives").reset_index()
+    t = t.groupby("version", sort=False)["negatives"].sum()
+    return t.rename("negatives").reset_index()
 
 
 def _per_check(v: pd.DataFrame, table: str, prev: str, cur: str) -> pd.DataFrame:

@@ -114,7 +114,6 @@
   // ---- state ---------------------------------------------------------------------------
   const S = { row: 0, playing: false, speed: 0.25, view: "front", a: null, b: null, mode: "side",
               check: null, pellet: 2, loaded: {}, first: 0, last: 0 };
-  const params = new URLSearchParams(location.hash.slice(1));
 
   let renderer, sceneA, sceneB, camera, controls, meshA, meshB, meshBwire, clipPlanes = [];
   const box = $("three");
@@ -139,6 +138,18 @@
     camera = new THREE.PerspectiveCamera(22, 1, 10, 100000);
     controls = new THREE.OrbitControls(camera, renderer.domElement);
     controls.addEventListener("change", draw);
+    // A lost WebGL context (driver reset, too many contexts) is restored by three.js's renderer;
+    // the page draws on demand, so it draws again once the context is back.
+    const cv = renderer.domElement;
+    cv.addEventListener("webglcontextlost", (ev) => { ev.preventDefault(); status.textContent = "WebGL context lost: restoring…"; });
+    cv.addEventListener("webglcontextrestored", () => { status.textContent = "ready"; requestAnimationFrame(draw); });
+    window.addEventListener("resize", resize);
+  }
+
+  function resize() {   // the 3D view and the timeline follow the window's width
+    if (renderer) renderer.setSize(box.clientWidth, box.clientHeight);
+    TL.width = Math.max(320, Math.round(TL.clientWidth));
+    draw(); drawTimeline();
   }
 
   function label(id, text, left) {
@@ -161,6 +172,7 @@
       mat.clippingPlanes = clipPlanes.slice(); mat.needsUpdate = true;
     }
     document.querySelectorAll("button[data-view]").forEach((b) => b.classList.toggle("on", b.dataset.view === name));
+    showRenders(); writeHash();
     draw();
   }
 
@@ -169,6 +181,7 @@
     if (!S.loaded[an]) S.loaded[an] = await loadVersion(an);
     if (bn && !S.loaded[bn]) S.loaded[bn] = await loadVersion(bn);
     S.a = S.loaded[an]; S.b = bn ? S.loaded[bn] : null; S.mode = $("mode").value;
+    writeHash();
     for (const m of [meshA, meshB, meshBwire]) if (m) m.parent.remove(m);
     meshA = buildMesh(S.a, false); sceneA.add(meshA);
     meshB = meshBwire = null;
@@ -209,8 +222,43 @@
     $("frame").textContent = String(row);
     $("time").textContent = "t = " + rowTime(row).toFixed(3) + " s";
     $("scrub").value = String(row);
-    showRenders();
+    showRenders(); if (!S.playing) writeHash();
     draw(); drawTimeline();
+  }
+
+  // ---- the address: #frame=&a=&b=&check=&view= follows the state, and the state the address
+  let hashWritten = location.hash;
+  function writeHash() {
+    if (!S.a) return;
+    const p = new URLSearchParams();
+    p.set("frame", String(S.row)); p.set("a", S.a.name);
+    if (S.b) p.set("b", S.b.name);
+    if (S.check) p.set("check", S.check);
+    p.set("view", S.view);
+    if (S.mode !== "side") p.set("mode", S.mode);
+    const h = "#" + p.toString();
+    if (h !== location.hash) history.replaceState(null, "", h);
+    hashWritten = location.hash;
+  }
+
+  function readHash() {   // what the address asks for; names the page does not know are ignored
+    const params = new URLSearchParams(location.hash.slice(1));
+    const a = params.get("a"), b = params.get("b");
+    if (a && D.versions.includes(a)) $("va").value = a;
+    if (params.has("b")) $("vb").value = b && D.versions.includes(b) ? b : "";
+    if (params.get("mode") === "overlay" || params.get("mode") === "side") $("mode").value = params.get("mode");
+    S.check = params.get("check");
+    // open in the view the check is judged from (the link says which)
+    const v = params.get("view");
+    if (v && Object.prototype.hasOwnProperty.call(D.views, v)) S.view = v;
+    if (params.has("frame") && isFinite(Number(params.get("frame")))) S.row = Number(params.get("frame"));
+  }
+
+  async function followHash() {
+    if (location.hash === hashWritten) return;
+    hashWritten = location.hash;
+    pause(); readHash();
+    await setVersions();   // versions, view, events and frame, as the address says
   }
 
   function showRenders() {
@@ -271,7 +319,11 @@
     if (D.audio && S.speed === 1) { audio.currentTime = rowTime(S.row); audio.play().catch(() => {}); }
     requestAnimationFrame(tick);
   }
-  function pause() { S.playing = false; $("play").textContent = "play"; $("audio").pause(); }
+  function pause() {
+    const was = S.playing;
+    S.playing = false; $("play").textContent = "play"; $("audio").pause();
+    if (was) writeHash();
+  }
 
   function stepKept(dir) {
     pause();
@@ -404,27 +456,34 @@
       det.open = silent.some((e) => e.check === S.check);
       li.appendChild(det); ul.appendChild(li);
     }
+    focusEvent();
+  }
+
+  function focusEvent() {   // the highlighted event, above the fold beside the frame controls
+    const box = $("focus"); box.replaceChildren();
+    const e = S.a && allEvents().find((x) => x.check === S.check && x.version === S.a.name);
+    box.hidden = !e;
+    if (e) box.appendChild(eventItem(e));
   }
 
   // ---- start ---------------------------------------------------------------------------
   async function start() {
     const va = $("va"), vb = $("vb");
-    const a = params.get("a"), b = params.get("b");
-    if (a && D.versions.includes(a)) va.value = a;
-    if (b && D.versions.includes(b)) vb.value = b;
-    S.check = params.get("check");
-    // open in the view the check is judged from (the link says which)
-    if (params.has("view") && Object.prototype.hasOwnProperty.call(D.views, params.get("view"))) S.view = params.get("view");
     D.pellets.forEach((name, i) => { const o = document.createElement("option"); o.value = String(i); o.text = name; $("pellet").appendChild(o); });
     $("pellet").value = String(S.pellet);
     S.measured = await decode(D.measured); S.measuredFrames = await decode(D.measured_frames);
     S.first = S.measuredFrames[0]; S.last = S.measuredFrames[S.measuredFrames.length - 1];
     const scrub = $("scrub"); scrub.min = String(S.first); scrub.max = String(S.last);
-    S.row = params.has("frame") ? Number(params.get("frame")) : S.first;
-    if (!isFinite(S.row)) S.row = S.first;
+    S.row = S.first;
+    readHash();
     if (D.audio) $("audio").src = D.audio;
+    const kept = "every " + D.stride + "th recording row and every frame a check points at";
+    $("prev").title = "the previous kept frame (" + kept + ")";
+    $("next").title = "the next kept frame (" + kept + ")";
     initThree();
+    TL.width = Math.max(320, Math.round(TL.clientWidth));
     await setVersions();
+    window.addEventListener("hashchange", () => followHash().catch(fail));
     va.addEventListener("change", () => setVersions().catch(fail));
     vb.addEventListener("change", () => setVersions().catch(fail));
     $("mode").addEventListener("change", () => setVersions().catch(fail));

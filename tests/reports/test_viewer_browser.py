@@ -222,3 +222,135 @@ def test_front_view_matches_the_golden(report, browser):
     moved = compare_images(p.pixels(), gold)
     assert not moved.passed, moved.reason
     p.page.close()
+
+
+def _rendered(run: Path, version: str, view: str) -> list[int]:
+    rend = pd.read_parquet(run / "renders.parquet")
+    return sorted(int(f) for f in rend[(rend["task"] == 106) & (rend["version"] == version)
+                                       & (rend["view"] == view)]["frame"])
+
+
+def test_the_render_panel_follows_the_view(report, browser):
+    run, rep = report
+    frame = _rendered(run, "cassi-1.0", "front")[1]
+    p = Page(browser, _viewer_url(rep, f"#frame={frame}&a=cassi-1.0&view=side")).ready()
+    assert "no Mitsuba render of frame" in p.page.text_content("#renders")
+    assert "(side view)" in p.page.text_content("#renders")
+    p.page.click("button[data-view='front']")
+    assert p.page.text_content("#renders .meta") == \
+        f"cassi-1.0: Mitsuba render, front view, frame {frame}"
+    assert p.page.locator("#renders img").count() >= 1
+    p.page.click("button[data-view='top']")
+    assert "(top view)" in p.page.text_content("#renders")
+    assert p.page.locator("#renders img").count() == 0 and p.errors == []
+    p.page.close()
+
+
+def _hash(p: Page) -> dict:
+    return dict(x.split("=", 1) for x in p.page.evaluate("location.hash").lstrip("#").split("&"))
+
+
+def test_the_address_follows_the_state_and_the_state_the_address(report, browser):
+    _, rep = report
+    p = Page(browser, _viewer_url(rep, "#frame=1023&a=cassi-1.0")).ready()
+    p.page.click("#next")
+    assert _hash(p)["frame"] == str(p.frame()) != "1023"
+    p.page.click("button[data-view='side']")
+    p.page.select_option("#vb", "cassi-2.1")
+    p.page.wait_for_function("location.hash.includes('b=cassi-2.1')")
+    assert _hash(p) == {"frame": str(p.frame()), "a": "cassi-1.0", "b": "cassi-2.1",
+                        "view": "side"}
+    # an address typed or pasted over the open page is followed
+    p.page.evaluate("location.hash = '#frame=700&a=cassi-2.1&view=top'")
+    p.page.wait_for_function("document.getElementById('frame').textContent === '700'")
+    assert p.page.evaluate("window.cassiViewer.state.view") == "top"
+    assert p.page.input_value("#va") == "cassi-2.1"
+    assert p.page.get_attribute("button[data-view='top']", "class") == "on"
+    assert p.errors == []
+    p.page.close()
+
+
+def test_the_page_fits_1024_and_the_opened_event_shows_above_the_fold(report, browser):
+    run, rep = report
+    p = Page(browser, _viewer_url(rep, "#frame=1023&a=cassi-1.0"), width=1024, height=768).ready()
+    width = p.page.evaluate("document.documentElement.scrollWidth")
+    assert width <= 1024, f"the page scrolls sideways: {width} px wide"
+    tl = p.page.locator("#timeline").bounding_box()
+    assert tl["x"] >= 0 and tl["x"] + tl["width"] <= 1024
+    assert p.errors == []
+    p.page.close()
+    res = pd.read_parquet(run / "results.parquet")
+    mine = res[(res["task"] == 106) & (res["version"] == "cassi-1.0") & res["table"].notna()]
+    fired = set(mine[(mine["frame"] == -1) & (mine["negatives"] > 0)]["check"])
+    ev = mine[(mine["frame"] >= 0) & mine["check"].isin(fired)].sort_values(["frame", "check"])
+    check, frame = ev.iloc[0]["check"], int(ev.iloc[0]["frame"])
+    q = Page(browser, _viewer_url(rep, f"#frame={frame}&a=cassi-1.0&check={check}"),
+             width=1400, height=900).ready()
+    shown = q.page.locator(f".hl[data-check='{check}']").first.bounding_box()
+    assert shown is not None and shown["y"] + shown["height"] <= 900, \
+        f"the opened event is below the fold: {shown}"
+    assert q.errors == []
+    q.page.close()
+
+
+def test_the_frame_steps_say_they_step_to_the_next_kept_frame(report, browser):
+    _, rep = report
+    p = Page(browser, _viewer_url(rep, "#frame=1000&a=cassi-1.0")).ready()
+    for button in ("#prev", "#next"):
+        assert "kept frame" in p.page.text_content(button)
+        assert "every 4th recording row" in p.page.get_attribute(button, "title")
+    kept = p.page.evaluate("Array.from(window.cassiViewer.state.a.frames)")
+    p.page.click("#next")
+    assert p.frame() == min(f for f in kept if f > 1000)
+    p.page.close()
+
+
+def test_a_lost_webgl_context_is_restored_and_drawn(report, browser):
+    _, rep = report
+    p = Page(browser, _viewer_url(rep, "#frame=1023&a=cassi-1.0")).ready()
+    before = p.pixels()
+    p.page.evaluate("""() => new Promise((done) => {
+        const gl = window.cassiViewer.three().renderer.getContext();
+        const ext = gl.getExtension('WEBGL_lose_context');
+        const cv = gl.canvas;
+        cv.addEventListener('webglcontextlost', () => setTimeout(() => ext.restoreContext(), 50),
+                            { once: true });
+        cv.addEventListener('webglcontextrestored', () => setTimeout(done, 300), { once: true });
+        ext.loseContext();
+    })""")
+    p.page.wait_for_timeout(300)
+    after = p.pixels()
+    assert compare_images(after, before).passed, "the canvas is not drawn again after a restore"
+    assert p.page.text_content("#status") == "ready"
+    p.page.close()
+
+
+@pytest.fixture(scope="module")
+def report19(tmp_path_factory):
+    """JW11 task 19, where cassi-1.0's Table A cell names three faults."""
+    root = tmp_path_factory.mktemp("viewer19")
+    assert cli_main(["run", "--subjects", "JW11", "--versions", "cassi-1.0", "--tasks", "19",
+                     "--views", "front", "--no-progress", "--out", str(root / "run")]) == 0
+    write_report(root / "run", root / "report")
+    return root / "run", root / "report"
+
+
+def test_each_fault_a_table_cell_names_opens_its_own_frame(report19, browser):
+    run, rep = report19
+    p = Page(browser, (rep / "index.html").as_uri())
+    cells = [c for c in p.page.locator("td").all() if c.locator("a.fault").count() >= 2]
+    assert cells, "no table cell names several faults in this run"
+    links = cells[0].locator("a.fault")
+    hrefs = [links.nth(i).get_attribute("href") for i in range(links.count())]
+    checks = [re.search(r"check=([^&]+)", h).group(1) for h in hrefs]
+    assert len(set(checks)) == len(checks), hrefs
+    # each link's text is its own check's, and the second opens on its own event
+    for i, check in enumerate(checks):
+        assert CHECKS[check].text in links.nth(i).text_content()
+    frame = int(re.search(r"frame=(\d+)", hrefs[1]).group(1))
+    links.nth(1).click()
+    p.ready()
+    assert p.frame() == frame
+    assert p.page.locator("#events li.hl").get_attribute("data-check") == checks[1]
+    assert p.errors == []
+    p.page.close()
