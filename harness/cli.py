@@ -59,9 +59,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(resolve(args.func)(args) or EXIT_OK)
     except Terminated:
-        print("cassi: terminated (SIGTERM); finished jobs are kept, rerun the same command "
-              "to resume", file=sys.stderr)
-        return EXIT_TERMINATED
+        return _terminated()
     except CassiInputError as err:
         print(f"cassi: error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -69,12 +67,20 @@ def main(argv: list[str] | None = None) -> int:
         print("cassi: interrupted", file=sys.stderr)
         return EXIT_FAILURE
     except Exception as err:  # noqa: BLE001 - the CLI boundary: report, never a traceback dump
+        if isinstance(err.__cause__, Terminated):  # raised inside native code (Ray's wait),
+            return _terminated()                   # which wraps it in a SystemError
         logging.getLogger("cassi").debug("failure", exc_info=True)
         print(f"cassi: failed: {type(err).__name__}: {err}", file=sys.stderr)
         return EXIT_FAILURE
     finally:
         if main_thread:
             signal.signal(signal.SIGTERM, previous)
+
+
+def _terminated() -> int:
+    print("cassi: terminated (SIGTERM); finished jobs are kept, rerun the same command "
+          "to resume", file=sys.stderr)
+    return EXIT_TERMINATED
 
 
 if __name__ == "__main__":

@@ -11,12 +11,16 @@ Layout::
         Headmeasures.txt                        optional, this subject (overrides the root one)
         tp001.TextGrid ...                      optional alignments (phone and word tiers)
 
+Two files of one task (``tp003.txy`` and ``JW12_003.txy``, or names equal up to case) are read
+only when their bytes are equal; otherwise every reader refuses, naming both.
+
 Every path the corpus opens is checked to stay inside the corpus directory (a symlink or a name
 that leads outside is an error), and every problem met is either raised as
 :class:`~cassi.common.errors.CassiInputError` or recorded in ``problems``/``warnings``.
 """
 from __future__ import annotations
 
+import filecmp
 import json
 import os
 import re
@@ -41,6 +45,14 @@ SUBJECT_FILES = {"pal": "PAL.DAT", "pha": "PHA.DAT", "mis": "Mis.dat"}
 
 def natural_key(name: str):
     return [int(p) if p.isdecimal() else p.lower() for p in re.split(r"(\d+)", name)]
+
+
+def _same_bytes(a: Path, b: Path) -> bool:
+    try:
+        return filecmp.cmp(a, b, shallow=False)
+    except OSError as err:
+        raise CassiInputError(f"cannot read: {err.strerror or err}", path=err.filename or b) \
+            from None
 
 
 def ensure_inside(root: Path, path: Path) -> Path:
@@ -84,6 +96,7 @@ class SubjectData:
         self.directory = directory
         self.warnings: list[str] = []
         self.problems: list[str] = []
+        self._task_paths: list[Path] = []  # every *.txy, case twins included
         self._files = self._scan()
 
     def __repr__(self) -> str:
@@ -103,9 +116,12 @@ class SubjectData:
                     self.warnings.append(f"{self.directory / e.name}: hidden file ignored")
                 continue
             key = e.name.lower()
+            if key.endswith(".txy"):  # twins up to case are two files of one task: the index's
+                self._task_paths.append(self.directory / e.name)
             if key in files:
-                self.warnings.append(f"{self.directory / e.name}: same name as "
-                                     f"{files[key].name} up to case; ignored")
+                if not key.endswith(".txy"):
+                    self.warnings.append(f"{self.directory / e.name}: same name as "
+                                         f"{files[key].name} up to case; ignored")
                 continue
             files[key] = self.directory / e.name
         return files
@@ -121,12 +137,22 @@ class SubjectData:
             raise CassiInputError("is not a regular file", path=path)
         return path
 
-    @cached_property
+    @property
     def _task_index(self) -> dict[tuple[int, int], Path]:
+        """``{(task, rep): path}``. Two files of one task (``tp003.txy`` and ``JW16_003.txy``,
+        or names equal up to case) are read as one only when their bytes are equal; otherwise
+        which one is the recording is not ours to guess: CassiInputError naming both."""
+        index, ambiguous = self._task_scan
+        if ambiguous:
+            raise CassiInputError("\n".join(ambiguous.values()))
+        return index
+
+    @cached_property
+    def _task_scan(self) -> tuple[dict[tuple[int, int], Path], dict[tuple[int, int], str]]:
+        """The task index and, per task read from two different files, the error naming both."""
         index: dict[tuple[int, int], Path] = {}
-        for key, path in sorted(self._files.items(), key=lambda kv: natural_key(kv[0])):
-            if not key.endswith(".txy"):
-                continue
+        ambiguous: dict[tuple[int, int], str] = {}
+        for path in sorted(self._task_paths, key=lambda p: natural_key(p.name)):
             try:
                 subj, task, rep = parse_task_name(path.name)
             except CassiInputError as err:
@@ -141,11 +167,19 @@ class SubjectData:
                 self.problems.append(str(err))
                 continue
             if (task, rep) in index:
-                self.warnings.append(f"{path}: task {task} repetition {rep} already read from "
-                                     f"{index[(task, rep)].name}; ignored")
+                first = index[(task, rep)]
+                if _same_bytes(first, path):
+                    self.warnings.append(f"{path}: task {task} repetition {rep} already read "
+                                         f"from {first.name} (the same bytes); ignored")
+                else:
+                    error = CassiInputError(
+                        f"task {task} repetition {rep} is also {first}, and the two differ: "
+                        f"remove the one that is not the recording", path=path)
+                    ambiguous[(task, rep)] = "\n".join(filter(None, [ambiguous.get((task, rep)),
+                                                                     str(error)]))
                 continue
             index[(task, rep)] = path
-        return dict(sorted(index.items()))
+        return dict(sorted(index.items())), ambiguous
 
     def task_files(self) -> dict[tuple[int, int], Path]:
         """``{(task, rep): path}`` for every task file, sorted by task then repetition."""
@@ -503,7 +537,10 @@ def check_corpus(corpus: Corpus) -> tuple[list[FileReport], list[str]]:
                 getattr(subj, attr)
             except CassiInputError as err:
                 errors.append(str(err))
-        for path in subj.task_files().values():
-            reports.append(check_task_file(path, subject=subj))
+        index, ambiguous = subj._task_scan  # the ambiguous tasks are errors, the rest checked
+        errors.extend(ambiguous.values())
+        for key, path in index.items():
+            if key not in ambiguous:
+                reports.append(check_task_file(path, subject=subj))
         errors.extend(subj.problems)
     return reports, errors

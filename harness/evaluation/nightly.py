@@ -20,6 +20,7 @@ from __future__ import annotations
 import datetime as dt
 import json
 import os
+import re
 import shutil
 import sys
 import time
@@ -41,28 +42,70 @@ STORE_DIR = "store"
 #: Written into a night's run directory once the whole night (run, gates, history, report) is
 #: done; a night of today's date without it was interrupted and is resumed.
 NIGHT_DONE = "night.json"
+#: The file naming the newest night (its review's report is the one to read).
+LATEST = "latest.txt"
+#: A night's name: its ISO date, then -2, -3 ... for the day's later nights.
+_NIGHT_NAME = re.compile(r"(\d{4}-\d{2}-\d{2})(?:-([2-9]|[1-9]\d+))?")
+
+
+def night_key(name: str) -> tuple[dt.date, int] | None:
+    """``(date, sequence)`` of a night's name (``2026-12-07`` is the day's 1st, ``-10`` its
+    10th), None for a name no night has. Nights are ordered by this key: as strings ``-10``
+    sorts before ``-2``."""
+    m = _NIGHT_NAME.fullmatch(name)
+    if m is None:
+        return None
+    try:
+        return dt.date.fromisoformat(m[1]), int(m[2] or 1)
+    except ValueError:  # 2026-13-40
+        return None
+
+
+def nights(runs_dir: Path) -> list[str]:
+    """The nights of ``runs_dir``, oldest first (other directories are not nights)."""
+    return sorted((p.name for p in runs_dir.iterdir() if p.is_dir() and night_key(p.name)),
+                  key=night_key)
+
+
+def latest_night(root: Path) -> str | None:
+    """The night ``DIR/latest.txt`` names, or None."""
+    try:
+        name = (root / LATEST).read_text(encoding="utf-8").strip()
+    except (OSError, UnicodeDecodeError):
+        return None
+    return name if night_key(name) else None
 
 
 def night_name(runs_dir: Path, today: dt.date | None = None) -> str:
-    """Today's ISO date; an unfinished night of that date is resumed (same name, its finished
-    jobs reused), a finished one is followed by -2, -3 ..."""
-    base = (today or dt.datetime.now(dt.timezone.utc).date()).isoformat()
-    name, n = base, 1
-    while (runs_dir / name).exists():
-        if not (runs_dir / name / NIGHT_DONE).is_file():
-            return name
-        n += 1
-        name = f"{base}-{n}"
-    return name
+    """Today's ISO date, or -2, -3 ... after the day's newest night; a name is never reused (not
+    after ``cassi gc`` either: the newest night and the one ``latest.txt`` names are always
+    kept). An unfinished newest night of today is resumed (same name, its finished jobs
+    reused)."""
+    today = today or dt.datetime.now(dt.timezone.utc).date()
+    names = nights(runs_dir)
+    used = names + [n for n in [latest_night(runs_dir.parent)] if n]
+    newest = max(used, key=night_key, default=None)
+    if newest is None:
+        return today.isoformat()
+    day, seq = night_key(newest)
+    if day > today:  # tonight would sort before it: gated against older nights, gc'd first
+        raise CassiInputError(f"the newest night, {newest}, is dated after today "
+                              f"({today.isoformat()}): is the clock right?",
+                              path=runs_dir / newest)
+    if day < today:
+        return today.isoformat()
+    if newest in names and not (runs_dir / newest / NIGHT_DONE).is_file():
+        return newest
+    return f"{today.isoformat()}-{seq + 1}"
 
 
 def previous_night(runs_dir: Path, current: str) -> Path | None:
     """The newest night before ``current`` whose run is complete: a table set that verifies and
     no failed job (a failed night is no baseline: its missing results would pass or blame
     tonight)."""
-    nights = sorted((p for p in runs_dir.iterdir() if p.is_dir() and p.name < current
-                     and (p / TABLE_SET).is_file()), key=lambda p: p.name, reverse=True)
-    return next((p for p in nights if _complete(p)), None)
+    before = [runs_dir / n for n in nights(runs_dir) if night_key(n) < night_key(current)]
+    return next((p for p in reversed(before) if (p / TABLE_SET).is_file() and _complete(p)),
+                None)
 
 
 def _complete(run_dir: Path) -> bool:
@@ -75,8 +118,9 @@ def _complete(run_dir: Path) -> bool:
 
 
 def gc(out_dir: str | os.PathLike, *, keep: int = KEEP_NIGHTS) -> dict:
-    """Keep the newest ``keep`` nights of a nightly directory (their runs and reports), remove
-    the older ones, then every blob of the shared store that no kept night links
+    """Keep the newest ``keep`` nights of a nightly directory (their runs and reports) and the
+    one ``latest.txt`` names, remove the other nights (directories of ``runs/`` whose names are
+    no night's are left alone), then every blob of the shared store that no kept night links
     (:func:`cassi.harness.farm.store.collect_garbage`). The golden directory holds copies and
     is never touched. Returns what was removed."""
     root = Path(out_dir)
@@ -85,15 +129,18 @@ def gc(out_dir: str | os.PathLike, *, keep: int = KEEP_NIGHTS) -> dict:
         raise CassiInputError("not a nightly directory (no runs/)", path=root)
     if keep < 1:
         raise CassiInputError(f"--keep must be at least 1, got {keep}")
-    nights = sorted(p.name for p in runs_dir.iterdir() if p.is_dir())
-    old = nights[:-keep]
+    names = nights(runs_dir)
+    # The night latest.txt names stays too (its report is the one people open).
+    kept = set(names[-keep:]) | {latest_night(root)}
+    old = [n for n in names if n not in kept]
     with store_lock(root / STORE_DIR, exclusive=True):  # no night may write it meanwhile
         for name in old:
             for d in (runs_dir / name, root / "reports" / name):
                 if d.is_dir():
                     shutil.rmtree(d)
         freed = collect_garbage(root / STORE_DIR)  # the lock made the directory: never missing
-    return {"nights_removed": old, "nights_kept": nights[-keep:], "blobs_removed": freed.blobs,
+    return {"nights_removed": old, "nights_kept": [n for n in names if n in kept],
+            "blobs_removed": freed.blobs,
             "manifests_removed": freed.manifests, "bytes_freed": freed.bytes}
 
 
@@ -135,7 +182,7 @@ def nightly(out_dir: str | os.PathLike, *, review: Callable[[Night], tuple[bool,
     passed, index = review(Night(root, name, run_dir, reports_dir / name, result,
                                  previous_night(runs_dir, name), timer))
     passed = passed and result.ok
-    atomic_write_text(root / "latest.txt", name + "\n")
+    atomic_write_text(root / LATEST, name + "\n")
     atomic_write_text(run_dir / NIGHT_DONE, json.dumps(
         {"night": name, "passed": passed,
          "finished": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")}) + "\n")

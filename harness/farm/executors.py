@@ -13,10 +13,15 @@ stage wrappers in :mod:`.jobs` already turn them into FAILED outcomes.
 from __future__ import annotations
 
 import collections
+import logging
 import multiprocessing as mp
 import os
 import re
+import signal
 import socket
+import threading
+import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 from multiprocessing.connection import wait as mp_wait
 from typing import Any, Callable
@@ -256,15 +261,19 @@ class RayExecutor:
     connect_timeout : float
         Seconds to wait for the cluster's address to answer (:func:`probe_address`): Ray's own
         connection retries last minutes.
+    init_timeout : float
+        Seconds to wait for Ray to connect this driver once the address answered as a gRPC
+        server.
     """
 
     name = "ray"
 
     def __init__(self, address: str | None = None, *, retries: int = 1, num_cpus: int = 2,
                  initializer: Callable | None = None, initargs: tuple = (),
-                 connect_timeout: float = 10.0):
+                 connect_timeout: float = 10.0, init_timeout: float = 60.0):
         self.address = address
         self.connect_timeout = float(connect_timeout)
+        self.init_timeout = float(init_timeout)
         self._init = (initializer, initargs)
         self.retries = int(retries)
         self.num_cpus = int(num_cpus)
@@ -285,16 +294,17 @@ class RayExecutor:
         if not ray.is_initialized():
             if self.address:
                 probe_address(self.address, self.connect_timeout)
-                try:
-                    ray.init(address=self.address, include_dashboard=False,
+            with _sigterm_kept():
+                if self.address:
+                    try:
+                        _connect_ray(ray, self.address, self.init_timeout)
+                    except (ConnectionError, ValueError, RuntimeError) as err:
+                        raise CassiInputError(f"cannot reach the Ray cluster at "
+                                              f"{self.address}: {err}") from err
+                else:
+                    ray.init(num_cpus=self.num_cpus, include_dashboard=False,
                              log_to_driver=False, logging_level="WARNING")
-                except (ConnectionError, ValueError, RuntimeError) as err:
-                    raise CassiInputError(f"cannot reach the Ray cluster at {self.address}: "
-                                          f"{err}") from err
-            else:
-                ray.init(num_cpus=self.num_cpus, include_dashboard=False, log_to_driver=False,
-                         logging_level="WARNING")
-                self._owns_cluster = True
+                    self._owns_cluster = True
         self._remote = ray.remote(max_retries=self.retries, retry_exceptions=False)(_ray_call)
 
     def submit(self, key: str, fn: Callable, *args) -> None:
@@ -341,9 +351,67 @@ class RayExecutor:
             self._owns_cluster = False
 
 
+def _connect_ray(ray, address: str, timeout: float) -> None:
+    """``ray.init(address)`` in a thread the run waits for, at most ``timeout`` seconds. Ray's
+    connection retries block in native code for minutes, where Python runs no signal handler:
+    waiting in the main thread instead keeps SIGTERM (and the bound) effective."""
+    failed: list[BaseException] = []
+
+    def connect():
+        try:
+            ray.init(address=address, include_dashboard=False, log_to_driver=False,
+                     logging_level="WARNING")
+        except BaseException as err:  # noqa: BLE001 - raised again in the waiting thread
+            failed.append(err)
+
+    # Ray warns that it sets no SIGTERM handler from this thread: the run keeps its own.
+    log = logging.getLogger("ray._private.worker")
+    quiet = lambda record: "SIGTERM handler is not set" not in record.getMessage()  # noqa: E731
+    log.addFilter(quiet)
+    thread = threading.Thread(target=connect, name="cassi-ray-connect", daemon=True)
+    thread.start()
+    try:
+        thread.join(timeout)
+    finally:
+        log.removeFilter(quiet)
+    if thread.is_alive():
+        raise CassiInputError(f"the Ray cluster at {address} answered but did not accept this "
+                              f"driver within {timeout:g} s; is it a Ray cluster of this Ray "
+                              f"version ({ray.__version__})?")
+    if failed:
+        raise failed[0]
+
+
+@contextmanager
+def _sigterm_kept():
+    """Ray's init puts its own SIGTERM handlers in place of the run's (``sys.exit`` in Python;
+    in native code one that prints a stack and kills the process, unwinding nothing): the
+    run's is put back, and a SIGTERM meanwhile gets the run's answer."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.getsignal(signal.SIGTERM)
+    try:
+        yield
+    except SystemExit as err:
+        if err.code == signal.SIGTERM and callable(previous):
+            previous(signal.SIGTERM, None)
+        raise
+    finally:
+        if previous is not None:  # None: not set from Python, nothing to put back
+            signal.signal(signal.SIGTERM, previous)
+
+
+#: What a gRPC client (Ray's GCS client, Ray Client) sends first: HTTP/2's connection preface
+#: and an empty SETTINGS frame. A gRPC server answers with a SETTINGS frame of its own.
+_H2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + bytes([0, 0, 0, 4, 0, 0, 0, 0, 0])
+
+
 def probe_address(address: str, timeout: float) -> None:
     """Fail fast, with the reason, when nothing answers at a cluster's ``host:port`` (or
-    ``ray://host:port``); ``auto`` is left to Ray, which finds a local cluster by its files."""
+    ``ray://host:port``) or what answers is not a gRPC server (a Ray dashboard's HTTP port, on
+    which Ray would retry for good); ``auto`` is left to Ray, which finds a local cluster by
+    its files."""
     if address in ("auto", "local"):
         return
     host, _, port = address.split("://", 1)[-1].rpartition(":")
@@ -351,12 +419,52 @@ def probe_address(address: str, timeout: float) -> None:
         raise CassiInputError(f"--address {address!r}: expected host:port, ray://host:port "
                               f"or auto")
     try:
-        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout).close()
+        sock = socket.create_connection((host.strip("[]"), int(port)), timeout=timeout)
     except OSError as err:
         raise CassiInputError(
             f"cannot reach the Ray cluster at {address}: {err.strerror or err} (waited up to "
             f"{timeout:g} s); start it with `ray start --head`, or give --address the head "
             f"node's host:port") from None
+    if os.environ.get("RAY_USE_TLS", "0").lower() in ("1", "true"):
+        sock.close()  # a TLS cluster answers a TLS handshake, not the plain preface
+        return
+    with sock:
+        answer = _what_answers(sock, timeout)
+    if answer:
+        dashboard = " (as a Ray dashboard's port, 8265, does)" if "HTTP" in answer else ""
+        raise CassiInputError(
+            f"{address} is not a Ray cluster's address: {answer}{dashboard}; give --address the "
+            f"address `ray start --head` prints (port 6379 by default), or ray://host:10001 "
+            f"for Ray Client")
+
+
+def _what_answers(sock: socket.socket, timeout: float) -> str:
+    """What the server at ``sock`` answers to a gRPC client's first bytes: '' for a gRPC
+    server, else what it was, in words."""
+    reply, deadline = b"", time.monotonic() + timeout
+    try:
+        sock.sendall(_H2_PREFACE)
+        while len(reply) < 9 and not reply.startswith(b"HTTP/"):
+            sock.settimeout(max(0.01, deadline - time.monotonic()))
+            chunk = sock.recv(256)
+            if not chunk:
+                break
+            reply += chunk
+    except TimeoutError:
+        if not reply:
+            return f"it accepted the connection but sent nothing back within {timeout:g} s"
+    except OSError as err:
+        return f"it closed the connection ({err.strerror or err})"
+    if len(reply) >= 9 and reply[3] == 4 and reply[5:9] == bytes(4):  # a SETTINGS frame
+        return ""
+    first_line = reply.split(b"\n", 1)[0].strip()[:60].decode("ascii", "replace")
+    if reply.startswith(b"HTTP/"):
+        return f"an HTTP server answered ({first_line!r})"
+    if reply.lstrip()[:14].lower().startswith((b"<!doctype html", b"<html")):
+        return f"an HTTP server answered (a web page: {first_line!r})"  # HTTP/0.9 style
+    if not reply:
+        return "it closed the connection without an answer"
+    return f"something other than a gRPC server answered ({reply[:24]!r})"
 
 
 def require_ray():

@@ -9,9 +9,10 @@ import pandas as pd
 import pytest
 from data_helpers import FIXTURES, recording, write_metadata, write_subject
 
-from cassi.data.corpus.disk import Corpus, check_corpus, read_alignment
+from cassi.data.corpus.disk import Corpus, check_corpus, natural_key, read_alignment
 from cassi.common.errors import CassiInputError
-from cassi.data.xrmb.files import PELLETS
+from cassi.harness.cli import main as cli_main
+from cassi.data.xrmb.files import PELLETS, write_txy
 
 
 @pytest.fixture
@@ -165,6 +166,33 @@ def test_duplicate_task_names_and_stray_files_are_warnings(corpus_dir):
     joined = "\n".join(s.warnings)
     assert "already read" in joined and "not a task file name" in joined
     assert ".tp014.txy: hidden file ignored" in joined
+
+
+@pytest.mark.parametrize("twin", ["JW45_013.txy", "TP013.TXY"])
+def test_two_different_files_of_one_task_are_refused_naming_both(corpus_dir, twin, capsys):
+    """Which of two files is task 13's recording is not for the corpus to guess: every reader
+    refuses (``cassi corpus check`` lists the rest)."""
+    first, other = corpus_dir / "JW45" / "tp013.txy", corpus_dir / "JW45" / twin
+    write_subject(corpus_dir, "JW45", {(14, 1): recording(task=14)})
+    write_txy(other, recording(task=13, lead=5))
+    paths = sorted([first, other], key=lambda p: (natural_key(p.name), p.name))  # the index's order
+    s = Corpus(corpus_dir).subject("JW45")
+    for read in (s.task_files, s.tasks, lambda: s.task_path(14), lambda: s.load(13)):
+        with pytest.raises(CassiInputError) as info:
+            read()
+        assert str(info.value) == (f"{paths[1]}: task 13 repetition 1 is also {paths[0]}, and "
+                                   f"the two differ: remove the one that is not the recording")
+    reports, errors = check_corpus(Corpus(corpus_dir))
+    assert str(info.value) in errors
+    assert {(r.subject, r.task) for r in reports} >= {("JW45", 14), ("JW11", 1)}
+    assert ("JW45", 13) not in {(r.subject, r.task) for r in reports}
+    for argv in (["corpus", "check", str(corpus_dir)], ["corpus", "stats", str(corpus_dir)],
+                 ["run", "--corpus", str(corpus_dir), "--subjects", "JW45", "--tasks", "14",
+                  "--out", str(corpus_dir.parent / "out")]):
+        code = cli_main(argv)
+        err = capsys.readouterr().err
+        assert code == 2 and str(info.value) in err, (argv, err)
+    assert not (corpus_dir.parent / "out").exists()
 
 
 def test_single_subject_directory_is_a_corpus():
