@@ -1,4 +1,4 @@
-"""``cassi report``, ``cassi agree``, ``cassi gate`` and ``cassi golden`` (``cassi nightly``'s
+"""``cassi report``, ``cassi rate``, ``cassi agree``, ``cassi gate`` and ``cassi golden`` (``cassi nightly``'s
 parser is the harness's: it starts a run)."""
 from __future__ import annotations
 
@@ -15,13 +15,33 @@ def register(sub) -> None:
                    "adds the agreement section")
     p.set_defaults(func="cassi.reports.actions:cmd_report")
 
+    p = sub.add_parser("rate", help="write a blinded rating session for people",
+                       description="Write DIR/session/ (open index.html from disk: each cell "
+                       "plays a task file's face in the viewer under a code, in shuffled order; "
+                       "the rater rates it on the thesis's scale, ticks faults and exports a "
+                       "ratings CSV) and DIR/key.json (code -> version, the seed), which stays "
+                       "with you: cassi agree --key un-blinds the exports.")
+    p.add_argument("run", type=Path, help="a run directory (cassi run --out)")
+    p.add_argument("--out", type=Path, required=True, help="session directory (new)")
+    p.add_argument("--tables", help="the rubric's tables to rate, e.g. A,C,E (default: the "
+                   "thesis's tables)")
+    p.add_argument("--sample", type=int, help="rate only the first N cells of the shuffled order")
+    p.add_argument("--seed", type=int, help="the shuffle's and the codes' seed (default: drawn "
+                   "at random and kept in the key)")
+    p.set_defaults(func="cassi.reports.actions:cmd_rate")
+
     p = sub.add_parser("agree", help="compare a run's ratings with ratings people gave",
                        description="Compare RUN's ratings with FILE.csv (columns subject,task,"
-                       "version,table,component,rating; a blank task: the subject's rating, a "
-                       "blank component: the whole table). Writes agreement.json, agreement.md "
-                       "and agreement.csv (the disagreements) into DIR; exit 2 on a bad line.")
+                       "version,table,component,rating[,rater,faults,note,session]; a blank task: "
+                       "the subject's rating, a blank component: the whole table). With several "
+                       "raters also the agreement between them (Krippendorff's alpha), the run "
+                       "against each and their consensus, and each check against the faults "
+                       "they ticked. Writes agreement.json, agreement.md and agreement.csv (the "
+                       "disagreements) into DIR; exit 2 on a bad line.")
     p.add_argument("run", type=Path, help="a run directory (cassi run --out)")
-    p.add_argument("--ratings", type=Path, required=True, help="the ratings file (CSV)")
+    p.add_argument("--ratings", type=Path, nargs="+", required=True,
+                   help="the ratings file(s) (CSV; a rating session's exports, one per rater)")
+    p.add_argument("--key", type=Path, help="the rating session's key.json: un-blinds its codes")
     p.add_argument("--out", type=Path, help="output directory (default: RUN)")
     p.set_defaults(func="cassi.reports.actions:cmd_agree")
 

@@ -39,6 +39,7 @@ from cassi.renderer.views import VIEWS, material_for
 from cassi.reports.runio import Run, order_versions
 
 __all__ = ["VIEWER_DIR", "STATIC_DIR", "viewer_page", "viewer_href", "write_viewers",
+           "version_payload", "viewer_payload", "write_viewer_page", "copy_static",
            "TABLE_COLOURS", "MASK_COLOURS", "mask_overlay"]
 
 VIEWER_DIR = "viewer"
@@ -100,7 +101,7 @@ def _views() -> dict:
     return out
 
 
-def _version_payload(data, events: list[dict], renders: list[dict]) -> dict:
+def version_payload(data, events: list[dict], renders: list[dict]) -> dict:
     """One version of the task file: its geometry, pellet sites, events and renders."""
     colours = []
     for part in data.parts:
@@ -191,7 +192,7 @@ def mask_overlay(blob: bytes, frame: int, dest: Path) -> Path:
     return dest
 
 
-def _copy_static(out: Path) -> None:
+def copy_static(out: Path) -> None:
     here = Path(__file__).parent / STATIC_DIR
     (out / STATIC_DIR).mkdir(parents=True, exist_ok=True)
     for name in _STATIC_FILES:
@@ -214,7 +215,7 @@ def write_viewers(run: Run, out: Path, env, *, slug, audio_for=None, images=None
     att = att[att["name"] == "viewer"] if len(att) else att
     if not len(att):
         return {}
-    _copy_static(out)
+    copy_static(out)
     pages = {}
     events = _events(run.results)
     for (subject, task, rep), g in att.groupby(["subject", "task", "rep"], sort=True):
@@ -225,7 +226,7 @@ def write_viewers(run: Run, out: Path, env, *, slug, audio_for=None, images=None
             data = read_viewer_blob(path.read_bytes())
             first = first or data  # the measured pellets are the same in every version
             rend = images(subject, task, rep, version) if images else []
-            versions[version] = _version_payload(
+            versions[version] = version_payload(
                 data, events.get((subject, task, rep, version), []), rend)
         page = viewer_page(slug(subject), task, rep)
         dest = out / page
@@ -235,24 +236,43 @@ def write_viewers(run: Run, out: Path, env, *, slug, audio_for=None, images=None
         if audio is not None and Path(audio).is_file():
             link_or_copy(audio, dest.parent / f"{stem}.wav")
             audio_href = f"{stem}.wav"
-        payload = {
-            "subject": str(subject), "task": task, "rep": rep, "synthetic": run.synthetic,
-            "versions": list(versions), "version_data": versions,
-            "measured": _array(first.measured, stream=first.deflated["measured"]),
-            "measured_frames": _array(first.frames.astype(np.int32)),
-            "pellets": list(PELLETS), "views": _views(), "stride": VIEWER_STRIDE,
-            "rate_hz": _rate(first), "audio": audio_href, "labels": _labels(run, subject, task, rep),
-            "waveform": _waveform(audio) if audio_href else None,
-            "table_colours": TABLE_COLOURS,
-            "subject_page": f"../../subjects/{slug(subject)}.html"}
-        atomic_write_text(dest.with_suffix(".js"), "window.CASSI_VIEWER = "
-                          + json.dumps(payload, separators=(",", ":"), allow_nan=False) + ";\n")
-        atomic_write_text(dest, env.get_template("viewer.html.j2").render(
-            subject=subject, task=task, rep=rep, synthetic=run.synthetic,
-            versions=list(versions), data=f"{stem}.js", static="../../static",
-            index="../../index.html", subject_page=payload["subject_page"]))
+        payload = viewer_payload(run, subject, task, rep, versions, first, audio=audio,
+                                 audio_href=audio_href,
+                                 subject_page=f"../../subjects/{slug(subject)}.html")
+        write_viewer_page(dest, payload, env, static="../../static", index="../../index.html")
         pages[(subject, task, rep)] = page
     return pages
+
+
+def viewer_payload(run: Run, subject: str, task: int, rep: int, versions: dict, first, *,
+                   audio=None, audio_href: str | None = None,
+                   subject_page: str | None = None) -> dict:
+    """What a viewer page's script reads (``window.CASSI_VIEWER``): ``versions`` maps each name
+    the page shows to its :func:`version_payload`; ``first`` is one version's viewer data (the
+    measured pellets are the same in every version); ``audio``: the sound beside the page
+    (``audio_href``), whose waveform the timeline draws."""
+    return {
+        "subject": str(subject), "task": task, "rep": rep, "synthetic": run.synthetic,
+        "versions": list(versions), "version_data": versions,
+        "measured": _array(first.measured, stream=first.deflated["measured"]),
+        "measured_frames": _array(first.frames.astype(np.int32)),
+        "pellets": list(PELLETS), "views": _views(), "stride": VIEWER_STRIDE,
+        "rate_hz": _rate(first), "audio": audio_href, "labels": _labels(run, subject, task, rep),
+        "waveform": _waveform(audio) if audio_href else None,
+        "table_colours": TABLE_COLOURS, "subject_page": subject_page}
+
+
+def write_viewer_page(dest: Path, payload: dict, env, *, static: str, index: str | None,
+                      blind: bool = False) -> None:
+    """A viewer page (``dest``) and its data (``dest`` with ``.js``); ``static``: the way from
+    the page to the viewer's scripts; ``index`` None: no way back to a report; ``blind``: a
+    rating session's page, without the rubric's events or links to what fired."""
+    atomic_write_text(dest.with_suffix(".js"), "window.CASSI_VIEWER = "
+                      + json.dumps(payload, separators=(",", ":"), allow_nan=False) + ";\n")
+    atomic_write_text(dest, env.get_template("viewer.html.j2").render(
+        subject=payload["subject"], task=payload["task"], rep=payload["rep"],
+        synthetic=payload["synthetic"], versions=payload["versions"], data=f"{dest.stem}.js",
+        static=static, index=index, subject_page=payload["subject_page"], blind=blind))
 
 
 def _rate(data) -> float:
