@@ -16,7 +16,8 @@ from cassi.harness.bench import BENCHMARKS, run_benchmarks
 from cassi.harness.commands import config_from_args
 from cassi.harness.evaluation.caches import get_corpus, get_face, get_profile, get_version_face
 from cassi.harness.evaluation.config import NIGHTLY
-from cassi.harness.evaluation.nightly import gc, nightly
+from cassi.harness.evaluation.nightly import nightly
+from cassi.harness.evaluation.nights import gc
 from cassi.harness.evaluation.run import run
 from cassi.harness.farm.store import collect_garbage, store_lock
 from cassi.renderer.commands import NEUTRAL

@@ -9,7 +9,7 @@ from pathlib import Path
 import pandas as pd
 
 from cassi.common.atomic import atomic_write_text
-from cassi.harness.evaluation.nightly import STORE_DIR, Night
+from cassi.harness.evaluation.nights import STORE_DIR, Night
 from cassi.harness.farm.store import MEDIA_DIR
 from cassi.harness.rubric import version_totals
 from cassi.reports.gates import (GOLDEN_MARK, GateResult, IncompleteRun, MismatchedBaseline,

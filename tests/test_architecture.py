@@ -27,7 +27,8 @@ ALLOWED = {
 }
 #: Modules reports must never import: they start or schedule a run; reports read what a run
 #: wrote (the farm's process pool may encode a report's videos: that is no run).
-REPORTS_NEVER = ("cassi.harness.evaluation.run", "cassi.harness.farm.runner")
+REPORTS_NEVER = ("cassi.harness.evaluation.run", "cassi.harness.evaluation.nightly",
+                 "cassi.harness.farm.runner")
 #: Names that start a run or a night, wherever they are defined: never imported by reports.
 REPORTS_NEVER_NAMES = {"run", "run_batch", "nightly", "make_executor", "RayExecutor",
                        "cassi_pipeline"}

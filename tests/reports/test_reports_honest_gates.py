@@ -14,7 +14,7 @@ import pytest
 from cassi.data.synth.corpus import make_corpus
 from cassi.harness.cli import main
 from cassi.harness.evaluation.config import RunConfig
-from cassi.harness.evaluation.nightly import previous_night
+from cassi.harness.evaluation.nights import previous_night
 from cassi.harness.evaluation.run import run
 from cassi.harness.farm import store
 from cassi.harness.farm.tableset import TableSetError

@@ -25,7 +25,7 @@ from cassi.harness.farm.executors import require_ray
 from cassi.harness.evaluation.run import run, worker_count
 from cassi.harness.farm.tableset import TableSetError, verify_table_set, write_table_set
 from cassi.reports.gates import MismatchedBaseline, gate
-from cassi.harness.evaluation.nightly import NIGHT_DONE, night_name
+from cassi.harness.evaluation.nights import NIGHT_DONE, night_name
 from cassi.reports.runio import load_run
 
 from reports_fixtures import results_rows, write_run

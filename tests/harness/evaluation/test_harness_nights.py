@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 
 from cassi.common.errors import CassiInputError
-from cassi.harness.evaluation.nightly import NIGHT_DONE, gc, night_key, night_name, previous_night
+from cassi.harness.evaluation.nights import NIGHT_DONE, gc, night_key, night_name, previous_night
 from cassi.harness.farm.tableset import write_table_set
 
 DAY = dt.date(2026, 12, 7)

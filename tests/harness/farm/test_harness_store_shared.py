@@ -15,7 +15,8 @@ from cassi.common.errors import CassiInputError
 from cassi.data.synth.corpus import make_corpus
 from cassi.harness.evaluation import provenance
 from cassi.harness.evaluation.config import RunConfig
-from cassi.harness.evaluation.nightly import gc, nightly
+from cassi.harness.evaluation.nightly import nightly
+from cassi.harness.evaluation.nights import gc
 from cassi.harness.evaluation.run import run
 from cassi.harness.farm.jobs import Job, StageContext
 from cassi.harness.farm.store import collect_garbage, store_lock
