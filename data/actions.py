@@ -185,7 +185,9 @@ def cmd_stats(args) -> int:
         if s is None:
             continue
         synth = s.label and Path(s.label).is_dir() and Corpus(s.label).is_synthetic
-        print(f"# {label}: {s.label} ({s.n_files} task file(s))"
+        what = (f"a frame set of {s.n_frames} frames: distributions only" if s.n_frames
+                else f"{s.n_files} task file(s)")
+        print(f"# {label}: {s.label} ({what})"
               + (" - synthetic: figures describe the software, not real speakers" if synth
                  else ""))
     head = [f"{c} ({UNITS[c]})" for c in PELLET_COLUMNS]

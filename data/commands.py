@@ -61,14 +61,17 @@ def register(subparsers) -> None:
 
     st = sub.add_parser("stats", help="kinematic statistics of a corpus, subject or task file",
                         description="Per pellet speed percentiles, x/y ranges and second-"
-                                    "difference RMS (tracking noise); jaw MNI-MNM distance; lip "
-                                    "midpoint height relative to the incisor tip; UL-LL "
-                                    "distance. Task files listed in Mis.dat are left out. With "
+                                    "difference RMS (tracking noise); jaw MNI-MNM distance and "
+                                    "MNI height; lip midpoint height relative to the incisor "
+                                    "tip; UL-LL distance. Task files listed in Mis.dat are left "
+                                    "out. A frame set (.npy or .mat: frames x 16 mm, UL..MNM "
+                                    "x, y, no times) gives the distributions only. With "
                                     "--compare, side by side with a second path and the ratios. "
                                     "Exit 2 on a malformed file (file:line: reason).")
-    st.add_argument("path", type=Path, help="a corpus directory, a subject directory or one file")
+    st.add_argument("path", type=Path, help="a corpus directory, a subject directory, one task "
+                                            "file or a frame set (.npy, .mat)")
     st.add_argument("--compare", type=Path, default=None, metavar="PATH2",
-                    help="a second corpus, subject directory or task file")
+                    help="a second corpus, subject directory, task file or frame set")
     st.add_argument("--tasks", type=task_list, default=None,
                     help="only these tasks, e.g. 105 or 102-105,13")
     st.add_argument("--json", action="store_true", help="print JSON")

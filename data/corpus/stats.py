@@ -19,16 +19,23 @@ Per pellet (:data:`PELLET_COLUMNS`):
 
 Whole-recording figures (:data:`SCALARS`):
 
-- ``jaw_distance_mean`` (mm) and ``jaw_distance_sd`` (mm): the MNI-MNM distance, mean over all
-  valid rows, and its within-file standard deviation (root mean of the per-file variances): the
-  jaw is rigid, so the SD is tracking noise;
+- ``jaw_distance_mean``, ``jaw_distance_median`` (mm) and ``jaw_distance_sd`` (mm): the MNI-MNM
+  distance, mean and median over all valid rows, and its within-file standard deviation (root
+  mean of the per-file variances): the jaw is rigid, so the SD is tracking noise;
+- ``mni_y_p95``, ``mni_y_median``, ``mni_y_p05`` (mm): height of the lower incisor pellet MNI
+  relative to the upper incisor tip over all valid rows: near the closed jaw, typical, and wide
+  open (the jaw opening);
 - ``lip_mid_first``, ``lip_mid_mean``, ``lip_mid_median``, ``lip_mid_p05`` (mm): height of the
   midpoint of the UL and LL pellets relative to the incisor tip, at the first valid row (mean
   over files), and the mean, median and 5th percentile over all valid rows (where speech takes
   it);
-- ``ul_ll_first``, ``ul_ll_median``, ``ul_ll_p01`` (mm): the UL-LL distance at the first valid
-  row (mean over files; thesis Figure 4.25 divides it by the jaw length), and its median and
-  1st percentile over all rows.
+- ``ul_ll_first``, ``ul_ll_median``, ``ul_ll_p01``, ``ul_ll_p001`` (mm): the UL-LL distance at
+  the first valid row (mean over files; thesis Figure 4.25 divides it by the jaw length), and its
+  median, 1st and 0.1th percentile over all rows (the lips pressed together).
+
+A frame set (:mod:`cassi.data.xrmb.frames`: frames without times, not necessarily consecutive)
+gives the distributions only (:func:`frame_set_stats`): the figures that need consecutive rows
+(speeds, second differences), whole files (ranges, within-file SD) or a first row are undefined.
 """
 from __future__ import annotations
 
@@ -42,13 +49,15 @@ import pandas as pd
 from cassi.common.errors import CassiInputError
 from cassi.data.corpus.disk import Corpus
 from cassi.data.xrmb.files import PELLETS, read_txy
+from cassi.data.xrmb.frames import is_frame_set, read_frames
 
 __all__ = ["PELLET_COLUMNS", "SCALARS", "KinematicStats", "compare", "corpus_stats",
-           "recording_stats", "summarise"]
+           "frame_set_stats", "recording_stats", "summarise"]
 
 PELLET_COLUMNS = ("speed_p50", "speed_p90", "speed_p99", "x_range", "y_range", "d2_rms_um")
-SCALARS = ("jaw_distance_mean", "jaw_distance_sd", "lip_mid_first", "lip_mid_mean",
-           "lip_mid_median", "lip_mid_p05", "ul_ll_first", "ul_ll_median", "ul_ll_p01")
+SCALARS = ("jaw_distance_mean", "jaw_distance_median", "jaw_distance_sd", "mni_y_p95",
+           "mni_y_median", "mni_y_p05", "lip_mid_first", "lip_mid_mean", "lip_mid_median",
+           "lip_mid_p05", "ul_ll_first", "ul_ll_median", "ul_ll_p01", "ul_ll_p001")
 #: Units of every figure, for tables and JSON.
 UNITS = {"speed_p50": "mm/s", "speed_p90": "mm/s", "speed_p99": "mm/s", "x_range": "mm",
          "y_range": "mm", "d2_rms_um": "um", **{k: "mm" for k in SCALARS}}
@@ -65,6 +74,7 @@ class _Samples:
     d2_n: np.ndarray = field(default_factory=lambda: np.zeros(len(PELLETS), np.int64))
     jaw: list[np.ndarray] = field(default_factory=list)
     jaw_var: list[float] = field(default_factory=list)
+    mni_y: list[np.ndarray] = field(default_factory=list)
     lip_mid: list[np.ndarray] = field(default_factory=list)
     ul_ll: list[np.ndarray] = field(default_factory=list)
     lip_mid_first: list[float] = field(default_factory=list)
@@ -86,18 +96,23 @@ class KinematicStats:
     n_files : int
     label : str
         What was measured (a path), for tables.
+    n_frames : int
+        Frames measured in a frame set; 0 for task files.
     """
 
     pellets: pd.DataFrame
     scalars: dict[str, float]
     n_files: int
     label: str = ""
+    n_frames: int = 0
 
     def as_dict(self) -> dict:
-        """JSON-ready: ``{"label", "n_files", "units", "pellets": {UL: {...}}, "scalars"}``."""
+        """JSON-ready: ``{"label", "n_files", "n_frames", "units", "pellets": {UL: {...}},
+        "scalars"}``."""
         def num(v):
             return None if v is None or not math.isfinite(v) else round(float(v), 6)
-        return {"label": self.label, "n_files": self.n_files, "units": UNITS,
+        return {"label": self.label, "n_files": self.n_files, "n_frames": self.n_frames,
+                "units": UNITS,
                 "pellets": {p: {c: num(self.pellets.at[p, c]) for c in PELLET_COLUMNS}
                             for p in self.pellets.index},
                 "scalars": {k: num(v) for k, v in self.scalars.items()}}
@@ -126,20 +141,28 @@ def _add(s: _Samples, time_us: np.ndarray, xy_mm: np.ndarray, valid: np.ndarray,
         d2 = (q[2:] - 2.0 * q[1:-1] + q[:-2])[trip]
         s.d2_sq[p] += float(np.square(d2).sum())
         s.d2_n[p] += d2.size
-    jaw_ok = ok[:, _MNI] & ok[:, _MNM]
-    d = np.hypot(*(xy[jaw_ok, _MNI] - xy[jaw_ok, _MNM]).T)
-    s.jaw.append(d)
+    d = _add_distributions(s, xy, ok)
     if d.size > 1:
         s.jaw_var.append(float(np.var(d)))
-    lips_ok = ok[:, _UL] & ok[:, _LL]
-    s.lip_mid.append(0.5 * (xy[lips_ok, _UL, 1] + xy[lips_ok, _LL, 1]))
-    s.ul_ll.append(np.hypot(*(xy[lips_ok, _UL] - xy[lips_ok, _LL]).T))
     s.lip_mid_first.append(0.5 * float(xy[0, _UL, 1] + xy[0, _LL, 1]))
     s.ul_ll_first.append(float(np.hypot(*(xy[0, _UL] - xy[0, _LL]))))
     s.files.append(label)
 
 
-def _figures(s: _Samples, label: str) -> KinematicStats:
+def _add_distributions(s: _Samples, xy: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """Add the rows' jaw distance, MNI height, lip midpoint and UL-LL distance (each where its
+    pellets are valid); return the jaw distances."""
+    jaw_ok = ok[:, _MNI] & ok[:, _MNM]
+    d = np.hypot(*(xy[jaw_ok, _MNI] - xy[jaw_ok, _MNM]).T)
+    s.jaw.append(d)
+    s.mni_y.append(xy[ok[:, _MNI], _MNI, 1])
+    lips_ok = ok[:, _UL] & ok[:, _LL]
+    s.lip_mid.append(0.5 * (xy[lips_ok, _UL, 1] + xy[lips_ok, _LL, 1]))
+    s.ul_ll.append(np.hypot(*(xy[lips_ok, _UL] - xy[lips_ok, _LL]).T))
+    return d
+
+
+def _figures(s: _Samples, label: str, n_frames: int = 0) -> KinematicStats:
     nan = float("nan")
     rows = []
     for p in range(len(PELLETS)):
@@ -154,14 +177,18 @@ def _figures(s: _Samples, label: str) -> KinematicStats:
     def cat(parts):
         return np.concatenate(parts) if parts else np.empty(0)
 
-    jaw, mid, dist = cat(s.jaw), cat(s.lip_mid), cat(s.ul_ll)
+    jaw, mid, dist, mni_y = cat(s.jaw), cat(s.lip_mid), cat(s.ul_ll), cat(s.mni_y)
 
     def stat(fn, a, *args):
         return float(fn(a, *args)) if a.size else nan
 
     scalars = {
         "jaw_distance_mean": stat(np.mean, jaw),
+        "jaw_distance_median": stat(np.median, jaw),
         "jaw_distance_sd": math.sqrt(float(np.mean(s.jaw_var))) if s.jaw_var else nan,
+        "mni_y_p95": stat(np.percentile, mni_y, 95),
+        "mni_y_median": stat(np.median, mni_y),
+        "mni_y_p05": stat(np.percentile, mni_y, 5),
         "lip_mid_first": stat(np.mean, np.array(s.lip_mid_first)),
         "lip_mid_mean": stat(np.mean, mid),
         "lip_mid_median": stat(np.median, mid),
@@ -169,8 +196,9 @@ def _figures(s: _Samples, label: str) -> KinematicStats:
         "ul_ll_first": stat(np.mean, np.array(s.ul_ll_first)),
         "ul_ll_median": stat(np.median, dist),
         "ul_ll_p01": stat(np.percentile, dist, 1),
+        "ul_ll_p001": stat(np.percentile, dist, 0.1),
     }
-    return KinematicStats(table, scalars, len(s.files), label)
+    return KinematicStats(table, scalars, len(s.files), label, n_frames)
 
 
 def summarise(time_us, xy_mm, valid=None, *, label: str = "") -> KinematicStats:
@@ -202,6 +230,28 @@ def summarise(time_us, xy_mm, valid=None, *, label: str = "") -> KinematicStats:
     return _figures(s, label)
 
 
+def frame_set_stats(frames_mm, *, label: str = "") -> KinematicStats:
+    """The distributions of a frame set (frames without times, :mod:`cassi.data.xrmb.frames`).
+
+    Parameters
+    ----------
+    frames_mm : (F, 8, 2) pellets in :data:`~cassi.data.xrmb.files.PELLETS` order, mm; NaN where
+        a value is bad (each figure uses the frames where its pellets are valid).
+    label : what the frames are (names the source in errors and tables).
+
+    Returns
+    -------
+    KinematicStats with ``n_files`` 0 and ``n_frames`` F: the jaw distance's mean and median,
+    MNI heights, lip midpoints and UL-LL distances; every other figure NaN.
+    """
+    xy = np.asarray(frames_mm, dtype=np.float64)
+    if xy.ndim != 3 or xy.shape[1:] != (len(PELLETS), 2):
+        raise CassiInputError(f"expected frames (F, 8, 2), got {xy.shape}", path=label or None)
+    s = _Samples()
+    _add_distributions(s, xy, np.isfinite(xy).all(axis=2))
+    return _figures(s, label, n_frames=xy.shape[0])
+
+
 def recording_stats(recs, *, label: str = "") -> KinematicStats:
     """Statistics pooled over :class:`~cassi.data.xrmb.files.TaskRecording` objects.
 
@@ -226,8 +276,8 @@ def _selected(path: Path, tasks: set[int] | None):
         raise CassiInputError("not found", path=path)
     if path.is_file():
         if not path.name.lower().endswith(".txy"):
-            raise CassiInputError("expected a corpus directory, a subject directory or a "
-                                  "*.txy task file", path=path)
+            raise CassiInputError("expected a corpus directory, a subject directory, a "
+                                  "*.txy task file or a frame set (.npy, .mat)", path=path)
         yield read_txy(path)
         return
     corpus = Corpus(path)
@@ -247,19 +297,26 @@ def _selected(path: Path, tasks: set[int] | None):
 
 
 def corpus_stats(path, *, tasks=None) -> KinematicStats:
-    """Statistics of a corpus, a subject directory or one task file.
+    """Statistics of a corpus, a subject directory, one task file or a frame set.
 
     Parameters
     ----------
     path : path-like
+        A frame set is a ``.npy`` or ``.mat`` file (:func:`frame_set_stats`).
     tasks : iterable of int, optional
-        Only these task numbers (e.g. ``[105]`` for the "sa sa sa" repetitions).
+        Only these task numbers (e.g. ``[105]`` for the "sa sa sa" repetitions); a frame set has
+        none.
 
     Raises
     ------
-    CassiInputError : a malformed file (``file:line: reason``), nothing to measure.
+    CassiInputError : a malformed file (``file:line: reason``), nothing to measure, tasks asked
+        of a frame set.
     """
     p = Path(path)
+    if is_frame_set(p):
+        if tasks is not None:
+            raise CassiInputError("a frame set has no task numbers: leave out --tasks", path=p)
+        return frame_set_stats(read_frames(p), label=str(p))
     keep = None if tasks is None else {int(t) for t in tasks}
     return recording_stats(_selected(p, keep), label=str(p))
 

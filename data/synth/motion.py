@@ -50,6 +50,14 @@ MNI-MNM distance SD            < 0.3 mm        rigid jaw plus tracking noise (is
 second difference RMS          UL < 10 um,     issue 10; thesis Figure 3.9 (real JW45, at
                                tongue above    rest): UL 0.9, LL 5, tongue 4-7, jaw 2-3 um
                                UL and jaw
+UL-LL distance, 0.1th and 1st  22.0, 25.5 mm   real JW11 frames (:data:`REAL_FRAME_TARGETS`):
+percentile, JW11, all tasks    (within 10 %)   the 43,260 frames of the Wisconsin XRMB
+                                               database's JW11 in Qin & Carreira-Perpiñán
+                                               2010 (ICASSP; eecqin/TongueReconstruction,
+                                               dat/jw11.mat); sets :data:`CLOSURE_PRESS`
+jaw length MNI-MNM, JW11       42.6 mm         same; JW11's row of the subject table
+MNI height, 95th / 50th / 5th  -4.8, -8.2,     same: the jaw's resting height (the subject
+percentile, JW11               -13.9 mm        table) and its opening (the phones' angles)
 =============================  ==============  ==============================================
 
 Lip pellets sit on the vermilion borders (Westbury & Hashi 1997, J. Phonetics 25:405; Westbury,
@@ -108,6 +116,23 @@ REAL_RECORDING_TARGETS: tuple[tuple, ...] = (
     ("JW11", 105, "lip_mid_first", None, -1.9, "mm", 3.0),
     ("JW45", 13, "lip_mid_first", None, 0.91, "mm", 3.0),
 )
+#: Real-frame distributions (figure of cassi.data.corpus.stats, real value, mm): the Wisconsin
+#: XRMB database's JW11, the 43,260 frames Qin & Carreira-Perpiñán used (ICASSP 2010; file
+#: dat/jw11.mat of the repository eecqin/TongueReconstruction; not consecutive, so distributions
+#: only), measured with ``cassi corpus stats``. The generated JW11, all its tasks measured the
+#: same way, must lie within REAL_FRAMES_TOLERANCE (relative) of each: the lips pressed together
+#: (CLOSURE_PRESS), the jaw length and the jaw's resting height (JW11's row of
+#: :mod:`cassi.data.synth.subjects`), and the jaw's opening (the phones' jaw angles, unchanged:
+#: MNI's 5th-95th percentile spread is 9.1 mm real, 9.7 mm generated).
+REAL_FRAME_TARGETS: tuple[tuple[str, float], ...] = (
+    ("ul_ll_p001", 22.0),
+    ("ul_ll_p01", 25.5),
+    ("jaw_distance_median", 42.6),
+    ("mni_y_p95", -4.8),
+    ("mni_y_median", -8.2),
+    ("mni_y_p05", -13.9),
+)
+REAL_FRAMES_TOLERANCE = 0.10
 #: Upper-lip rise (mm) per degree of jaw opening: the upper lip elevates in opening gestures
 #: ("The effects of varying lower-lip displacement on upper-lip movements: implications for the
 #: coordination of speech movements", five speakers, strain gauges). The gain is set from the real
@@ -119,6 +144,18 @@ PERIOD_S = 6866e-6
 #: Jaw slide forward (mm) per degree of opening, along the articular eminence.
 JAW_SLIDE_MM_PER_DEG = 0.12
 _SLIDE_DIR = np.array([math.cos(math.radians(-25.0)), math.sin(math.radians(-25.0))])
+#: Bilabial closure (/p b m/, the lip-closing and swallowing tasks): the lips press together
+#: until the vertical UL-LL pellet distance is CLOSURE_PRESS of the subject's resting UL-LL
+#: distance (thesis Figure 4.25's lip thickness times the jaw length), varying by
+#: CLOSURE_PRESS_SD (relative SD) from closure to closure; soft contact stops them at
+#: LIPS_PRESSED_MIN of it. One rule for every subject (pressing compresses the lips in proportion
+#: to their height), set on the real JW11 frames (REAL_FRAME_TARGETS): there the UL-LL distance's
+#: 0.1th and 1st percentiles are 22.0 and 25.5 mm, 0.53 and 0.61 of JW11's resting 41.6 mm
+#: (0.976 x 42.6; the real task 5 starts at 41.5 mm). The former rule (lips meeting at 0.8 of the
+#: rest, pressed to 0.74) left the generated JW11 at 27.8 and 29.3 mm.
+CLOSURE_PRESS = 0.55
+CLOSURE_PRESS_SD = 0.08
+LIPS_PRESSED_MIN = 0.45
 #: Tongue pellets stay this far below the palatal outline (pellet radius plus tissue), mm.
 PALATE_CLEARANCE_MM = 1.2
 #: Tracking noise per pellet (UL LL T1 T2 T3 T4 MNI MNM): standard deviation (mm) and corner
@@ -185,7 +222,8 @@ class Anatomy:
     fig: SubjectFigures
     rest: np.ndarray        # (8, 2) resting pellets UL LL T1 T2 T3 T4 MNI MNM
     condyle: np.ndarray     # (2,)
-    d_closed: float         # UL-LL pellet distance with the lips closed
+    d_rest: float           # resting UL-LL pellet distance
+    d_closed: float         # UL-LL pellet distance with the lips just touching
     round_ul: float         # speech lip rounding of UL (mm forward)
     round_ll: float
     spread_ul: float        # speech lip spreading of UL (mm back)
@@ -204,7 +242,7 @@ class Anatomy:
         dist = float(np.hypot(*(ul - ll)))
         # speech moves the upper lip 1-3 mm (KINEMATIC_TARGETS): rounding and spreading stay
         # well short of the subject's extremes, which the oral-motor tasks reach
-        return cls(fig, rest, np.array(fig.condyle_mm, float), d_closed=0.8 * dist,
+        return cls(fig, rest, np.array(fig.condyle_mm, float), d_rest=dist, d_closed=0.8 * dist,
                    round_ul=min(1.5, 0.3 * fig.max_protrusion_ul_mm),
                    round_ll=min(4.0, 0.6 * fig.max_protrusion_ll_mm),
                    spread_ul=min(0.8, fig.spread_ul_mm),
@@ -298,7 +336,7 @@ def segment_targets(anat: Anatomy, segs: list[tuple[float, float, dict]],
     mids = np.array([0.5 * (s[0] + s[1]) for s in segs], float)
     tg = np.full((n, len(CHANNELS)), np.nan)
     ts = anat.fig.tongue_scale
-    jit = rng.normal(0.0, 1.0, size=(n, 4))
+    jit = rng.normal(0.0, 1.0, size=(n, 5))
     jaw = np.array([s[2].get("jaw", np.nan) for s in segs], float)
     jaw = jaw * jaw_gain * (1.0 + 0.08 * jit[:, 0])
     jaw = _fill(mids, jaw)
@@ -325,7 +363,8 @@ def segment_targets(anat: Anatomy, segs: list[tuple[float, float, dict]],
             tg[i, 2] = ull
             ul_y = rest[0, 1] - ull
             if lips == "close":       # pellets closer than at contact: the lips press together
-                tg[i, 4] = ul_y - 0.93 * anat.d_closed - ll_jaw_y[i]
+                press = CLOSURE_PRESS * (1.0 + CLOSURE_PRESS_SD * jit[i, 4])
+                tg[i, 4] = ul_y - press * anat.d_rest - ll_jaw_y[i]
             elif lips == "labiodental":
                 # lower lip up and drawn back onto the upper incisors (its floor)
                 tg[i, 4] = ul_y - 1.05 * anat.d_closed - ll_jaw_y[i]
@@ -404,8 +443,9 @@ def pellets(anat: Anatomy, ch: np.ndarray) -> np.ndarray:
     out[:, 1, 1] += ch[:, 4]
     # the upper incisors stop the lower lip going further back (soft contact)
     out[:, 1, 0] = -_soft_ceiling(-out[:, 1, 0], -anat.ll_floor_x, 0.25)
-    # lips meet: LL stays at least 0.88 d_closed below UL (pressed lips; soft contact)
-    out[:, 1, 1] = _soft_ceiling(out[:, 1, 1], out[:, 0, 1] - 0.88 * anat.d_closed, 0.6)
+    # lips meet: LL stays below UL by the most pressed lips' distance (soft contact)
+    out[:, 1, 1] = _soft_ceiling(out[:, 1, 1], out[:, 0, 1] - LIPS_PRESSED_MIN * anat.d_rest,
+                                 0.6)
     # tongue pellets under the palate where the palate is above them
     pal = anat.fig.palate
     tx = out[:, 2:6, 0]

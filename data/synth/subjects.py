@@ -15,6 +15,18 @@ Sources of the columns
 - ``lipthick``: thesis Figure 4.25 (``lipthick.txt``), divided by the jaw length.
 - JW45's jaw pellets (``mni_mm``, ``jaw_length_mm``, ``jaw_slope_deg``) are those of thesis
   Figure 3.9 (JW45_013.TXY, first valid row: MNI (-0.699, -7.452), MNM (-34.792, -9.862) mm).
+- JW11's jaw pellets are the real JW11's (Wisconsin XRMB database). ``jaw_length_mm`` 42.6: the
+  median MNI-MNM distance of the 43,260 JW11 frames Qin & Carreira-Perpiñán used (ICASSP 2010;
+  repository eecqin/TongueReconstruction, dat/jw11.mat; the real task 5 starts at 42.7 mm).
+  ``mni_mm`` (-0.8, -4.7) and ``jaw_slope_deg`` -5.1 (MNM above MNI): the real task 5's first
+  valid row, MNI (-0.79, -4.69), MNM (-43.36, -0.93) mm; the frames' MNI height (95th
+  percentile -4.8 mm, median -8.2 mm) puts the closed jaw there too. The thesis prints no jaw
+  length in mm, and its profile of JW11 agrees with 42.6 mm: rest UL 0.345 and LL 0.229 times
+  42.6 are 14.7 and 9.7 mm (the frames' median UL and LL x: 14.9, 9.4 mm), lipthick 0.976 times
+  42.6 is 41.6 mm (the real task 5's first UL-LL distance: 41.5 mm); the generator's former
+  37.9 mm gave 13.1, 8.7 and 37.0 mm. JW11's head measures were derived (rule below) with those
+  former pellets (MNI y -7.6 mm, jaw length 37.9 mm) and are kept: the real pellets sit higher on
+  the incisor and further back along the molars, which moves the pellets, not the bone.
 - JW12's palate parameters are a least-squares fit (max error 0.42 mm) to thesis Figure 3.11
   (JW12 PAL.DAT).
 - ``gonion_mm``, ``gnathion_mm`` (the head measures written to ``Headmeasures.txt``): not printed
@@ -65,9 +77,9 @@ Sources of the columns
   oral-motor gesture draws the upper lip's vermilion back onto the incisor tip (spreading moves
   it 1.9-6.2 mm in the five others). The generator spreads them by a typical 1.5 mm instead
   (:attr:`SubjectFigures.spread_ul_mm`): their generated MIN UL is 0.30-0.50.
-- Everything else (jaw length, pellet placement, condyle, palate shape, pharynx, lip height,
-  tongue size) is this generator's choice: drawn once around typical adult values (larger for
-  the male speakers) and frozen here. They are plausible, not measured.
+- Everything else (the other subjects' jaw length and pellet placement, condyle, palate shape,
+  pharynx, lip height, tongue size) is this generator's choice: drawn once around typical adult
+  values (larger for the male speakers) and frozen here. They are plausible, not measured.
 """
 from __future__ import annotations
 
@@ -210,7 +222,7 @@ _S = SubjectFigures
 #: The 15 subjects, in the order of maxprotru.txt.
 SUBJECTS: dict[str, SubjectFigures] = {s.name: s for s in (
     _S("JW11", "M", 0.345274, 0.228690, 0.519758, 0.439836, 0.009925, 0.003348, 0.975998,
-       jaw_length_mm=37.9, mni_mm=(-1.7, -7.6), jaw_slope_deg=2.7, condyle_mm=(-77.5, 15.6),
+       jaw_length_mm=42.6, mni_mm=(-0.8, -4.7), jaw_slope_deg=-5.1, condyle_mm=(-77.5, 15.6),
        palate=(-4.3, 8.1, 23.1, 12.9, 1.47, 0.09, -53.6, 12), pharynx_x_mm=(-89.8, -90.9),
        gonion_mm=(-89.0, -17.1), gnathion_mm=(-5.3, -44.2),
        lip_mid_y_mm=LIP_MID_REAL["JW11"], tongue_scale=0.99),

@@ -3,6 +3,7 @@
 - :mod:`.files` -- task files (``.txy``), ``PAL.DAT`` / ``PHA.DAT`` (and, re-exported, the
   readers of the two modules below);
 - :mod:`.mis` -- ``Mis.dat``; :mod:`.headmeasures` -- gonion and gnathion;
+- :mod:`.frames` -- frame sets: pellet frames without times (``.npy``, ``.mat``);
 - :mod:`.parke_io` -- Parke's ``st1.pts`` / ``stt.top``; :mod:`.alignment` -- TextGrids;
 - :mod:`.textlines` -- the small whitespace-separated formats' shared line reader.
 """

@@ -11,8 +11,10 @@ from data_helpers import JW45_EXCERPT
 
 from cassi.data.commands import main
 from cassi.common.errors import CassiInputError
-from cassi.data.corpus.stats import compare, corpus_stats, recording_stats, summarise
+from cassi.data.corpus.stats import (SCALARS, compare, corpus_stats, frame_set_stats,
+                                     recording_stats, summarise)
 from cassi.data.xrmb.files import PELLETS, TaskRecording, format_txy
+from cassi.data.xrmb.frames import read_frames
 
 DT_US = 6866
 DT = DT_US * 1e-6
@@ -73,6 +75,13 @@ def test_rigid_jaw_lip_midpoint_and_distance():
     assert s["lip_mid_p05"] == pytest.approx(-5.0)
     assert s["ul_ll_first"] == pytest.approx(math.hypot(2.0, 24.0))
     assert s["ul_ll_p01"] == pytest.approx(math.hypot(2.0, 24.0))
+    assert s["ul_ll_p001"] == pytest.approx(math.hypot(2.0, 24.0))
+    assert s["jaw_distance_median"] == pytest.approx(35.0, abs=1e-9)
+    # MNI (-1, -8) turns 0-12 degrees about (-80, 15): the rest at the top, the open jaw below
+    mni_y = 15.0 - np.sin(theta) * 79.0 + np.cos(theta) * -23.0
+    assert s["mni_y_p95"] == pytest.approx(np.percentile(mni_y, 95))
+    assert s["mni_y_median"] == pytest.approx(np.median(mni_y))
+    assert s["mni_y_p05"] == pytest.approx(np.percentile(mni_y, 5)) and s["mni_y_p05"] < -20.0
 
 
 def test_invalid_rows_are_left_out_and_files_are_pooled():
@@ -130,6 +139,89 @@ def test_compare_gives_ratios():
     row = df[(df.pellet == "") & (df.figure == "jaw_distance_mean")].iloc[0]
     assert row.ratio == pytest.approx(a.scalars["jaw_distance_mean"] / 35.0)
     assert np.isnan(df[(df.pellet == "UL") & (df.figure == "speed_p99")].iloc[0].ratio)  # b = 0
+
+
+# ----------------------------------------------------------------------------- frame sets
+def _frame_set(n: int = 1000) -> np.ndarray:
+    """(n, 16) mm, shuffled rows: the lips 24 mm apart, closing to 16 mm in 1 frame of 50."""
+    xy = _still(n)
+    xy[::50, 1, 1] += 8.0
+    xy[:, 6, 1] -= np.linspace(0.0, 10.0, n)                 # the MNI pellet lower and lower
+    xy[:, 7, 1] -= np.linspace(0.0, 10.0, n)                 # the jaw drops level: 35 mm
+    return np.random.default_rng(0).permutation(xy.reshape(n, 16))
+
+
+def test_frame_sets_give_distributions_only(tmp_path):
+    import scipy.io
+    frames = _frame_set()
+    np.save(tmp_path / "s.npy", frames)
+    scipy.io.savemat(tmp_path / "s.mat", {"frames": frames})
+    for name in ("s.npy", "s.mat"):
+        xy = read_frames(tmp_path / name)
+        assert xy.shape == (1000, 8, 2) and np.array_equal(xy.reshape(1000, 16), frames)
+        s = corpus_stats(tmp_path / name)
+        assert s.n_frames == 1000 and s.n_files == 0
+        assert s.pellets.isna().all().all()          # no times: no speeds, ranges, noise
+        sc = s.scalars
+        for k in ("jaw_distance_sd", "lip_mid_first", "ul_ll_first"):
+            assert math.isnan(sc[k]), k
+        assert sc["jaw_distance_mean"] == pytest.approx(35.0)
+        assert sc["jaw_distance_median"] == pytest.approx(35.0)
+        assert sc["mni_y_median"] == pytest.approx(-13.0, abs=0.01)
+        assert sc["mni_y_p95"] == pytest.approx(-8.5, abs=0.01)
+        assert sc["mni_y_p05"] == pytest.approx(-17.5, abs=0.01)
+        assert sc["ul_ll_median"] == pytest.approx(math.hypot(2.0, 24.0))
+        assert sc["ul_ll_p01"] == pytest.approx(math.hypot(2.0, 16.0))   # 20 pressed frames
+        assert sc["ul_ll_p001"] == pytest.approx(math.hypot(2.0, 16.0))
+        assert sc["lip_mid_mean"] == pytest.approx(-2.0 + 8.0 / 2 / 50)
+    # a bad value (NaN) leaves out its frame from the figures of its pellet only
+    frames[:500, 12:14] = np.nan                              # MNI lost in half the frames
+    s = frame_set_stats(frames.reshape(-1, 8, 2)).scalars
+    assert s["ul_ll_median"] == pytest.approx(math.hypot(2.0, 24.0))
+    assert s["jaw_distance_median"] == pytest.approx(35.0)
+    assert -18.0 < s["mni_y_p05"] and s["mni_y_p95"] < -8.0
+
+
+def test_bad_frame_sets_are_input_errors(tmp_path, capsys):
+    import scipy.io
+    good = _frame_set(200)
+    np.save(tmp_path / "cols.npy", good[:, :14])
+    np.save(tmp_path / "um.npy", good * 1000.0)
+    scipy.io.savemat(tmp_path / "two.mat", {"a": good, "b": good})
+    scipy.io.savemat(tmp_path / "none.mat", {"a": good[:, :3]})
+    (tmp_path / "junk.npy").write_text("not numpy")
+    bad = good.copy()
+    bad[7, 0] = 1000000.0                                     # a .txy bad-value marker
+    np.save(tmp_path / "marker.npy", bad)
+    np.save(tmp_path / "nan.npy", np.full((5, 16), np.nan))
+    cases = {"cols.npy": r"frames x 16 numbers.*\(200, 14\)",
+             "um.npy": "frame 1: a coordinate beyond 200 mm", "two.mat": "exactly one array",
+             "none.mat": r"variables: a \(200, 3\)", "junk.npy": "not a readable .npy",
+             "marker.npy": "frame 8: a coordinate beyond", "nan.npy": "no frame has all eight"}
+    for name, why in cases.items():
+        with pytest.raises(CassiInputError, match=why) as err:
+            read_frames(tmp_path / name)
+        assert err.value.path == str(tmp_path / name)
+    np.save(tmp_path / "good.npy", good)
+    with pytest.raises(CassiInputError, match="no task numbers"):
+        corpus_stats(tmp_path / "good.npy", tasks=[105])
+    assert main(["stats", str(tmp_path / "um.npy")]) == 2
+    assert f"{tmp_path / 'um.npy'}: frame 1:" in capsys.readouterr().err
+    assert main(["stats", str(tmp_path / "good.npy"), "--tasks", "105"]) == 2
+
+
+def test_cli_stats_compares_task_files_with_a_frame_set(tmp_path, capsys):
+    np.save(tmp_path / "frames.npy", _frame_set())
+    assert main(["stats", str(JW45_EXCERPT), "--compare", str(tmp_path / "frames.npy")]) == 0
+    out = capsys.readouterr().out
+    assert f"# B: {tmp_path / 'frames.npy'} (a frame set of 1000 frames: distributions only)" \
+        in out
+    assert "jaw_distance_median (mm)\t34 | 35 | x0.97\n" in out
+    assert "speed_p99" in out and "- | x-" in out
+    assert main(["stats", str(tmp_path / "frames.npy"), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)["a"]
+    assert doc["n_frames"] == 1000 and set(doc["scalars"]) == set(SCALARS)
+    assert doc["scalars"]["ul_ll_first"] is None and doc["pellets"]["UL"]["speed_p99"] is None
 
 
 # ----------------------------------------------------------------------------- the command

@@ -25,7 +25,8 @@ from cassi.data.corpus.profile import preprocess, read_lipthick, read_maxprotru
 from cassi.data.synth.corpus import (GENERATOR_VERSION, JW32_MNM_LOST_FROM_TASK, PROTECTED_TASKS,
                               TABLE_5_1_TASKS, default_corpus, generate_task, make_corpus)
 from cassi.data.corpus.stats import corpus_stats, recording_stats
-from cassi.data.synth.motion import KINEMATIC_TARGETS, REAL_RECORDING_TARGETS
+from cassi.data.synth.motion import (KINEMATIC_TARGETS, REAL_FRAME_TARGETS, REAL_FRAMES_TOLERANCE,
+                                     REAL_RECORDING_TARGETS)
 from cassi.data.synth.subjects import SUBJECTS
 from cassi.data.xrmb.files import PELLETS, read_head_measures, read_mis
 
@@ -45,6 +46,12 @@ def _digest(root: Path) -> dict[str, str]:
 def small(tmp_path_factory) -> Path:
     return make_corpus(tmp_path_factory.mktemp("synth") / "c", subjects=["JW45", "JW32", "JW12"],
                        seed=0, workers=2)
+
+
+@pytest.fixture(scope="module")
+def jw11(tmp_path_factory) -> Path:
+    return make_corpus(tmp_path_factory.mktemp("synth") / "jw11", subjects=["JW11"], seed=0,
+                       workers=1)
 
 
 @pytest.fixture(scope="module")
@@ -288,11 +295,10 @@ def test_jw45_at_rest_is_like_the_real_excerpt(small, fixtures_dir):
     assert a.scalars["jaw_distance_mean"] == pytest.approx(b.scalars["jaw_distance_mean"], abs=0.3)
 
 
-def test_generated_files_match_the_real_recordings_figures(small, tmp_path):
+def test_generated_files_match_the_real_recordings_figures(small, jw11):
     """Issue 23: UL speed, T3 second difference and lip midpoint of the generated JW11 task 105
     and JW45 task 13, read as the checks read them, within the factor (or mm) of the real
     recordings' figures (REAL_RECORDING_TARGETS, sources in synth_motion)."""
-    jw11 = make_corpus(tmp_path / "jw11", subjects=["JW11"], seed=0, workers=1)
     roots = {"JW11": jw11, "JW45": small}
     for subject, task, figure, pellet, real, kind, tol in REAL_RECORDING_TARGETS:
         rec = Corpus(roots[subject]).subject(subject).load(task, require_valid=False)
@@ -302,6 +308,21 @@ def test_generated_files_match_the_real_recordings_figures(small, tmp_path):
             assert real / tol <= value <= real * tol, (subject, task, figure, pellet, value)
         else:
             assert abs(value - real) <= tol, (subject, task, figure, value)
+
+
+def test_jw11_moves_like_the_real_jw11_frames(jw11, fixtures_dir):
+    """The generated JW11, all its tasks as `cassi corpus stats` measures them: the lips pressed
+    together (UL-LL 0.1th and 1st percentiles), the jaw length and the jaw's height (MNI 95th,
+    50th, 5th percentiles) within 10 % of the real JW11 frames' (REAL_FRAME_TARGETS, sources in
+    synth_motion); its preprocessed profile is still the thesis's, now with the real jaw."""
+    st = corpus_stats(jw11 / "JW11")
+    assert st.n_files > 90
+    for figure, real in REAL_FRAME_TARGETS:
+        value = st.scalars[figure]
+        assert abs(value / real - 1.0) <= REAL_FRAMES_TOLERANCE, (figure, value, real)
+    profiles = preprocess(Corpus(jw11))
+    _check_profiles(profiles, fixtures_dir, ["JW11"])
+    assert profiles["JW11"].jaw_length_mm == pytest.approx(42.6, abs=0.3)
 
 
 def test_same_seed_same_stats(small, tmp_path):

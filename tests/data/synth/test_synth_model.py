@@ -13,8 +13,10 @@ from hypothesis import strategies as st
 
 from cassi.data.corpus.profile import read_lipthick, read_maxprotru
 from cassi.data.synth.corpus import PERIOD_S, generate_task
-from cassi.data.synth.motion import (DIPHTHONGS, OMEGA, PHONE_SPECS, Anatomy, expand_phones, jaw_transform,
-                                     pellets, segment_targets, smooth)
+from cassi.data.synth.motion import (CLOSURE_PRESS, CLOSURE_PRESS_SD, DIPHTHONGS,
+                                     LIPS_PRESSED_MIN, OMEGA, PHONE_SPECS, Anatomy,
+                                     expand_phones, jaw_transform, pellets, segment_targets,
+                                     smooth)
 from cassi.data.synth.subjects import (LIP_MID_BY_SEX, LIP_MID_REAL, SUBJECTS, palate_y,
                                       subject_figures)
 from cassi.data.synth.tasks import LEXICON, TASKS, word_phones
@@ -44,7 +46,8 @@ def test_resting_lips_are_calibrated_to_the_profiles():
         assert ul[1] > ll[1], fig.name                         # upper lip above lower lip
         mni, mnm = np.array(fig.mni_mm), np.array(fig.mnm_mm)
         assert np.hypot(*(mni - mnm)) == pytest.approx(d, abs=1e-9)
-        assert 28.0 < d < 42.0 and mnm[0] < mni[0] < 3.0 and mni[1] < 0.0
+        # real jaws: JW45 34.2 mm (thesis Figure 3.9), JW11 42.6 mm (its real frames)
+        assert 28.0 < d < 45.0 and mnm[0] < mni[0] < 3.0 and mni[1] < 0.0
 
 
 def test_jw45_jaw_pellets_match_thesis_figure_3_9(fixtures_dir):
@@ -222,6 +225,25 @@ def test_bilabial_closes_the_lips_and_alveolar_reaches_the_palate():
     assert (all_t[inside, 1] <= palate_y(fig.palate, all_t[inside, 0]) + 0.01).all()
     aa = xy[f(0.8), 6, 1] - xy[0, 6, 1]
     assert -14.0 < aa < -4.0                                  # jaw opens for /a/
+
+
+@pytest.mark.parametrize("name", list(SUBJECTS))
+def test_bilabial_closure_presses_the_lips_by_one_rule(name):
+    """Every subject presses its lips in /p/ to CLOSURE_PRESS of its resting UL-LL distance
+    (the rule set on real JW11's frames), never closer than LIPS_PRESSED_MIN of it."""
+    fig = SUBJECTS[name]
+    anat = Anatomy.of(fig)
+    assert anat.d_rest == pytest.approx(fig.lipthick * fig.jaw_length_mm)
+    rng = np.random.default_rng(1)
+    for _ in range(3):
+        segs = expand_phones([(0.0, 0.6, "sp"), (0.6, 0.9, "AA"), (0.9, 1.3, "P"),
+                              (1.3, 1.6, "AA"), (1.6, 2.4, "sp")])
+        starts, tg = segment_targets(anat, segs, rng)
+        xy = pellets(anat, smooth(starts, tg, int(2.4 / PERIOD_S)))
+        held = xy[int(1.1 / PERIOD_S):int(1.25 / PERIOD_S)]
+        ratio = (held[:, 0, 1] - held[:, 1, 1]).min() / anat.d_rest
+        assert LIPS_PRESSED_MIN - 0.03 < ratio < CLOSURE_PRESS * (1 + 3 * CLOSURE_PRESS_SD), name
+        assert (xy[:, 0, 1] - xy[:, 1, 1] > LIPS_PRESSED_MIN * anat.d_rest - 1.0).all(), name
 
 
 @pytest.mark.parametrize("task", [3, 11, 13, 16, 105, 106, 112, 118])
