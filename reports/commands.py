@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from cassi.common.cliargs import ascii_int, seed_int
+
 
 def register(sub) -> None:
     p = sub.add_parser("report", help="write an HTML report (and CSV/Markdown tables) of a run",
@@ -25,8 +27,8 @@ def register(sub) -> None:
     p.add_argument("--out", type=Path, required=True, help="session directory (new)")
     p.add_argument("--tables", help="the rubric's tables to rate, e.g. A,C,E (default: the "
                    "thesis's tables)")
-    p.add_argument("--sample", type=int, help="rate only the first N cells of the shuffled order")
-    p.add_argument("--seed", type=int, help="the shuffle's and the codes' seed (default: drawn "
+    p.add_argument("--sample", type=ascii_int, help="rate only the first N cells of the shuffled order")
+    p.add_argument("--seed", type=seed_int, help="the shuffle's and the codes' seed (default: drawn "
                    "at random and kept in the key)")
     p.set_defaults(func="cassi.reports.actions:cmd_rate")
 
