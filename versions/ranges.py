@@ -22,7 +22,7 @@ __all__ = ["RANGED_MODULES", "RangedConstant", "ranged_constants", "constant_set
 #: The modules whose ``RANGES`` are gathered, by the short name settings are called with.
 RANGED_MODULES: dict[str, ModuleType] = {"constants": constants, "lips_constants": lips_constants}
 
-_lock = threading.Lock()
+_lock = threading.RLock()  # a block may set a second constant inside the first
 
 
 @dataclass(frozen=True)
@@ -49,7 +49,7 @@ def ranged_constants() -> dict[str, RangedConstant]:
 @contextmanager
 def constant_set(name: str, value: float) -> Iterator[None]:
     """Set the ranged constant ``name`` (``module.NAME``) to ``value`` in this process while the
-    block runs. One setting at a time (a lock): the modules are the process's own."""
+    block runs; other threads wait (the modules are the process's own)."""
     known = ranged_constants()
     if name not in known:
         raise CassiInputError(f"no ranged constant {name!r}; known: {', '.join(known)}")
