@@ -186,9 +186,10 @@ class Check:
             raise ValueError(f"{self.name}: direction must be higher or lower")
         if ":" not in self.measure:
             raise ValueError(f"{self.name}: measure must be 'module:function'")
-        self._check_ranges()
 
-    def _check_ranges(self) -> None:
+    def verify_ranges(self) -> None:
+        """Each declared range holds its threshold, and either end keeps the thresholds' order
+        (the registry asks at start-up; a check built with other thresholds is not asked)."""
         if not self.ranges:
             return
         if len(self.ranges) != len(self.thresholds) or not self.range_reason:

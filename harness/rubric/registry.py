@@ -1293,6 +1293,7 @@ for _c in _ALL:
 for _c in CHECKS.values():
     if _c.charged_with is not None and _c.charged_with not in CHECKS:
         raise RuntimeError(f"check {_c.name} is charged with unknown check {_c.charged_with}")
+    _c.verify_ranges()
 del _c
 
 

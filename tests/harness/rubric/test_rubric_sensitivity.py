@@ -116,16 +116,16 @@ def test_with_geometry_replaces_the_geometry_stage_rows_and_keeps_the_image_rows
                                                       ("lips_centered_high", 0.9)]
 
 
-def test_ranges_are_checked_where_they_are_declared():
+def test_ranges_are_verified_as_the_registry_declares_them():
     base = dict(name="x", table="A", component="lips", view="front", unit="mm", frames="all",
                 description="", negatives=(1, 2), direction="higher", reason="", text="",
                 kind="geometry", measure="measures:m", thresholds=(1.0, 3.0))
-    Check(**base, ranges=((0.5, 1.5), None), range_reason="why")
+    Check(**base, ranges=((0.5, 1.5), None), range_reason="why").verify_ranges()
     for bad in (((1.5, 2.0), None), ((0.5, 3.5), None), ((0.5, 1.5),)):
         with pytest.raises(ValueError):
-            Check(**base, ranges=bad, range_reason="why")
+            Check(**base, ranges=bad, range_reason="why").verify_ranges()
     with pytest.raises(ValueError, match="range_reason"):
-        Check(**base, ranges=((0.5, 1.5), None))
+        Check(**base, ranges=((0.5, 1.5), None)).verify_ranges()
 
 
 def test_every_ranged_threshold_has_its_reason_and_the_self_graded_check_none():
