@@ -1,5 +1,5 @@
-"""What ``cassi run``, ``cassi nightly``, ``cassi bench``, ``cassi gc``, ``cassi render`` and
-``cassi animate`` do in the harness (parsers: :mod:`.commands`, :mod:`.render_commands`)."""
+"""What ``cassi run``, ``cassi nightly``, ``cassi bench``, ``cassi gc``, ``cassi sensitivity``,
+``cassi render`` and ``cassi animate`` do in the harness (parsers: :mod:`.commands`, :mod:`.render_commands`)."""
 from __future__ import annotations
 
 import argparse
@@ -19,6 +19,7 @@ from cassi.harness.evaluation.config import NIGHTLY
 from cassi.harness.evaluation.nightly import nightly
 from cassi.harness.evaluation.nights import gc
 from cassi.harness.evaluation.run import run
+from cassi.harness.evaluation.sensitivity import JSON_NAME, MD_NAME, sensitivity
 from cassi.harness.farm.store import collect_garbage, store_lock
 from cassi.renderer.commands import NEUTRAL
 from cassi.versions.registry import get_version
@@ -65,6 +66,16 @@ def cmd_bench(args: argparse.Namespace) -> int:
     if "farm_speedup_2_workers" in report:
         print(f"farm_speedup_2_workers: {report['farm_speedup_2_workers']}")
     print(f"wrote {out}")
+    return 0
+
+
+def cmd_sensitivity(args: argparse.Namespace) -> int:
+    out = args.out or args.run
+    doc = sensitivity(args.run, out, only=args.only, workers=args.workers)
+    flipped = [f for f in doc["findings"] if f["flips"]]
+    print(f"{len(doc['findings'])} findings, {len(flipped)} flipped by some setting; "
+          f"timing: {doc['timing']}")
+    print(f"wrote {Path(out) / JSON_NAME} and {Path(out) / MD_NAME}")
     return 0
 
 

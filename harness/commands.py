@@ -1,4 +1,5 @@
-"""``cassi run`` (a batch of subjects x tasks x versions x views) and ``cassi bench``."""
+"""``cassi run`` (a batch of subjects x tasks x versions x views), ``cassi nightly``,
+``cassi bench``, ``cassi gc`` and ``cassi sensitivity``."""
 from __future__ import annotations
 
 import argparse
@@ -108,12 +109,32 @@ def _add_gc(sub) -> None:
     p.set_defaults(func="cassi.harness.actions:cmd_gc")
 
 
+def _add_sensitivity(sub) -> None:
+    p = sub.add_parser("sensitivity", help="each version-level finding of a run with its "
+                                           "robustness to the project's own constants",
+                       description="Re-derive every version-level finding of a finished run "
+                       "(per table, each version against the one before it, by total negatives "
+                       "and by the paired comparison) with one constant at a time at each end of "
+                       "its declared range: rubric thresholds re-applied to the stored values "
+                       "(no render), version constants by animating and checking again (one "
+                       "geometry stage each). Writes sensitivity.json and sensitivity.md.")
+    p.add_argument("run", type=Path, help="a finished run directory")
+    p.add_argument("--out", type=Path, help="where to write (default: the run directory)")
+    p.add_argument("--only", choices=("thresholds", "versions"),
+                   help="only the rubric thresholds, or only the version constants")
+    p.add_argument("--workers", type=ascii_int,
+                   help="processes animating the version settings (default: the run's)")
+    p.set_defaults(func="cassi.harness.actions:cmd_sensitivity")
+
+
 def register(sub) -> None:
-    """Add ``run``, ``nightly``, ``bench`` and ``gc`` to the ``cassi`` subcommands."""
+    """Add ``run``, ``nightly``, ``bench``, ``gc`` and ``sensitivity`` to the ``cassi``
+    subcommands."""
     _add_run(sub)
     _add_nightly(sub)
     _add_bench(sub)
     _add_gc(sub)
+    _add_sensitivity(sub)
 
 
 def config_from_args(args: argparse.Namespace, defaults: C.RunConfig = C.RunConfig(), *,

@@ -33,6 +33,7 @@ from cassi.harness.rubric import (AGGREGATION_RULES, CHECKS, RATINGS, component_
 from cassi.harness.rubric.paired import (BOOTSTRAP_N, BOOTSTRAP_SEED, TIE_TOLERANCE,
                                          bootstrap_median, paired_comparisons, paired_sentence,
                                          sign_test)
+from cassi.reports.sensitivity import sensitivity_section
 from cassi.reports.tables import markdown_table
 from cassi.reports.viewer import mask_overlay, viewer_href, write_viewers
 from cassi.data.corpus.disk import Corpus
@@ -645,6 +646,7 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
         comparison=_comparison(run, previous, out, diff),
         tables=_table_sections(run, cr, out, _fault_links(run, fv, viewers)),
         criterion=_criterion(run, out), rescored=_rescored(run, cr),
+        sensitivity=sensitivity_section(run.root, out),
         videos=encoding.videos(),
         rules=AGGREGATION_RULES,
         subjects=subject_links, trend=trend, gate=gate,

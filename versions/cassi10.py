@@ -26,7 +26,7 @@ disabled parameters are listed in :mod:`cassi.versions.constants` and refused by
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import Enum
 from typing import ClassVar
 
@@ -194,7 +194,8 @@ def nose_tip_vertices(vertices: np.ndarray | None = None) -> np.ndarray:
 class NoseClearanceStage:
     """Keep a space between the top of the upper lip and the nose tip (4.1.1)."""
 
-    min_gap_mm: float = K.NOSE_LIP_MIN_GAP_MM
+    # read when built, not when imported (cassi.versions.ranges sets it for a while)
+    min_gap_mm: float = field(default_factory=lambda: K.NOSE_LIP_MIN_GAP_MM)
     name: str = "nose"
 
     def _setup(self, ctx: TaskContext) -> tuple[np.ndarray, np.ndarray, float]:

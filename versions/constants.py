@@ -122,6 +122,13 @@ CORNER_WEIGHTS = {"UL": 0.5, "LL": 0.5}
 #: the neutral face's own gap, so a lip at or below its neutral height never moves the nose.
 #: 2 mm: a visible space at the scale of the lips (~10 mm tall), small enough not to reshape it.
 NOSE_LIP_MIN_GAP_MM = 2.0
+#: Name -> (low, high, reason): the plausible range of each CHOSEN value that the default versions
+#: use, declared before any sensitivity analysis (``cassi sensitivity`` animates at each end). The
+#: tongue tip's distances below act only in the clamped tongue, no default's reading.
+RANGES: dict[str, tuple[float, float, str]] = {
+    "NOSE_LIP_MIN_GAP_MM": (1.0, 3.0, "a visible space at the scale of the lips: about one to two "
+                                      "pixels of the preview front view (1.3 mm)"),
+}
 #: CHOSEN (4.1.1 says only "the other vertices on the tongue are adjusted accordingly"): each
 #: edge vertex follows the centre vertex it lies beside; the edge beside the tip (294) keeps its
 #: place beside the tip (it follows the tip, which is placed from T1 and T2, see below); the back

@@ -202,3 +202,34 @@ BELOW_LIP_SEARCH: float = 50.0
 #: follows the movement of 70 with weight 0.6 and of its outline neighbours 69 and 51 with
 #: 0.2 each (weights sum to 1: 44 moves rigidly with the lips' corner region).
 CHEEK_CORNER_WEIGHTS: tuple[tuple[int, float], ...] = ((70, 0.6), (69, 0.2), (51, 0.2))
+
+# --- Plausible ranges of the unstated values ------------------------------------------------
+
+#: Name -> (low, high, reason): how far each value left unstated above could plausibly lie,
+#: declared before any sensitivity analysis (``cassi sensitivity`` animates at each end, one
+#: value at a time). The readings (CORNER_READING, LOW_LIPS_READING) are choices between two
+#: rules, not values, and have their evidence beside them; BELOW_LIP_SEARCH is a search extent.
+RANGES: dict[str, tuple[float, float, str]] = {
+    "RHO": (0.05, 0.2, "0.2 keeps the lips' largest step per row at 1.8 times the pellets' "
+                       "(measured above); 0.05 doubles the lag to ~19 rows (130 ms), still short "
+                       "of a rounding gesture"),
+    "NEAR_C_REST": (2.5, 10.0, "an eighth to a half of the 20 units between rest and fully "
+                               "stretched: lips that have barely moved forward or back"),
+    "SMALL_C_PRIME": (15.0, 35.0, "'c' is small': from 70 % to 30 % of the way from the rounding "
+                                  "onset (50) to fully rounded"),
+    "A_MIN": (33.0, 46.0, "lips at full protrusion keep about 60 % of their resting width: 50-70 % "
+                          "of a resting half-width of ~65 units"),
+    "A_MAX": (104.0, 117.0, "the same rule as the value with a wide wag's height b of 60-80 units "
+                            "instead of 70"),
+    "CORNER_STRETCH_AT_REST": (4.0, 12.0, "1-3 mm beyond a at rest (0.25 mm a unit): a visible "
+                                          "sharpening, short of a beak"),
+    "THICKEN_GAIN": (0.2, 0.6, "rounded lips visibly pout, the thesis gives no figure: 20-60 % "
+                               "thicker when fully rounded"),
+    "LIP_COMPRESS_MIN": (0.7, 0.9, "pressed lips compress by a tenth to three tenths before they "
+                                   "cross; 0.7 was tried (above)"),
+    "ABOVE_LIP_PORTION": (0.3, 0.7, "the skin above the vermilion moves a third to two thirds as "
+                                    "far as the lip edge"),
+    "BELOW_LIP_Y_PORTION": (0.3, 0.7, "an unstated weight beside the stated half: a third to two "
+                                      "thirds"),
+    "BELOW_LIP_SPLIT": (0.35, 0.65, "halfway +- 0.15; 0.65 was the earlier value"),
+}

@@ -12,7 +12,7 @@ OUTER_ABC_CALC is a recurrence over frames and runs as a tight loop over plain f
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -119,9 +119,10 @@ def is_vertical(a, b) -> np.ndarray:
 class OuterAbcParams:
     """The tuning of OUTER_ABC_CALC (defaults from :mod:`lips_constants`, with reasons)."""
 
-    rho: float = K.RHO
-    near_c_rest: float = K.NEAR_C_REST
-    small_c_prime: float = K.SMALL_C_PRIME
+    # read when built, not when imported: cassi.versions.ranges sets them for a while
+    rho: float = field(default_factory=lambda: K.RHO)
+    near_c_rest: float = field(default_factory=lambda: K.NEAR_C_REST)
+    small_c_prime: float = field(default_factory=lambda: K.SMALL_C_PRIME)
     c_rest: float = K.C_REST
     width_rate_divisor: float = K.WIDTH_RATE_DIVISOR
 
@@ -272,14 +273,14 @@ def limit_abc(
     a,
     c,
     *,
-    a_min: float = K.A_MIN,
-    a_max: float = K.A_MAX,
+    a_min: float | None = None,
+    a_max: float | None = None,
     c_limit: float = K.C_LIMIT,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Step 7 of LIP MOVEMENT: limits on the outer a and c (Parke units).
 
-    ``a`` is clipped to [a_min, a_max] (the drawn width) and ``c`` to [0, c_limit] (how far the
-    corner is stretched). The orientation stays OUTER_ABC_CALC's own (height against its
+    ``a`` is clipped to [a_min, a_max] (the drawn width; by default ``A_MIN``, ``A_MAX``, read
+    at the call) and ``c`` to [0, c_limit] (how far the corner is stretched). The orientation stays OUTER_ABC_CALC's own (height against its
     unlimited width): c passes through 0 at that switch, so the corner does not jump there,
     whereas judging it against the clipped width would switch it wherever a limit binds.
 
@@ -290,6 +291,8 @@ def limit_abc(
     -------
     (a, c) : arrays (F,)
     """
+    a_min = K.A_MIN if a_min is None else a_min
+    a_max = K.A_MAX if a_max is None else a_max
     return (
         np.clip(np.asarray(a, dtype=np.float64), a_min, a_max),
         np.clip(np.asarray(c, dtype=np.float64), 0.0, c_limit),

@@ -60,13 +60,14 @@ def rounding_t(cp, *, onset: float = K.ROUNDING_ONSET_C) -> np.ndarray:
 
 
 def current_thickness(
-    thick: float, cp, *, onset: float = K.ROUNDING_ONSET_C, gain: float = K.THICKEN_GAIN
+    thick: float, cp, *, onset: float = K.ROUNDING_ONSET_C, gain: float | None = None
 ) -> np.ndarray:
     """Step 8 of LIP MOVEMENT: currthick, equal to Thick unless the lips round (c' < 50).
 
     ``currthick = Thick * (1 + gain * t)`` with t from :func:`rounding_t`; continuous at the
     onset and ``(1 + gain) Thick`` when fully rounded.
     """
+    gain = K.THICKEN_GAIN if gain is None else gain  # read at the call (cassi.versions.ranges)
     return thick * (1.0 + gain * rounding_t(cp, onset=onset))
 
 

@@ -135,17 +135,27 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
         raise SkipJob(f"subject cannot be preprocessed: {err}") from err
     verify_profile(job, profile)
     version = get_version(job.version)
-    face = get_face(corpus, job.subject, profile)
     with geometry_temp_dir() as tmp:
-        anim = animate_to_file(version, profile, face, rec, Path(tmp))
-        withheld = withheld_sites(version, profile, face, rec)           # leave-one-out tongue
-        face = get_version_face(corpus, job.subject, profile, version)  # what it animated
-        rows = rubric.run_geometry_checks(anim, face, profile, task=job.task, subject=job.subject,
-                                          rep=job.rep, neutral=get_neutral(), recording=rec,
-                                          withheld=withheld)
-        out = _geometry_output(job, ctx, rec, anim, pd.DataFrame(rows))
+        anim, face, rows = checked_animation(version, corpus, job.subject, profile, rec,
+                                             task=job.task, rep=job.rep, tmp=Path(tmp))
+        out = _geometry_output(job, ctx, rec, anim, rows)
         out.files["viewer"] = (_viewer_output(rec, anim, face, profile, out.rows), ".npz")
         return out
+
+
+def checked_animation(version, corpus, subject: str, profile, rec, *, task: int, rep: int,
+                      tmp: Path, version_face_of=get_version_face):
+    """Animate ``rec`` into ``tmp`` (and again with T2, then T3, withheld: Table G's
+    leave-one-out tongue) and run the geometric checks: (animation, the face the version
+    animated, the checks' rows). ``version_face_of`` gives that face (the worker's cache by
+    default; :func:`cassi.harness.evaluation.sensitivity` builds it afresh under a setting)."""
+    face = get_face(corpus, subject, profile)
+    anim = animate_to_file(version, profile, face, rec, tmp)
+    withheld = withheld_sites(version, profile, face, rec)           # leave-one-out tongue
+    face = version_face_of(corpus, subject, profile, version)       # what it animated
+    rows = rubric.run_geometry_checks(anim, face, profile, task=task, subject=subject, rep=rep,
+                                      neutral=get_neutral(), recording=rec, withheld=withheld)
+    return anim, face, pd.DataFrame(rows)
 
 
 @dataclass(frozen=True)

@@ -50,6 +50,13 @@ def _grades(check: Check) -> str:
                      for t, n in zip(check.thresholds, check.negatives))
 
 
+def _ranges(check: Check) -> str:
+    """``1.4-2 mm (1.5), fixed (4)``: each threshold's declared range, or fixed."""
+    unit = f" {check.unit}" if check.unit else ""
+    return ", ".join(f"{_number(r[0])}-{_number(r[1])}{unit} ({_number(t)})" if r is not None
+                     else f"fixed ({_number(t)})" for t, r in zip(check.thresholds, check.ranges))
+
+
 def _check_section(check: Check) -> list[str]:
     notes = []
     if not check.counted:
@@ -66,6 +73,9 @@ def _check_section(check: Check) -> list[str]:
              f"- **frames**: {check.frames}; **tasks**: {_tasks(check)}",
              f"- **negatives**: {_grades(check)}",
              f"- **reason**: {check.reason}"]
+    if check.ranges:
+        lines.append(f"- **plausible range** (`cassi sensitivity`): {_ranges(check)}; "
+                     f"{check.range_reason}")
     if notes:
         lines.append(f"- **note**: {'; '.join(notes)}")
     return lines + [""]

@@ -6,6 +6,7 @@ in :mod:`cassi.harness.rubric.registry`.
 """
 from __future__ import annotations
 
+import dataclasses
 import importlib
 from dataclasses import dataclass
 
@@ -137,6 +138,13 @@ class Check:
     charged_with : str or None
         One fault, one charge: this check earns nothing for a subject and version when the named
         check already charges the same fault (the aggregation applies it).
+    ranges : tuple of (low, high) or None
+        The plausible range of each threshold the rubric chose itself (same length as
+        ``thresholds``; None for a threshold the thesis or a cited source fixes), declared before
+        any sensitivity run: ``cassi sensitivity`` re-grades the stored values at each end.
+        Empty: no threshold of the check is ranged.
+    range_reason : str
+        Why those ends (what a viewer sees, the thesis, literature).
     """
 
     name: str
@@ -158,6 +166,8 @@ class Check:
     counted: bool = True
     gate_tolerance: int = 0
     charged_with: str | None = None
+    ranges: tuple[tuple[float, float] | None, ...] = ()
+    range_reason: str = ""
 
     def __post_init__(self):
         if self.table not in TABLES:
@@ -176,6 +186,26 @@ class Check:
             raise ValueError(f"{self.name}: direction must be higher or lower")
         if ":" not in self.measure:
             raise ValueError(f"{self.name}: measure must be 'module:function'")
+
+    def verify_ranges(self) -> None:
+        """Each declared range holds its threshold, and either end keeps the thresholds' order
+        (the registry asks at start-up; a check built with other thresholds is not asked)."""
+        if not self.ranges:
+            return
+        if len(self.ranges) != len(self.thresholds) or not self.range_reason:
+            raise ValueError(f"{self.name}: one range (or None) per threshold, and a range_reason")
+        for i, (t, r) in enumerate(zip(self.thresholds, self.ranges)):
+            if r is not None and not r[0] < t < r[1]:
+                raise ValueError(f"{self.name}: threshold {t} must lie inside its range {r}")
+            for end in () if r is None else r:  # each end keeps the thresholds' order
+                self.with_threshold(i, end)
+
+    def with_threshold(self, index: int, value: float) -> "Check":
+        """This check with threshold ``index`` set to ``value`` (one end of its range); the
+        thresholds must still run from mild to severe."""
+        t = list(self.thresholds)
+        t[index] = float(value)
+        return dataclasses.replace(self, thresholds=tuple(t), ranges=())
 
     @property
     def func(self):

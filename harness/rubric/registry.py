@@ -239,6 +239,10 @@ _ALL: list[Check] = [
           description="vertical overlap of the back teeth (lower molar top minus upper molar bottom), beyond "
                       "Parke's rest face",
           thresholds=(1.5,),
+          ranges=((1.0, 2.5),),
+          range_reason="'visible in the half view': about a pixel of the preview views (1.3 mm at "
+                       "the front view) more than Parke's, from a little under one (1.0 mm) to "
+                       "two (2.5 mm)",
           negatives=(1,),
           direction="higher",
           reason="Parke's face is the reference alignment; 1.5 mm more overlap than it is visible in the "
@@ -255,6 +259,11 @@ _ALL: list[Check] = [
           description="angle of the lower occlusal line (lower molar -> lower incisor tip) above the upper "
                       "one, beyond Parke's rest face",
           thresholds=(5.0, 25.0),
+          ranges=((3.0, 8.0), (20.0, 30.0)),
+          range_reason="mild: 8 deg was the value before the renders moved it to 5; 3 deg lifts "
+                       "the front of the ~30 mm row by 1.6 mm, about a pixel of the half view, "
+                       "the least slope that shows. Severe: 'very steep' has no figure in the "
+                       "thesis; 20-30 deg around 25",
           negatives=(1, 3),
           direction="higher",
           reason="was 8 deg; 5 deg after the renders: CASSI 2.0 on synthetic JW11 task 19 ends at 7 deg "
@@ -272,6 +281,8 @@ _ALL: list[Check] = [
           frames="during the task (held) and at its end",
           description="angle of the lower occlusal line below the upper one, beyond rest",
           thresholds=(5.0,),
+          ranges=((3.0, 8.0),),
+          range_reason="as teeth_slope_up's mild threshold",
           negatives=(1,),
           direction="higher",
           reason="as teeth_slope_up (5 deg)",
@@ -287,6 +298,9 @@ _ALL: list[Check] = [
           description="vertical gap between the upper (226) and lower front teeth tips, or between the back "
                       "teeth beyond Parke's rest face, whichever is larger",
           thresholds=(5.0,),
+          ranges=((3.5, 7.0),),
+          range_reason="'clearly open' has no figure: about three to five pixels of the half view "
+                       "(1.3 mm each); fewer reads as nearly closed",
           negatives=(1,),
           direction="higher",
           reason="at the end of a task the jaw is near rest, where the incisors nearly meet; a gap over "
@@ -303,6 +317,10 @@ _ALL: list[Check] = [
           frames="all frames",
           description="smallest gap between the lips' edges (61 above 58) over the task",
           thresholds=(1.5, 4.0),
+          ranges=((1.4, 2.0), None),
+          range_reason="mild: not below Parke's neutral 1.35 mm, which the front render shows as "
+                       "lips touching; up to 2.0 mm, a seam of about a pixel plus the outline's "
+                       "round-off. Severe: the cited 3 mm interlabial gap fixes it",
           negatives=(1, 2),
           direction="higher",
           reason="lips that touch have ~0 gap. Was 1 mm; raised to 1.5 mm after the renders: "
@@ -322,6 +340,8 @@ _ALL: list[Check] = [
           frames="first frame",
           description="gap between the lips' edges at the first frame",
           thresholds=(1.5,),
+          ranges=((1.4, 2.0),),
+          range_reason="as lips_never_touch's mild threshold",
           negatives=(1,),
           direction="higher",
           reason="desirable: the lips lightly touch at the start; 1.5 mm as lips_never_touch (Parke's "
@@ -338,6 +358,9 @@ _ALL: list[Check] = [
           frames="first frame",
           description="how far the lips' edges cross at the first frame (tightly pressed)",
           thresholds=(2.0,),
+          ranges=((1.0, 3.0),),
+          range_reason="CASSI 2.0's 0.8 mm crossing renders as lips lightly closed, so not below "
+                       "1.0 mm; up to 3.0 mm, past two pixels of the front view",
           negatives=(1,),
           direction="higher",
           reason="lightly touching lips meet at 0. Was 0.5 mm; 2 mm after the renders: CASSI "
@@ -401,6 +424,9 @@ _ALL: list[Check] = [
           frames="all frames (sustained 3)",
           description="depth of lip vertices behind the front surface of the front teeth",
           thresholds=(0.5,),
+          ranges=((0.25, 1.0),),
+          range_reason="beyond the teeth's shading: from palate_below_incisor's round-off (0.25 "
+                       "mm) to under a pixel of the side view (1.0 mm)",
           negatives=(1,),
           direction="higher",
           reason="0.5 mm is beyond the teeth's shading: the lip visibly sinks in",
@@ -415,6 +441,9 @@ _ALL: list[Check] = [
           frames="all frames (90th percentile)",
           description="x(49) - x(67): lower lip forward of the upper",
           thresholds=(1.0, 3.0),
+          ranges=((0.5, 1.5), (2.0, 4.0)),
+          range_reason="'shows in profile': about a pixel of the side view, 0.5-1.5 mm; 'marked' "
+                       "has no figure: 2-4 mm around 3",
           negatives=(1, 2),
           direction="higher",
           reason="upper lip is normally at or ahead of the lower; 1 mm ahead shows in profile, 3 mm is "
@@ -430,6 +459,9 @@ _ALL: list[Check] = [
           frames="all frames (sustained 3)",
           description="how far the lower lip's edge rises above the upper lip's edge (the lips cross)",
           thresholds=(0.5,),
+          ranges=((0.25, 1.0),),
+          range_reason="as lips_through_teeth: a crossing from past the round-off to under a "
+                       "pixel",
           negatives=(1,),
           direction="higher",
           reason="crossing by 0.5 mm shows as one lip through the other",
@@ -522,6 +554,9 @@ _ALL: list[Check] = [
           frames="initialization",
           description="how far the palatal outline reaches below the tip of the upper front teeth (226)",
           thresholds=(0.25, 2.0),
+          ranges=(None, (1.5, 3.0)),
+          range_reason="mild: 0.25 mm is the outline's numerical round-off, not a choice; 'very "
+                       "noticeable' has no figure: one to two pixels of the half view",
           negatives=(1, 2),
           direction="higher",
           reason="any reach below the tip shows (0.25 mm rules out round-off); over 2 mm is 'very "
@@ -539,6 +574,9 @@ _ALL: list[Check] = [
           description="how far the jaw (14-43) reaches below the upper incisor tip (226), "
                       "where the version put it, over Parke's neutral face",
           thresholds=(1.15,),
+          ranges=((1.13, 1.165),),
+          range_reason="the side renders bracket it: 1.12 read as an ordinary jaw, 1.17 as very "
+                       "long",
           negatives=(1,),
           direction="higher",
           reason="CASSI 1.0 turns Parke's jaw onto the head measures (4.1.3), so the jaw is "
@@ -559,6 +597,9 @@ _ALL: list[Check] = [
           frames="initialization",
           description="jaw squareness (side-view hull area / box) over Parke's neutral",
           thresholds=(1.10,),
+          ranges=((1.05, 1.15),),
+          range_reason="'visibly squarer' has no render cited: 5-15 % fuller than Parke's around "
+                       "10 %",
           negatives=(1,),
           direction="higher",
           reason="a square jaw fills its box; 10 % fuller than Parke's is visibly squarer",
@@ -574,6 +615,9 @@ _ALL: list[Check] = [
           description="side-view area of the lower face (hull of the jaw 14-43 and the upper "
                       "incisor tip 226), where the version put it, over Parke's neutral face",
           thresholds=(1.25,),
+          ranges=((1.2, 1.3),),
+          range_reason="'a quarter larger' +-5 %; not below 1.2: the default corpus's largest "
+                       "lower face (16 %) renders longer, not bigger",
           negatives=(1,),
           direction="higher",
           reason="a quarter larger than Parke's reads as 'too large seen from the side'; read "
@@ -593,6 +637,9 @@ _ALL: list[Check] = [
           description="front-view area inside the outer lip outline over the rest face's, in the frames where "
                       "the lips overlap (90th percentile)",
           thresholds=(1.5,),
+          ranges=((1.3, 1.75),),
+          range_reason="'half again' the rest face's lip area, from a third to three quarters "
+                       "larger",
           negatives=(1,),
           direction="higher",
           reason="the thesis saw overlapping lips look too large; half again the rest face's lip area "
@@ -660,6 +707,9 @@ _ALL: list[Check] = [
           frames="maximum protrusion",
           description="lip-corner half-width at maximum protrusion over at the start",
           thresholds=(0.95,),
+          ranges=((0.93, 0.97),),
+          range_reason="5 % of a ~50 mm mouth is 2.5 mm, two pixels of the front view; 3-7 % is "
+                       "one to about three pixels",
           negatives=(3,),
           direction="higher",
           reason="rounding draws the corners in; less than 5 % narrowing is no rounding (three negatives)",
@@ -675,6 +725,9 @@ _ALL: list[Check] = [
           frames="maximum protrusion",
           description="x(49) - x(chin) at maximum protrusion beyond its value at the first frame",
           thresholds=(8.0,),
+          ranges=((6.5, 8.4),),
+          range_reason="real maximum protrusion moves the lips 5-8 mm and 8.5 mm read as a beak "
+                       "on the side render: the range stays below it",
           negatives=(1,),
           direction="higher",
           reason="real maximum protrusion moves the lips 5-8 mm. Was 10 mm; 8 mm after the renders: "
@@ -694,6 +747,8 @@ _ALL: list[Check] = [
           frames="all frames (sustained 3)",
           description="vertex 71 behind the chord nose base - 67, beyond rest",
           thresholds=(1.0,),
+          ranges=((0.5, 1.5),),
+          range_reason="'a visible shadow': half a pixel to about a pixel of the side view",
           negatives=(1,),
           direction="higher",
           reason="1 mm of new hollow above the lip casts a visible shadow",
@@ -724,6 +779,8 @@ _ALL: list[Check] = [
           frames="maximum protrusion",
           description="front-view area inside the outer lip outline at maximum protrusion over at rest",
           thresholds=(1.5,),
+          ranges=((1.3, 1.75),),
+          range_reason="as lips_too_large_moving",
           negatives=(1,),
           direction="higher",
           reason="rounded lips shrink; half again as large is 'too big'",
@@ -785,6 +842,9 @@ _ALL: list[Check] = [
           description="how much sharper the side-profile angle 71-67-61 at the upper lip's edge is at maximum "
                       "protrusion than on the rest face",
           thresholds=(10.0,),
+          ranges=((7.5, 12.0),),
+          range_reason="12.5 deg sharper read as a wedge on the side render, so the range stays "
+                       "below it; 7.5 deg a quarter under the value",
           negatives=(1,),
           direction="higher",
           reason="relative to the rest face because Parke's own profile turns sharply there (108 deg on "
@@ -804,6 +864,9 @@ _ALL: list[Check] = [
           description="frame-to-frame shake (distance from a 9-frame quadratic fit) of the computed lip "
                       "vertices beyond the jaw's and the lip pellets'",
           thresholds=(0.5,),
+          ranges=((0.3, 1.0),),
+          range_reason="shake 'is visible' at 146 frames a second from about a quarter of a pixel "
+                       "(a shimmer) to under a pixel of the front view",
           negatives=(1,),
           direction="higher",
           reason="jitter the jaw shows equally comes from the data; 0.5 mm of shake beyond it is visible. "
@@ -854,6 +917,9 @@ _ALL: list[Check] = [
           description="the lip opening's (inner outline's) sharpest interior angle away from its two "
                       "corners, median over the wide-open frames",
           thresholds=(LIP_OUTLINE_KINK_DEG,),
+          ranges=((121.0, 132.0),),
+          range_reason="between a regular hexagon's 120 deg (CASSI 1.0's kinks measured 110-117) "
+                       "and the rounded arches measured at 136-156 deg",
           negatives=(1,),
           direction="lower",
           reason="added after the renders: CASSI 1.0 at the widest opening of task 106 (synthetic "
@@ -891,6 +957,9 @@ _ALL: list[Check] = [
           frames="all frames (sustained 3)",
           description="vertex 41 behind the chord 49 - chin, beyond rest",
           thresholds=(3.0,),
+          ranges=((2.5, 3.2),),
+          range_reason="the side renders bracket it: +2.3 mm read as Parke's sulcus, +3.3 mm as a "
+                       "notch",
           negatives=(1,),
           direction="higher",
           reason="Parke's face has a mentolabial sulcus (41 ~7.5 mm behind the chord), so only a "
@@ -910,6 +979,8 @@ _ALL: list[Check] = [
           frames="all frames (sustained 3)",
           description="distance of the corner (70) outside the band between 69 and 51",
           thresholds=(1.0,),
+          ranges=((0.5, 1.5),),
+          range_reason="a kink of half a pixel to about a pixel of the front view",
           negatives=(1,),
           direction="higher",
           reason="a corner 1 mm above, below or ahead of its neighbours kinks the outline",
@@ -925,6 +996,8 @@ _ALL: list[Check] = [
           frames="all frames (sustained 3)",
           description="chin vertex (24) behind the chord 41 - underside of the chin",
           thresholds=(1.0,),
+          ranges=((0.5, 1.5),),
+          range_reason="'shows in profile': half a pixel to about a pixel of the side view",
           negatives=(1,),
           direction="higher",
           reason="the chin bulges (Parke's 24 lies 7.7 mm ahead of the chord); it caves in when "
@@ -945,6 +1018,9 @@ _ALL: list[Check] = [
           description="largest lip-corner step beyond the jaw's at a switch between horizontal and vertical "
                       "ellipse, or the corners' sustained jitter beyond the jaw's",
           thresholds=(1.0,),
+          ranges=((0.5, 1.5),),
+          range_reason="'a visible pop' in one frame: half a pixel to about a pixel of the front "
+                       "view",
           negatives=(1,),
           direction="higher",
           reason="a 1 mm jump in one frame (7 ms) is a visible pop",
@@ -1104,6 +1180,11 @@ _ALL: list[Check] = [
                       "1.5 mm of its narrowest) where the model's inner edges 61-58 touch (<= 1.5 mm), plus "
                       "share of its open frames (>= 4 mm beyond) where they are apart, minus 1",
           thresholds=(0.5, 0.25),
+          ranges=((0.4, 0.6), None),
+          range_reason="mild: derived from the render (a quarter of the closures seen open); "
+                       "+-0.1, about one closure in ten either way. Severe: a face that never "
+                       "changes its contact scores 0, so 0.25 is near chance, not a choice of "
+                       "view",
           negatives=(1, 2),
           direction="lower",
           reason="bands derived from the render, no published figure found: J below 0.5 means at least "
@@ -1123,6 +1204,9 @@ _ALL: list[Check] = [
           description="how far the mouth width at rest (corner to corner, 2 |y(70)|, in the subject's mm "
                       "by the 4.1.1 scale) lies outside the adult range 44.0-62.5 mm",
           thresholds=(2.0, 10.0),
+          ranges=((1.3, 3.0), None),
+          range_reason="mild: past one pixel of the front view (1.3 mm) to about two; severe: a "
+                       "fifth of a mouth, not a pixel count",
           negatives=(1, 2),
           direction="higher",
           reason="range: MOUTH_WIDTH_RANGE_MM (published adult cheilion-cheilion widths, mean +- 2 SD). "
@@ -1140,6 +1224,10 @@ _ALL: list[Check] = [
           description="mouth width lost since the first frame (2 |y(70)|) per mm of lip protrusion the "
                       "recording gains (mean x of UL and LL), at the recording's most protruded frame",
           thresholds=(0.5, 0.1),
+          ranges=((0.35, 0.65), None),
+          range_reason="mild: derived from the render, a 6 mm protrusion narrowing the mouth by 3 "
+                       "mm; 2.1-3.9 mm is about one pixel a side +-a third. Severe: 0.1 is "
+                       "corners that do not move",
           negatives=(1, 2),
           direction="lower",
           reason="Abry & Boe ('Laws' for lips, Speech Communication 5, 1986, 97-104) relate lip width, "
@@ -1205,6 +1293,7 @@ for _c in _ALL:
 for _c in CHECKS.values():
     if _c.charged_with is not None and _c.charged_with not in CHECKS:
         raise RuntimeError(f"check {_c.name} is charged with unknown check {_c.charged_with}")
+    _c.verify_ranges()
 del _c
 
 

@@ -1,0 +1,176 @@
+"""``cassi sensitivity RUN``: each version-level finding of a finished run with its robustness.
+
+Settings are one constant at one end of its declared range, one at a time (2 per constant, plus
+the baseline; :mod:`cassi.harness.rubric.sensitivity` says what a finding is):
+
+- a rubric threshold is re-applied to the run's stored values: no animation, no render;
+- a version constant (:mod:`cassi.versions.ranges`) animates the run's task files again with
+  every version of the run and runs the geometric checks (one geometry stage, on the run's
+  corpus); the image checks keep the run's values, which only a render could change.
+
+Writes ``sensitivity.json`` and ``sensitivity.md``.
+"""
+from __future__ import annotations
+
+import json
+import tempfile
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import pandas as pd
+
+from cassi.common.atomic import atomic_write_text
+from cassi.common.errors import CassiInputError
+from cassi.harness.evaluation.caches import get_corpus, get_face, get_profile
+from cassi.harness.evaluation.stages import checked_animation
+from cassi.harness.farm.results import normalize, read_results
+from cassi.harness.rubric import sensitivity as S
+from cassi.renderer.views import VIEW_NAMES
+from cassi.versions.protocol import version_face
+from cassi.versions.ranges import constant_set, ranged_constants
+from cassi.versions.registry import get_version
+
+__all__ = ["ONLY", "sensitivity", "sensitivity_markdown"]
+
+#: What ``--only`` may name.
+ONLY = ("thresholds", "versions")
+JSON_NAME, MD_NAME = "sensitivity.json", "sensitivity.md"
+
+
+def _read_run(run: Path) -> tuple[pd.DataFrame, dict]:
+    meta_path, results_path = run / "run.json", run / "results.parquet"
+    for p in (meta_path, results_path):
+        if not p.is_file():
+            raise CassiInputError("not a finished run directory (no such file)", path=p)
+    try:
+        meta = json.loads(meta_path.read_text())
+    except (OSError, ValueError) as err:
+        raise CassiInputError(f"cannot read the run's metadata: {err}", path=meta_path) from err
+    return read_results(results_path), meta
+
+
+def _fresh_face(corpus, subject, profile, version):
+    """The face ``version`` animates, built under the setting (the worker cache's may not be)."""
+    return version_face(version, get_face(corpus, subject, profile))
+
+
+def _geometry_rows(corpus_dir: str, subject: str, task: int, rep: int, version: str,
+                   constant: str, value: float) -> pd.DataFrame:
+    """The geometry stage's rows of one task file and version with ``constant`` at ``value``
+    (a worker process; the version is built while the setting holds)."""
+    corpus = get_corpus(corpus_dir)
+    profile = get_profile(corpus, subject)
+    rec = corpus.subject(subject).load(task, rep, require_valid=False)
+    with constant_set(constant, value), tempfile.TemporaryDirectory() as tmp:
+        ver = get_version(version)
+        _, _, rows = checked_animation(ver, corpus, subject, profile, rec, task=task, rep=rep,
+                                       tmp=Path(tmp), version_face_of=_fresh_face)
+    return rows
+
+
+def _files(meta: dict) -> list[tuple[str, int, int]]:
+    rows = meta.get("tasks_resolved")
+    if rows is None:
+        raise CassiInputError("run.json lists no task files (tasks_resolved): a run written "
+                              "before they were recorded cannot be animated again")
+    return [(str(s), int(t), int(r)) for s, t, r, usable, *_ in rows if usable]
+
+
+def _with_geometry(results: pd.DataFrame, rows: list[pd.DataFrame], synthetic: bool) -> pd.DataFrame:
+    """The run's results with every row the geometry stage wrote replaced by ``rows``; the
+    image checks' rows (render views) stay as the run measured them."""
+    kept = results[results["view"].isin(VIEW_NAMES)]
+    new = normalize(pd.concat(rows, ignore_index=True), synthetic=synthetic)
+    return pd.concat([kept, new], ignore_index=True)
+
+
+def sensitivity(run: str | Path, out: str | Path | None = None, *, only: str | None = None,
+                workers: int | None = None, log=print) -> dict:
+    """Evaluate every setting on the run in ``run``; write :data:`JSON_NAME` and
+    :data:`MD_NAME` into ``out`` (default ``run``) and return what the JSON holds."""
+    run, out = Path(run), Path(out) if out is not None else Path(run)
+    if only is not None and only not in ONLY:
+        raise CassiInputError(f"--only takes {' or '.join(ONLY)}, not {only!r}")
+    results, meta = _read_run(run)
+    S.verify_grades(results, str(run / "results.parquet"))
+    t0 = time.perf_counter()
+    base = S.findings(results)
+    timing = {"baseline_s": round(time.perf_counter() - t0, 2)}
+    evaluated: list[tuple[S.Setting, dict]] = []
+    if only in (None, "thresholds"):
+        t0 = time.perf_counter()
+        for setting, check in S.threshold_settings():
+            evaluated.append((setting, S.findings(S.regraded(results, check), kinds=("totals",))))
+        n = sum(s.kind == "threshold" for s, _ in evaluated)
+        timing["threshold_settings"] = n
+        timing["threshold_s_each"] = round((time.perf_counter() - t0) / max(n, 1), 2)
+    if only in (None, "versions"):
+        evaluated += _version_settings(results, meta, workers, timing, log)
+    doc = dict(run=str(run.resolve()), synthetic=bool(meta.get("synthetic")), only=only,
+               settings_per_constant=2, timing=timing,
+               constants=_constants(only),
+               findings=S.robustness(base, evaluated),
+               note="the generator's calibration is not among the constants; under a version "
+                    "setting the image checks keep the run's values (a render would be needed)")
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(out / JSON_NAME, json.dumps(doc, indent=1) + "\n")
+    atomic_write_text(out / MD_NAME, sensitivity_markdown(doc))
+    return doc
+
+
+def _version_settings(results, meta, workers, timing, log) -> list[tuple[S.Setting, dict]]:
+    files = _files(meta)
+    versions = [v for v in meta.get("versions_resolved") or results["version"].unique()]
+    corpus = meta.get("corpus_resolved") or meta.get("corpus")
+    jobs = [(s, t, r, v) for s, t, r in files for v in versions]
+    synthetic = bool(meta.get("synthetic"))
+    evaluated, spent = [], []
+    workers = workers or int(meta.get("workers_resolved") or 1)
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        for c in ranged_constants().values():
+            for end in (c.low, c.high):
+                t0 = time.perf_counter()
+                rows = list(pool.map(_geometry_rows, *zip(*[(corpus, s, t, r, v, c.name, end)
+                                                            for s, t, r, v in jobs])))
+                evaluated.append((S.Setting("version", c.name, end, c.value),
+                                  S.findings(_with_geometry(results, rows, synthetic))))
+                spent.append(time.perf_counter() - t0)
+                log(f"{c.name} = {end:g}: {spent[-1]:.1f} s ({len(jobs)} animations)")
+    timing.update(version_settings=len(spent), geometry_jobs_each=len(jobs), workers=workers,
+                  version_s_each=round(sum(spent) / max(len(spent), 1), 1))
+    return evaluated
+
+
+def _constants(only: str | None) -> list[dict]:
+    """The ranged constants the analysis moved, with their ranges and reasons."""
+    rows = S.threshold_ranges() if only in (None, "thresholds") else []
+    if only in (None, "versions"):
+        rows += [dict(kind="version", constant=c.name, value=c.value, low=c.low, high=c.high,
+                      reason=c.reason) for c in ranged_constants().values()]
+    return rows
+
+
+def _md_cell(x) -> str:
+    return str(x).replace("|", "\\|") if x not in (None, "") else ""
+
+
+def sensitivity_markdown(doc: dict) -> str:
+    """The document as Markdown: the findings with their robustness, then the constants."""
+    t = S.robustness_table(doc)
+    lines = ["# Robustness of the version-level findings", "",
+             f"Run: `{doc['run']}`" + (" (synthetic corpus: results describe the software, not "
+                                       "real speakers)" if doc.get("synthetic") else ""), "",
+             f"Each setting moves one constant to one end of its declared range; {doc['note']}.",
+             "A finding holds in k of n settings (the baseline is one); paired findings are "
+             "judged under version settings only (a threshold changes no measured value).", "",
+             "| " + " | ".join(S.TABLE_COLUMNS) + " |", "|" + "---|" * len(S.TABLE_COLUMNS)]
+    lines += ["| " + " | ".join(_md_cell(r[c]) for c in S.TABLE_COLUMNS) + " |"
+              for _, r in t.iterrows()]
+    lines += ["", "## Constants and their ranges", "",
+              "| constant | kind | value | low | high | reason |", "|---|---|---|---|---|---|"]
+    lines += [f"| {c['constant']} | {c['kind']} | {c['value']:g} | {c['low']:g} | {c['high']:g} "
+              f"| {_md_cell(c['reason'])} |" for c in doc["constants"]]
+    tm = doc["timing"]
+    lines += ["", "## Cost", "", "; ".join(f"{k}: {v}" for k, v in tm.items()), ""]
+    return "\n".join(lines)

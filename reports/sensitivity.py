@@ -1,0 +1,38 @@
+"""The report's robustness section: a run's ``sensitivity.json`` (``cassi sensitivity``), when
+it has one, as a table of every version-level finding with the settings it holds in."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from cassi.common.atomic import atomic_write_text
+from cassi.common.errors import CassiInputError
+from cassi.harness.rubric.sensitivity import robustness_table
+from cassi.reports.tables import markdown_table
+
+__all__ = ["SENSITIVITY_FILE", "sensitivity_section"]
+
+#: What ``cassi sensitivity`` writes into the run directory.
+SENSITIVITY_FILE = "sensitivity.json"
+
+
+def sensitivity_section(run_root: Path, out: Path) -> dict | None:
+    """The section's data (rows, counts, the constants moved, links to the full table), or
+    None when the run has no sensitivity analysis."""
+    path = Path(run_root) / SENSITIVITY_FILE
+    if not path.is_file():
+        return None
+    try:
+        doc = json.loads(path.read_text())
+        table = robustness_table(doc)
+    except (OSError, ValueError, KeyError, TypeError) as err:
+        raise CassiInputError(f"cannot read the sensitivity analysis: {err}", path=path) from err
+    csv, md = out / "tables" / "sensitivity.csv", out / "tables" / "sensitivity.md"
+    atomic_write_text(csv, table.to_csv(index=False, lineterminator="\n"))
+    atomic_write_text(md, markdown_table(table.set_index("table")))
+    kinds = [c.get("kind") for c in doc.get("constants", [])]
+    return {"rows": table.to_dict("records"),
+            "flipped": int((table["flipped by"] != "").sum()),
+            "thresholds": kinds.count("threshold"), "versions": kinds.count("version"),
+            "note": doc.get("note", ""), "timing": doc.get("timing", {}),
+            "csv": csv.relative_to(out).as_posix(), "md": md.relative_to(out).as_posix()}
