@@ -21,7 +21,7 @@ from cassi.reports import compare as cmp
 from cassi.reports.agree import agreement, write_agreement
 from cassi.reports import media, plots
 from cassi.reports.runio import Run, load_run, order_versions
-from cassi.harness.evaluation.frames import COMPARISON_VIEW, VIDEO_VIEWS
+from cassi.harness.evaluation.frames import COMPARISON_VIEW, VIDEO_VIEWS, linked_frames
 from cassi.harness.evaluation.provenance import rubric_digest
 from cassi.harness.evaluation.stages import MASKS_OUTPUT
 from cassi.harness.farm.executors import LocalExecutor
@@ -250,13 +250,6 @@ def _change(diff: pd.DataFrame, version: str) -> dict | None:
             "p": sign_test(better, worse)}
 
 
-def _evidence_frames(results: pd.DataFrame) -> dict[tuple, int]:
-    """(subject, task, rep, version, check) -> the frame the check points at (its evidence row)."""
-    ev = results[(results["frame"] >= 0) & results["table"].notna()]
-    return {(r.subject, int(r.task), int(r.rep), r.version, r.check): int(r.frame)
-            for r in ev.itertuples(index=False)}
-
-
 def _worst_first(fv: pd.DataFrame) -> pd.DataFrame:
     """File verdicts, the most negatives first (the subject pages' order, and the fault a
     thesis table's cell opens in the viewer)."""
@@ -274,7 +267,7 @@ def _image_dest(out: Path, subject: str, version: str, task: int, rep: int, fram
 def _fault_links(run: Run, fv: pd.DataFrame, viewers: dict) -> dict[tuple, str]:
     """(subject, version, table, component, check) -> the task viewer at the frame of the
     check's worst file, its event highlighted (relative to the report)."""
-    evidence = _evidence_frames(run.results)
+    evidence = linked_frames(run.results)
     present = set(fv["version"])
     out: dict[tuple, str] = {}
     for r in _worst_first(fv[fv["raw_negatives"] > 0]).itertuples(index=False):
@@ -376,7 +369,7 @@ def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
                   rule: pd.DataFrame, out: Path, env, viewers: dict | None = None) -> str:
     """Per version and table: the checks that earned negatives first (value, threshold and its
     side, the thesis's words, the four views of the frame pointed at), silent checks folded."""
-    evidence = _evidence_frames(run.results[run.results["subject"] == subject])
+    evidence = linked_frames(run.results[run.results["subject"] == subject])
     rend = run.renders[run.renders["subject"] == subject] if len(run.renders) else run.renders
     mine = fv[fv["subject"] == subject]
     present = set(mine["version"])

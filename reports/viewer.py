@@ -28,7 +28,7 @@ import pandas as pd
 from cassi.common.atomic import atomic_write_bytes, atomic_write_text, link_or_copy
 from cassi.data.corpus.disk import Corpus
 from cassi.data.xrmb.files import PELLETS
-from cassi.harness.evaluation.frames import VIEWER_STRIDE
+from cassi.harness.evaluation.frames import VIEWER_STRIDE, linked_view
 from cassi.harness.evaluation.stages import read_masks_blob
 from cassi.harness.evaluation.viewerdata import read_viewer_blob
 from cassi.harness.rubric import CHECKS
@@ -61,8 +61,8 @@ def viewer_href(subject_slug: str, task: int, rep: int, *, frame: int | None = N
     """A link to the viewer page, opening at ``frame`` with versions ``a`` (and ``b``),
     ``check``'s event highlighted, in ``view`` (default: the view ``check`` is judged from);
     ``base``: the linking page's way to the report's root."""
-    if view is None and check in CHECKS:
-        view = CHECKS[check].view
+    if view is None and check is not None:
+        view = linked_view(check)
     params = {k: v for k, v in (("frame", frame), ("a", a), ("b", b), ("check", check),
                                 ("view", view)) if v is not None}
     frag = urllib.parse.urlencode(params, quote_via=urllib.parse.quote)

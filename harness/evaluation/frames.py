@@ -18,6 +18,11 @@ What a night keeps, and why (measured on the default nightly, docs/farm.md "Disk
   of 31,081 renders and half the report's video encoding; ``--video-versions cassi-2.1``
   restores it. Final-quality (path-traced) videos are not made: a 512² frame costs 5-15 s
   against a preview's 15 ms;
+- the evidence frames (:func:`evidence_frames`): the frame every link of the report points at
+  (a charged check's evidence frame, :func:`linked_frames`), in the view the check is judged
+  from, so that the viewer and the subject pages show that very frame rendered. They are
+  rendered only: no image check judges them (those judge the frames above, the same for every
+  version; adding a version's own evidence frames would change their results);
 - the viewer's geometry (:func:`viewer_frames`): every :data:`VIEWER_STRIDE`-th row and every
   check's frame, quantised (:mod:`cassi.harness.evaluation.viewerdata`).
 """
@@ -28,7 +33,7 @@ import pandas as pd
 
 from cassi.data.xrmb.files import JAW_WAGGING_TASK, MAX_PROTRUSION_TASK
 from cassi.harness.evaluation.config import DEFAULT_EXTREMES
-from cassi.harness.rubric import checks_for
+from cassi.harness.rubric import CHECKS, checks_for
 
 #: The views a task file's video shows side by side; with ``animate_stride`` each of them is
 #: rendered at that stride (views a run leaves out are not rendered).
@@ -139,6 +144,63 @@ def frames_to_render(frames: np.ndarray, rows: pd.DataFrame, *, task: int, versi
     return pick, by_view
 
 
+def linked_frames(results: pd.DataFrame) -> dict[tuple, int]:
+    """(subject, task, rep, version, check) -> the frame the report links the check to.
+
+    Only charged checks are linked (their whole-task row, ``frame == -1``, holds negatives):
+    the thesis tables' faults and the subject pages' negatives open the task viewer there. The
+    frame is the check's evidence row (``frame >= 0`` in a rubric table; the fidelity traces
+    have none). The report's links and the render policy (:func:`evidence_frames`) both read
+    this, so every link has its render.
+    """
+    if results is None or not len(results) or "frame" not in results:
+        return {}
+    keys = ["subject", "task", "rep", "version", "check"]
+    ruled = results[results["table"].notna()]
+    whole = ruled[ruled["frame"] == -1]
+    charged = {(s, int(t), int(p), v, c) for s, t, p, v, c, n in
+               whole[[*keys, "negatives"]].itertuples(index=False, name=None)
+               if pd.notna(n) and int(n) > 0}
+    out = {}
+    for s, t, p, v, c, f in ruled[ruled["frame"] >= 0][[*keys, "frame"]].itertuples(
+            index=False, name=None):
+        key = (s, int(t), int(p), v, c)
+        if key in charged:
+            out[key] = int(f)
+    return out
+
+
+def linked_view(check: str) -> str | None:
+    """The view a link to ``check``'s frame opens in: the one the check is judged from (its
+    registry ``view``); None for a name the registry lacks."""
+    c = CHECKS.get(check)
+    return c.view if c is not None else None
+
+
+def evidence_frames(rows: pd.DataFrame, frames: np.ndarray) -> dict[str, list[int]]:
+    """Per view, the animated ``frames`` the report links to: :func:`linked_frames` of a
+    geometry job's ``rows``, each in its :func:`linked_view`. Those a view does not render
+    anyway are rendered for the report only
+    (:meth:`cassi.harness.farm.plan.BatchPlan.evidence_jobs`): no image check judges them."""
+    animated = set(np.asarray(frames).tolist())
+    out: dict[str, set[int]] = {}
+    for (*_, check), frame in linked_frames(rows).items():
+        view = linked_view(check)
+        if view is not None and frame in animated:
+            out.setdefault(view, set()).add(frame)
+    return {view: sorted(f) for view, f in sorted(out.items())}
+
+
+def evidence_budget(task: int) -> dict[str, int]:
+    """Per view, at most how many evidence frames a task file and version adds: one per check
+    of the geometry job (the image checks' frames are rendered anyway) judged from that view."""
+    out: dict[str, int] = {}
+    for c in checks_for(task=task):
+        if c.kind != "image":
+            out[c.view] = out.get(c.view, 0) + 1
+    return out
+
+
 #: The report's task viewer keeps every VIEWER_STRIDE-th recording row (145.6 / 4 = 36 Hz,
 #: above a video's 30 frames a second: a bilabial closure of 50-100 ms spans 2-3 kept frames).
 VIEWER_STRIDE = 4
@@ -167,7 +229,8 @@ def render_budget(rows_of, tasks, versions, views, *, stride: int, extremes: int
     (:attr:`cassi.harness.evaluation.inputs.CheckedInputs.rows`: the files are not read again).
     Per usable task file of R rows, version and view: the first frame, every ``stride``-th row
     and up to ``extremes`` check frames; plus every ``animate_stride``-th row in the
-    :func:`video_views` (overlaps counted twice: an upper bound).
+    :func:`video_views`, and the :func:`evidence_budget` (overlaps counted twice: an upper
+    bound).
     """
     total = 0
     for t in tasks:
@@ -176,7 +239,9 @@ def render_budget(rows_of, tasks, versions, views, *, stride: int, extremes: int
         rows = rows_of[(t.subject, t.task, t.rep)]
         base = 1 + (rows // stride if stride > 0 else 0) + max(0, extremes)
         video = rows // animate_stride + 1 if animate_stride > 0 else 0
+        evidence = evidence_budget(t.task)
         for version in versions:
             shown = set(video_views(t.task, version, video_versions))
-            total += sum(base + (video if view in shown else 0) for view in views)
+            total += sum(base + (video if view in shown else 0) + evidence.get(view, 0)
+                         for view in views)
     return total

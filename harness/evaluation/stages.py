@@ -25,8 +25,8 @@ from cassi.harness.evaluation.caches import (get_corpus, get_face, get_neutral, 
                                              get_renderer, get_version_face)
 from cassi.harness.evaluation.config import Catalog
 from cassi.harness.evaluation.evalset import task_catalog
-from cassi.harness.evaluation.frames import (DEFAULT_EXTREMES, frames_to_render, image_views,
-                                             viewer_frames)
+from cassi.harness.evaluation.frames import (DEFAULT_EXTREMES, evidence_frames,
+                                             frames_to_render, image_views, viewer_frames)
 from cassi.harness.evaluation.viewerdata import viewer_blob
 from cassi.harness.evaluation.withheld import withheld_sites
 from cassi.harness.evaluation.inputs import (read_planned, verify_code, verify_profile,
@@ -120,7 +120,7 @@ def geometry_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> 
     Outputs: ``rows`` (the checks' rows, view ``"geometry"``), ``keyframes`` (npz: ``frames``
     int64 (K,) recording rows, ``positions`` float32 (K, V, 3) Parke units), ``viewer`` (the
     report's task viewer data, :mod:`cassi.harness.evaluation.viewerdata`) and
-    ``meta["render_frames"]``.
+    ``meta["render_frames"]`` (and ``"render_frames_by_view"``, ``"evidence_frames_by_view"``).
     """
     corpus = get_corpus(ctx.corpus)
     verify_code(ctx, job.version)
@@ -197,23 +197,33 @@ def animate_to_file(version, profile, face, rec, tmp: Path) -> StreamedAnimation
 
 def _geometry_output(job: Job, ctx: StageContext, rec, anim: StreamedAnimation,
                      rows: pd.DataFrame) -> StageOutput:
-    """Pick the frames to render from the checks' rows and keep their positions."""
+    """Pick the frames to render from the checks' rows and keep their positions.
+
+    ``render_frames`` (``render_frames_by_view`` where a view has its own) are rendered and
+    judged by the view's image checks; ``evidence_frames_by_view`` are rendered for the
+    report's links only (:func:`~cassi.harness.evaluation.frames.evidence_frames`)."""
     frames = np.asarray(anim.frames, dtype=np.int64)
     step = int(ctx.option("animate_stride", 0) or 0)
     pick, by_view = frames_to_render(
         frames, rows, task=job.task, version=job.version, stride=ctx.stride,
         extremes=ctx.option("extremes", DEFAULT_EXTREMES), animate_stride=step,
         video_versions=ctx.option("video_versions"))
+    evidence = evidence_frames(rows, frames)
     meta = {"render_frames": pick, "n_frames": int(frames.size)}
     if by_view:
         meta["render_frames_by_view"] = by_view
-    keep = sorted(set(pick).union(*by_view.values()))
+    if evidence:
+        meta["evidence_frames_by_view"] = evidence
+    keep = sorted(set(pick).union(*by_view.values(), *evidence.values()))
     idx = np.searchsorted(frames, keep)
     keyframes = npz_bytes(frames=np.asarray(keep, np.int64), positions=anim.positions.take(idx))
     log = [f"frames {frames[0]}..{frames[-1]} ({frames.size}); render {len(pick)}: {pick}"]
-    if len(keep) > len(pick):
-        log.append(f"video frames (every {step}th row, {', '.join(by_view)}): "
-                   f"{len(keep) - len(pick)} more")
+    video = set().union(*by_view.values()) - set(pick)
+    if video:
+        log.append(f"video frames (every {step}th row, {', '.join(by_view)}): {len(video)} more")
+    if evidence:
+        log.append("evidence frames (rendered, not judged): " +
+                   "; ".join(f"{view} {f}" for view, f in evidence.items()))
     log += [f"recording warning: {w}" for w in getattr(rec, "warnings", ())]
     return StageOutput(rows=rows, files={"keyframes": (keyframes, ".npz")}, meta=meta, log=log)
 
@@ -273,11 +283,11 @@ def read_masks_blob(data: bytes) -> StoredFrame:
 def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> StageOutput:
     """Render ``job.frames`` of ``job.view``.
 
-    Outputs: one PNG per frame (``render-<frame>``) and, in the views the task's image checks
-    judge, ``masks-<frame>`` (:func:`masks_blob`). Nothing else reads masks, and a night's
-    masks of every view were 6.9 GB written and hashed.
+    Outputs: one PNG per frame (``render-<frame>``) and, for the frames the task's image checks
+    judge (their views, not an evidence job's frames), ``masks-<frame>`` (:func:`masks_blob`).
+    Nothing else reads masks, and a night's masks of every view were 6.9 GB written and hashed.
     """
-    judged = job.view in image_views(job.task)
+    judged = not job.evidence and job.view in image_views(job.task)
 
     data = np.load(io.BytesIO(inputs["keyframes"]))
     all_frames = data["frames"].tolist()
@@ -306,7 +316,8 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
 
 
 def image_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> StageOutput:
-    """The rubric's image checks over every rendered frame of ``job.view`` (all chunks)."""
+    """The rubric's image checks over every rendered frame of ``job.view`` (all its render
+    chunks; its evidence chunks are not among ``job.frames``)."""
 
     def frames():  # one frame's masks at a time: the checks keep a few numbers per frame
         for f in job.frames:

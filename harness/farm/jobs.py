@@ -9,7 +9,9 @@ Three kinds of job run the rubric on one task file and one version:
   images and part masks;
 - an **image** job (one per view) runs the image checks over all the rendered frames of the view,
   once every render chunk of it is done (the checks judge the whole task, e.g. "the tongue is
-  barely visible" is a fraction of the open-mouth frames).
+  barely visible" is a fraction of the open-mouth frames);
+- an **evidence** render job (``Job.evidence``) renders the frames the report links to that
+  the view's render chunks lack; no image job reads it.
 
 The ratings are derived from the combined rows once every job has finished (:mod:`.runner`).
 A job is a frozen, picklable value; its :meth:`Job.digest` names everything its outputs depend
@@ -71,6 +73,9 @@ class Job:
         Recording rows to render (render jobs); empty for geometry jobs (every frame).
     chunk : int
         Index of this chunk among the view's render jobs for the task file.
+    evidence : bool
+        A render job of evidence frames only (the frames the report links to), which no image
+        job judges; its chunks are counted apart from the judged ones.
     parents : tuple of str
         Keys of the jobs whose outputs this one reads (a render job's geometry job, an image
         job's render chunks).
@@ -93,6 +98,7 @@ class Job:
     view: str = GEOMETRY_VIEW
     frames: tuple[int, ...] = ()
     chunk: int = 0
+    evidence: bool = False
     parents: tuple[str, ...] = ()
     parent_digest: str = ""
     inputs: str = ""
@@ -101,12 +107,14 @@ class Job:
     @property
     def key(self) -> str:
         """A readable, path-safe, unique name: ``JW11/019-1/cassi-2.1/geometry``,
-        ``JW11/019-1/cassi-2.1/front/render-000``, ``JW11/019-1/cassi-2.1/front/checks``."""
+        ``JW11/019-1/cassi-2.1/front/render-000``, ``JW11/019-1/cassi-2.1/front/evidence-000``,
+        ``JW11/019-1/cassi-2.1/front/checks``."""
         head = f"{self.subject}/{self.task:03d}-{self.rep}/{self.version}"
         if self.stage == "geometry":
             return f"{head}/{GEOMETRY_VIEW}"
         if self.stage == "render":
-            return f"{head}/{self.view}/render-{self.chunk:03d}"
+            kind = "evidence" if self.evidence else "render"
+            return f"{head}/{self.view}/{kind}-{self.chunk:03d}"
         return f"{head}/{self.view}/checks"
 
     @property

@@ -9,6 +9,7 @@ scheduler (:mod:`.runner`) asks the plan what a finished job unlocks.
 The dependency graph, per task file and version::
 
     geometry ──> render(view, chunk 0..n) ──> image(view)      for every view
+             └─> evidence render(view, chunk 0..m)              (no image job reads them)
 """
 from __future__ import annotations
 
@@ -87,23 +88,41 @@ class BatchPlan:
         return cls(tuple(geometry), tuple(skipped), views, max(1, int(chunk_size)),
                    bool(images and views))
 
-    def render_jobs(self, geometry: Job, manifest: Mapping) -> dict[str, tuple[Job, ...]]:
-        """The render chunks a finished geometry job unlocks, per view.
+    @staticmethod
+    def judged_frames(meta: Mapping, view: str) -> list[int]:
+        """The frames ``view`` renders for its image job: ``meta["render_frames"]``, or the
+        view's own list in ``meta["render_frames_by_view"]`` (the video grid's views)."""
+        return list(meta.get("render_frames_by_view", {}).get(view, meta.get("render_frames", [])))
 
-        The geometry stage names its frames in ``meta["render_frames"]``; a view may have its
-        own list in ``meta["render_frames_by_view"]`` (the front view's animation frames).
-        """
+    @staticmethod
+    def evidence_frames(meta: Mapping, view: str) -> list[int]:
+        """The frames ``view`` renders for the report's links only
+        (``meta["evidence_frames_by_view"]``) that it does not render for its image job."""
+        judged = set(BatchPlan.judged_frames(meta, view))
+        return sorted(int(f) for f in meta.get("evidence_frames_by_view", {}).get(view, [])
+                      if int(f) not in judged)
+
+    def render_jobs(self, geometry: Job, manifest: Mapping) -> dict[str, tuple[Job, ...]]:
+        """The render chunks of :meth:`judged_frames` a finished geometry job unlocks, per
+        view: together, the frames the view's image job judges."""
+        return self._chunks(geometry, manifest, self.judged_frames, evidence=False)
+
+    def evidence_jobs(self, geometry: Job, manifest: Mapping) -> dict[str, tuple[Job, ...]]:
+        """The render chunks of :meth:`evidence_frames` a finished geometry job unlocks, per
+        view (views without any left out): rendered and listed, never judged."""
+        out = self._chunks(geometry, manifest, self.evidence_frames, evidence=True)
+        return {view: jobs for view, jobs in out.items() if jobs}
+
+    def _chunks(self, geometry: Job, manifest: Mapping, frames_of, *,
+                evidence: bool) -> dict[str, tuple[Job, ...]]:
         meta = manifest.get("meta", {})
         parent = outputs_digest([manifest])
-        out = {}
-        for view in self.views:
-            frames = meta.get("render_frames_by_view", {}).get(view, meta.get("render_frames", []))
-            out[view] = tuple(
-                Job("render", *geometry.task_key, view, chunk, i, parents=(geometry.key,),
-                    parent_digest=parent, inputs=geometry.inputs,
-                    reads=geometry.reads)
-                for i, chunk in enumerate(chunk_frames(frames, self.chunk_size)))
-        return out
+        return {view: tuple(
+            Job("render", *geometry.task_key, view, chunk, i, evidence=evidence,
+                parents=(geometry.key,), parent_digest=parent, inputs=geometry.inputs,
+                reads=geometry.reads)
+            for i, chunk in enumerate(chunk_frames(frames_of(meta, view), self.chunk_size)))
+            for view in self.views}
 
     @staticmethod
     def image_job(renders: tuple[Job, ...], manifests: Iterable[Mapping]) -> Job:

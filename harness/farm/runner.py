@@ -40,11 +40,11 @@ class Pipeline:
     """The pluggable stages of a run.
 
     geometry : stage for geometry jobs (animate, geometric checks, pick the frames to render:
-        ``meta["render_frames"]``).
+        ``meta["render_frames"]``, and those rendered only: ``meta["evidence_frames_by_view"]``).
     render : stage for render jobs (render ``job.frames`` of ``job.view``), or None for
         geometry-only runs.
     image : stage for image jobs (image checks over every rendered frame of a view: its inputs
-        are the outputs of all the view's render chunks), or None.
+        are the outputs of all the view's render chunks, never its evidence chunks), or None.
     ratings : the run's results table -> its ratings table (the one aggregation the run's
         ``ratings`` files and every report share), or None for a run without ratings.
     attachments : output names (of any stage) the run lists in ``attachments.parquet``.
@@ -178,7 +178,10 @@ class Scheduler:
                     self.chunks[chunk.key] = chunks
                 for chunk in chunks:
                     self._schedule(chunk)
-        elif job.stage == "render" and self.plan.images:
+            for chunks in self.plan.evidence_jobs(job, manifest).values():
+                for chunk in chunks:  # rendered for the report only: no image job waits on them
+                    self._schedule(chunk)
+        elif job.stage == "render" and self.plan.images and not job.evidence:
             siblings = self.chunks[job.key]
             if not all(self.records.get(s.key, JobRecord(s.key, "render")).state.finished
                        for s in siblings):
