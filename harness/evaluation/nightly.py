@@ -19,6 +19,7 @@ from cassi.harness.evaluation.config import NIGHTLY, RunConfig
 from cassi.harness.evaluation.nights import (LATEST, NIGHT_DONE, STORE_DIR, Night, StageTimer,
                                              night_name, previous_night)
 from cassi.harness.evaluation.run import run as run_farm
+from cassi.harness.evaluation.sensitivity import sensitivity
 
 
 def nightly(out_dir: str | os.PathLike, *, review: Callable[[Night], tuple[bool, Path]],
@@ -43,6 +44,11 @@ def nightly(out_dir: str | os.PathLike, *, review: Callable[[Night], tuple[bool,
               f"{result.summary.reused} of {len(result.records)}")
     timer.worker_seconds(result)
     timer.say(f"variant: {_variant_of(run_dir)}")
+    if result.ok:
+        # each finding's robustness to the rubric's own thresholds (seconds: no re-render);
+        # the versions' constants cost a geometry stage each: `cassi sensitivity RUN`
+        with timer("robustness (thresholds)"):
+            sensitivity(run_dir, only="thresholds", log=timer.say)
     passed, index = review(Night(root, name, run_dir, reports_dir / name, result,
                                  previous_night(runs_dir, name), timer))
     passed = passed and result.ok
