@@ -137,6 +137,10 @@ class Check:
     charged_with : str or None
         One fault, one charge: this check earns nothing for a subject and version when the named
         check already charges the same fault (the aggregation applies it).
+    at_rest : str
+        Non-empty for a measure of the face at rest (its first frame), not of its movement: why.
+        A face that stands still is judged on it as any face with the same rest, so such a check
+        is exempt from "a face that stands still scores worst" on the movement checks.
     """
 
     name: str
@@ -158,6 +162,7 @@ class Check:
     counted: bool = True
     gate_tolerance: int = 0
     charged_with: str | None = None
+    at_rest: str = ""
 
     def __post_init__(self):
         if self.table not in TABLES:
