@@ -17,7 +17,7 @@ from cassi.versions.cassi10 import Cassi10
 from cassi.versions import lips_constants as K
 from cassi.versions.lips import (CornerReading, EqualThicknessPolicy, LipMovementStage,
                                  ThicknessPolicy)
-from cassi.versions.lips_ellipse import OuterAbcParams
+from cassi.versions.lips_ellipse import OuterAbcParams, tuning as lip_tuning
 from cassi.versions.protocol import Stage
 
 __all__ = ["Cassi20"]
@@ -29,8 +29,10 @@ class Cassi20(Cassi10):
     Parameters
     ----------
     params : OuterAbcParams, optional
-        OUTER_ABC_CALC's tuning (rho, "near c_rest", "small c'"); the defaults are
-        :mod:`cassi.versions.lips_constants`'.
+        OUTER_ABC_CALC's tuning (rho, "near c_rest", "small c'"); overrides ``tuning``.
+    tuning : str, optional
+        A named tuning of :data:`~cassi.versions.lips_ellipse.TUNINGS` (default
+        :attr:`tuning`: this version's own; "shared" is the one both versions had before).
     corner : CornerReading or str, optional
         Where the lip corner sits on a vertical ellipse (default :attr:`corner`).
     tongue : TongueReading or str, optional
@@ -38,13 +40,17 @@ class Cassi20(Cassi10):
     """
 
     name = "cassi-2.0"
+    #: OUTER_ABC_CALC's tuning: 2.0's own (rho 1, no smoothing; lips_constants.RHO_20).
+    tuning: str = "2.0"
     #: The lip corner's reading on a vertical ellipse; RESULTS by default (module docstring).
     corner: CornerReading = CornerReading(K.CORNER_READING)
 
-    def __init__(self, *, params: OuterAbcParams | None = None,
+    def __init__(self, *, params: OuterAbcParams | None = None, tuning: str | None = None,
                  corner: CornerReading | str | None = None, tongue: str | None = None):
         super().__init__(tongue=tongue)
-        self.params = params or OuterAbcParams()
+        if tuning is not None:
+            self.tuning = tuning
+        self.params = params or lip_tuning(self.tuning)
         if corner is not None:
             self.corner = CornerReading(corner)
 

@@ -29,7 +29,8 @@ class Cassi21(Cassi20):
     Parameters
     ----------
     params : OuterAbcParams, optional
-        As for :class:`~cassi.versions.cassi20.Cassi20`.
+    tuning : str, optional
+        As for :class:`~cassi.versions.cassi20.Cassi20` (default :attr:`tuning`).
     reading : LowLipsReading or str, optional
         Which side of vertex 226 the 20-unit threshold lies on (default :attr:`reading`).
     corner, tongue : CornerReading or str, TongueReading or str, optional
@@ -37,13 +38,15 @@ class Cassi21(Cassi20):
     """
 
     name = "cassi-2.1"
+    #: OUTER_ABC_CALC's tuning: 2.1's own, which removes 2.0's switch jitter (rho 0.1).
+    tuning: str = "2.1"
     #: The criterion's reading; RESULTS by default (see the module docstring).
     reading: LowLipsReading = LowLipsReading(K.LOW_LIPS_READING)
 
-    def __init__(self, *, params: OuterAbcParams | None = None,
+    def __init__(self, *, params: OuterAbcParams | None = None, tuning: str | None = None,
                  reading: LowLipsReading | str | None = None,
                  corner: CornerReading | str | None = None, tongue: str | None = None):
-        super().__init__(params=params, corner=corner, tongue=tongue)
+        super().__init__(params=params, tuning=tuning, corner=corner, tongue=tongue)
         if reading is not None:
             self.reading = LowLipsReading(reading)
 

@@ -111,12 +111,16 @@ class LipSubject:
         Key x values of the upper lip for c_rest, c_min and c_max (Eq. 4.13).
     thick : float
         Thick: one relaxed lip's thickness.
+    units_per_mm : float, optional
+        p / d, Parke units per mm of the subject (for a band near c_rest given in mm,
+        :meth:`~cassi.versions.lips_ellipse.OuterAbcParams.for_subject`).
     """
 
     x_rest: float
     x_max: float
     x_min: float
     thick: float
+    units_per_mm: float | None = None
 
 
 def lip_subject(profile, parke_jaw_distance: float, x_origin: float) -> LipSubject:
@@ -149,7 +153,17 @@ def lip_subject(profile, parke_jaw_distance: float, x_origin: float) -> LipSubje
         x_max=vals["max_ul"] * p + x_origin,
         x_min=vals["min_ul"] * p + x_origin,
         thick=thick_from_lipthick(vals["lipthick"], p),
+        units_per_mm=_units_per_mm(profile, p),
     )
+
+
+def _units_per_mm(profile, p: float) -> float | None:
+    """p / d (thesis 4.1.1), or None for a profile without a usable jaw length d."""
+    try:
+        d = float(getattr(profile, "jaw_length_mm"))
+    except (AttributeError, TypeError, ValueError):
+        return None
+    return p / d if np.isfinite(d) and d > 0 else None
 
 
 def compress_pressed(upper, lower, z67, z49) -> tuple[np.ndarray, np.ndarray]:
@@ -331,6 +345,8 @@ def _centre_line(ul, ll, rest: LipRest, subject: LipSubject, rule: ThicknessRule
     height = np.abs(b_signed)
     # Step 6: OUTER_ABC_CALC (c' from Eq. 4.13 on 67's x).
     cp_raw, cp = _c_prime(x67, subject)
+    params = (params or OuterAbcParams()).for_subject(subject.x_rest, subject.x_max,
+                                                      subject.x_min, subject.units_per_mm)
     track = outer_abc_sequence(height, cp, params=params, state=state)
     # Step 7: limits.
     a, c = limit_abc(track.a, track.c)

@@ -11,8 +11,10 @@ OUTER_ABC_CALC is a recurrence over frames and runs as a tight loop over plain f
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
@@ -23,6 +25,7 @@ from cassi.versions import lips_constants as K
 __all__ = [
     "BRANCH_LABELS",
     "OuterAbcParams",
+    "TUNINGS",
     "OuterAbcState",
     "OuterAbcTrack",
     "c_prime",
@@ -34,6 +37,7 @@ __all__ = [
     "mid_inner_abc",
     "outer_abc_sequence",
     "outer_abc_step",
+    "tuning",
 ]
 
 #: Which branch of OUTER_ABC_CALC (Figure 4.18) produced a frame's a and c, by code.
@@ -117,7 +121,13 @@ def is_vertical(a, b) -> np.ndarray:
 
 @dataclass(frozen=True)
 class OuterAbcParams:
-    """The tuning of OUTER_ABC_CALC (defaults from :mod:`lips_constants`, with reasons)."""
+    """The tuning of OUTER_ABC_CALC (defaults from :mod:`lips_constants`, with reasons).
+
+    The band "c' near c_rest" of steps 3(a)/3(b) is ``near_c_rest`` c' units either side of
+    c_rest, unless ``near_rest_mm`` is given: then it is that many mm of the upper lip's x either
+    side of the subject's rest, in c' units by Eq. 4.13's slope on each side
+    (:meth:`for_subject` resolves it into ``near_forward`` / ``near_back``).
+    """
 
     # read when built, not when imported: cassi.versions.ranges sets them for a while
     rho: float = field(default_factory=lambda: K.RHO)
@@ -125,12 +135,66 @@ class OuterAbcParams:
     small_c_prime: float = field(default_factory=lambda: K.SMALL_C_PRIME)
     c_rest: float = K.C_REST
     width_rate_divisor: float = K.WIDTH_RATE_DIVISOR
+    near_rest_mm: float | None = None
+    #: The band below c_rest (lips forward, rounding) and above it (lips back), c' units; None:
+    #: ``near_c_rest``.
+    near_forward: float | None = None
+    near_back: float | None = None
 
     def __post_init__(self) -> None:
         if not 0.0 < self.rho <= 1.0:
             raise CassiInputError(f"rho must lie in (0, 1], got {self.rho!r}")
         if self.near_c_rest < 0 or self.width_rate_divisor <= 0:
             raise CassiInputError("near_c_rest must be >= 0 and width_rate_divisor > 0")
+        for name in ("near_rest_mm", "near_forward", "near_back"):
+            v = getattr(self, name)
+            if v is not None and not v >= 0:
+                raise CassiInputError(f"{name} must be >= 0, got {v!r}")
+
+    @property
+    def band(self) -> tuple[float, float]:
+        """(below, above) c_rest: c' is near c_rest when c_rest - below <= c' <= c_rest + above."""
+        below = self.near_c_rest if self.near_forward is None else self.near_forward
+        above = self.near_c_rest if self.near_back is None else self.near_back
+        return below, above
+
+    def for_subject(self, x_rest: float, x_max: float, x_min: float,
+                    units_per_mm: float | None) -> "OuterAbcParams":
+        """These parameters with the band resolved for a subject (``near_rest_mm`` of the upper
+        lip's x, Parke units = mm * ``units_per_mm``, through Eq. 4.13's slope on each side);
+        unchanged when the band is given in c' units."""
+        if self.near_rest_mm is None:
+            return self
+        if units_per_mm is None or not units_per_mm > 0:
+            raise CassiInputError("a band in mm of the upper lip (near_rest_mm) needs the "
+                                  f"subject's Parke units per mm, got {units_per_mm!r}")
+        dx = self.near_rest_mm * units_per_mm
+        return dataclasses.replace(
+            self, near_rest_mm=None,
+            near_forward=dx * (self.c_rest - K.C_MIN) / (x_max - x_rest),
+            near_back=dx * (K.C_MAX - self.c_rest) / (x_rest - x_min))
+
+
+#: Each version's OUTER_ABC_CALC tuning, by name (the thesis gives neither: 2.0 and 2.1 were
+#: tuned on tasks 106 and 118, section 5.4). "2.0": the thesis's equations with the least added
+#: smoothing that stays stable (rho 1); "2.1": the tuning that removes the switch jitter (rho
+#: 0.1); both with the band of the upper lip within the pellets' precision of rest. "shared":
+#: the one tuning both versions had before (rho 0.1, a band of 5 c' units for every subject).
+#: Built when asked for, not when imported: cassi.versions.ranges sets the constants for a while.
+TUNINGS: dict[str, Callable[[], OuterAbcParams]] = {
+    "2.0": lambda: OuterAbcParams(rho=K.RHO_20, near_rest_mm=K.NEAR_REST_MM),
+    "2.1": lambda: OuterAbcParams(rho=K.RHO, near_rest_mm=K.NEAR_REST_MM),
+    "shared": OuterAbcParams,
+}
+
+
+def tuning(name: str) -> OuterAbcParams:
+    """The named OUTER_ABC_CALC tuning (:data:`TUNINGS`), built from today's constants; a clear
+    error for an unknown name."""
+    try:
+        return TUNINGS[name]()
+    except KeyError:
+        raise CassiInputError(f"unknown lip tuning {name!r}; known: {', '.join(TUNINGS)}") from None
 
 
 @dataclass
@@ -178,7 +242,8 @@ def outer_abc_step(
     if new_subject:
         # Step 3: c := c', a from Eq. 4.8.
         return math.sqrt(b * b + cp * cp), cp, BRANCH_NEW
-    near = abs(cp - params.c_rest) <= params.near_c_rest
+    below, above = params.band
+    near = -below <= cp - params.c_rest <= above
     if near and b > prev_b:
         # 3(a): lips dropping; width decreases (prev_b - b < 0), c from Eq. 4.14.
         a = prev_a + (prev_b - b) / params.width_rate_divisor

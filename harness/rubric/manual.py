@@ -63,6 +63,8 @@ def _check_section(check: Check) -> list[str]:
         notes.append("measured, not counted (its rows carry 0 negatives)")
     if check.charged_with:
         notes.append(f"charged with `{check.charged_with}` (earns nothing where that one fires)")
+    if check.at_rest:
+        notes.append(f"a measure of the face at rest: {check.at_rest}")
     if check.gate_tolerance:
         notes.append(f"gate tolerance {check.gate_tolerance}")
     lines = [f"#### `{check.name}`", "",

@@ -208,14 +208,21 @@ def m_lips_never_touch(ctx):
                        frame_value=float(g[f]))
 
 
-def m_lips_apart_start(ctx):
-    return Measurement(float(ctx.gap[0]), 0, "gap between the lips' edges at the first frame",
-                       frame_value=float(ctx.gap[0]))
+def _at_ends(values, ctx, what: str):
+    """The worse (larger) of a per-frame value at the first and the last frame: the two frames
+    the judges examined for lip contact (thesis 5.3.1)."""
+    f = 0 if values[0] >= values[-1] else ctx.F - 1
+    return Measurement(float(values[f]), f, f"{what} at the first frame ({values[0]:.2f} mm) and the "
+                                            f"last ({values[-1]:.2f} mm), the larger",
+                       frame_value=float(values[f]))
+
+
+def m_lips_apart_ends(ctx):
+    return _at_ends(ctx.gap, ctx, "gap between the lips' edges")
 
 
 def m_lips_pressed(ctx):
-    return Measurement(float(-ctx.gap[0]), 0, "how far the lips' edges cross at the first frame",
-                       frame_value=float(-ctx.gap[0]))
+    return _at_ends(-ctx.gap, ctx, "how far the lips' edges cross")
 
 
 def m_lips_overlap(ctx):

@@ -145,6 +145,10 @@ class Check:
         Empty: no threshold of the check is ranged.
     range_reason : str
         Why those ends (what a viewer sees, the thesis, literature).
+    at_rest : str
+        Non-empty for a measure of the face at rest (its first frame), not of its movement: why.
+        A face that stands still is judged on it as any face with the same rest, so such a check
+        is exempt from "a face that stands still scores worst" on the movement checks.
     """
 
     name: str
@@ -168,6 +172,7 @@ class Check:
     charged_with: str | None = None
     ranges: tuple[tuple[float, float] | None, ...] = ()
     range_reason: str = ""
+    at_rest: str = ""
 
     def __post_init__(self):
         if self.table not in TABLES:

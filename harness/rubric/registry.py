@@ -32,7 +32,7 @@ from cassi.data.xrmb.files import JAW_WAGGING_TASK, MAX_PROTRUSION_TASK, ORAL_MO
 from cassi.harness.rubric.model import Check
 
 __all__ = ["CHECKS", "get_check", "checks_for", "registry_table", "MIN_FRAMES", "SPEECH_TABLES",
-           "TABLE_C_FROM_A", "MARKED_SHARE", "AGGREGATION_RULES"]
+           "TABLE_C_FROM_A", "MARKED_SHARE", "AGGREGATION_RULES", "CENTERED_SHARE"]
 
 # ----------------------------------------------------------------------------------------------
 # Windows: which frames and pixels a measure looks at
@@ -86,6 +86,21 @@ OPEN_MIN_HEIGHT = 3
 #: task 118 showed the lower teeth more than the upper when open (share 0.32) but the median over
 #: every open frame was 0.85 "centered high", carried by 3-pixel slits showing an upper edge only.
 CENTERING_OPEN_SHARE = 0.5
+#: Lip centring, "well centered" = "similar portions" of the upper and lower teeth inside the lip
+#: opening (thesis 5.3.1, Figure 5.9, where a subject "centered slightly low" was charged): a file
+#: is centred high (low) when the upper (lower) teeth's share of the teeth pixels inside the
+#: opening, median over the open frames, is above CENTERED_SHARE. From front renders, the rule
+#: declared first ("slightly low" begins where a viewer sees clearly more lower than upper teeth;
+#: the mean of the crossings, one value both ways unless they differ by more than a step): one open
+#: frame with the lip parts moved up and down in 0.5-1 mm steps, each render judged before its
+#: share was read. Synthetic JW11 task 19, CASSI 2.1, frame 1055 (8 mm inner gap, final preset):
+#: an upper share of 0.59 reads as similar portions, 0.66 and more as clearly more upper; a lower
+#: share of 0.62 as barely more lower, 0.63 and more as clearly more lower. Synthetic JW18 task 4,
+#: CASSI 2.0, frame 619 (7 mm, teeth in shadow): a lower share of 0.70 reads as similar portions
+#: (the shadowed lower teeth count as pixels but barely show), 0.80 as clearly more lower.
+#: Crossings 0.62 up, 0.63 and 0.75 down (0.69): 0.65 both ways. The 4:1 split (0.80) it replaces
+#: caught only gross miscentring, which these renders show as one set of teeth alone.
+CENTERED_SHARE = 0.65
 #: A frame judges centering only when this many teeth pixels show inside the opening (a third of
 #: the smallest opening: fewer is a glint, not "portions of the teeth").
 TEETH_MIN_PIXELS = OPEN_MIN_PIXELS // 3
@@ -133,7 +148,7 @@ TRACE_TASKS = (JAW_WAGGING_TASK,)
 TRACE_STEP = 10
 
 #: Table G: the model's lips "touch" when their inner edges (61 over 58) are at most this far
-#: apart: lips_never_touch's threshold (Parke's neutral 1.35 mm reads as lips lightly touching
+#: apart: lips_apart_at_start's threshold (Parke's neutral 1.35 mm reads as lips lightly touching
 #: on the front render).
 LIPS_TOUCH_MM = 1.5
 #: Table G, lip contact: the recording's lips touch where the UL-LL pellet distance is within
@@ -144,7 +159,7 @@ LIPS_TOUCH_MM = 1.5
 #: 405-419) estimate the midline lip separation from the inter-pellet distance in just this way,
 #: as the distance beyond the closed-lip distance "as long as lip-body deformation is taken into
 #: account". Their per-speaker figures were not found here, so the bands are this rubric's own:
-#: 1.5 mm is LIPS_TOUCH_MM (what reads as touching on the render) and 4 mm lips_never_touch's
+#: 1.5 mm is LIPS_TOUCH_MM (what reads as touching on the render) and 4 mm lips_apart_at_start's
 #: "large separation"; frames between the two bands are not judged. The narrowest frame of a
 #: file without a bilabial closure is taken as closed: a limit of a per-file rule.
 CLOSURE_BAND_MM = LIPS_TOUCH_MM
@@ -197,8 +212,8 @@ AGGREGATION_RULES = (
     "A check counts once per subject and version: the most negatives any of the subject's task "
     "files earned (the thesis judged each subject from its files together).",
     "One fault, one charge: a check declared as charged with another earns nothing where that "
-    "one fires for the same subject, version and table (lips separated at the start are not charged "
-    "again when the lips never touch).",
+    "one fires for the same subject, version and table (lips that do not close where the speaker "
+    "closes them are not charged again in C when they are apart at the first or last frame).",
     "Table C = the lip checks of Table A judged per version + Table C's own checks.",
     "Table C, compared with the previous version on the same task files, where the ratings would "
     "be the same: a version that looks worse (a check fires in more of the shared files) earns one "
@@ -309,63 +324,51 @@ _ALL: list[Check] = [
           kind="geometry",
           measure="measures:m_teeth_apart"),
     # ---------------- Table A: lips ----------------
-    Check(name="lips_never_touch",
+    Check(name="lips_apart_at_start",
           table="A",
           component="lips",
           view="front",
           unit="mm",
-          frames="all frames",
-          description="smallest gap between the lips' edges (61 above 58) over the task",
-          thresholds=(1.5, 4.0),
+          frames="first and last frame",
+          description="gap between the lips' edges (61 above 58) at the first and at the last frame, the "
+                      "larger of the two",
+          thresholds=(LIPS_TOUCH_MM, 4.0),
           ranges=((1.4, 2.0), None),
           range_reason="mild: not below Parke's neutral 1.35 mm, which the front render shows as "
                        "lips touching; up to 2.0 mm, a seam of about a pixel plus the outline's "
                        "round-off. Severe: the cited 3 mm interlabial gap fixes it",
           negatives=(1, 2),
           direction="higher",
-          reason="lips that touch have ~0 gap. Was 1 mm; raised to 1.5 mm after the renders: "
-                 "Parke's neutral face parts the lips by 1.35 mm and its front render reads as lips "
-                 "lightly touching (a dark seam with a glint of teeth). The thesis gives a 'large "
-                 "separation' two negatives without a figure: 4 mm, past the 3 mm that dentistry "
-                 "takes as the acceptable upper limit of the interlabial gap at rest (Mosby's "
-                 "Dental Dictionary, 2nd ed. 2008, entry 'intralabial gap'), lips plainly held apart",
-          text="lips too far apart, never touching",
+          reason="the judges examined the front view at the starting and ending frame to see whether "
+                 "the lips lightly touched (desirable), were too far apart or too close together "
+                 "(thesis 5.3.1), so a fault at either frame counts. Lips that touch have ~0 gap; "
+                 "1.5 mm (LIPS_TOUCH_MM) after the renders: Parke's neutral face parts the lips by "
+                 "1.35 mm and its front render reads as lips lightly touching (a dark seam with a "
+                 "glint of teeth). The thesis gives a 'large separation' two negatives without a "
+                 "figure: 4 mm, past the 3 mm that dentistry takes as the acceptable upper limit of "
+                 "the interlabial gap at rest (Mosby's Dental Dictionary, 2nd ed. 2008, entry "
+                 "'intralabial gap'), lips plainly held apart",
+          text="lips too far apart at the start or end, not touching",
           kind="geometry",
-          measure="measures:m_lips_never_touch"),
-    Check(name="lips_apart_at_start",
-          table="A",
-          component="lips",
-          view="front",
-          unit="mm",
-          frames="first frame",
-          description="gap between the lips' edges at the first frame",
-          thresholds=(1.5,),
-          ranges=((1.4, 2.0),),
-          range_reason="as lips_never_touch's mild threshold",
-          negatives=(1,),
-          direction="higher",
-          reason="desirable: the lips lightly touch at the start; 1.5 mm as lips_never_touch (Parke's "
-                 "1.35 mm still reads as touching on the render)",
-          text="lips separated at the start",
-          kind="geometry",
-          measure="measures:m_lips_apart_start",
-          charged_with="lips_never_touch"),
+          measure="measures:m_lips_apart_ends"),
     Check(name="lips_pressed",
           table="A",
           component="lips",
           view="front",
           unit="mm",
-          frames="first frame",
-          description="how far the lips' edges cross at the first frame (tightly pressed)",
+          frames="first and last frame",
+          description="how far the lips' edges cross at the first and at the last frame (tightly pressed), "
+                      "the larger of the two",
           thresholds=(2.0,),
           ranges=((1.0, 3.0),),
           range_reason="CASSI 2.0's 0.8 mm crossing renders as lips lightly closed, so not below "
                        "1.0 mm; up to 3.0 mm, past two pixels of the front view",
           negatives=(1,),
           direction="higher",
-          reason="lightly touching lips meet at 0. Was 0.5 mm; 2 mm after the renders: CASSI "
-                 "2.0's 0.8 mm crossing at the start (synthetic JW12 task 5) renders as lips lightly "
-                 "closed, not pressed",
+          reason="judged where the judges looked for lips too close together, the starting and ending "
+                 "frame (thesis 5.3.1). Lightly touching lips meet at 0. Was 0.5 mm; 2 mm after the "
+                 "renders: CASSI 2.0's 0.8 mm crossing at the start (synthetic JW12 task 5) renders as "
+                 "lips lightly closed, not pressed",
           text="lips too close together, tightly pressed",
           kind="geometry",
           measure="measures:m_lips_pressed"),
@@ -392,11 +395,15 @@ _ALL: list[Check] = [
           frames="frames with the lips open",
           description="share of the teeth pixels inside the lip opening that are upper teeth (median over open "
                       "frames)",
-          thresholds=(0.80,),
+          thresholds=(CENTERED_SHARE,),
           negatives=(1,),
           direction="higher",
-          reason="well centered = similar portions (thesis Table 5.3); the same 4:1 split either way: only "
-                 "4:1 or more reads as 'much of the upper and little of the lower' (or the reverse)",
+          reason="well centered = similar portions of upper and lower teeth (thesis 5.3.1, Figure 5.9); "
+                 "CENTERED_SHARE from front renders of a planted series (the lips moved in 0.5 mm steps "
+                 "over synthetic JW11 task 19 CASSI 2.1 frame 1055 and JW18 task 4 CASSI 2.0 frame 619): "
+                 "an upper share of 0.59 reads as similar portions, 0.66 as clearly more upper; a lower "
+                 "share of 0.62 as barely more lower, 0.63 clearly, and 0.70 as similar where the lower "
+                 "teeth lie in shadow; the crossings' mean, 0.65, both ways",
           text="centered high: much of the upper teeth and little of the lower teeth show",
           kind="image",
           measure="image:m_centered_high"),
@@ -408,11 +415,12 @@ _ALL: list[Check] = [
           frames="frames with the lips open",
           description="share of the teeth pixels inside the lip opening that are lower teeth (median over open "
                       "frames): the mirror of lips_centered_high",
-          thresholds=(0.80,),
+          thresholds=(CENTERED_SHARE,),
           negatives=(1,),
           direction="higher",
-          reason="judged symmetrically with lips_centered_high: a 4:1 split toward the lower teeth is as "
-                 "far from 'similar portions' as one toward the upper",
+          reason="judged symmetrically with lips_centered_high (CENTERED_SHARE): the renders put the end "
+                 "of 'similar portions' at about the same share either way (0.62 up, 0.63-0.75 down); "
+                 "'centered slightly low' earned a negative (thesis 5.3.1)",
           text="centered low: much of the lower teeth and little of the upper teeth show",
           kind="image",
           measure="image:m_centered_low"),
@@ -675,13 +683,13 @@ _ALL: list[Check] = [
           direction="lower",
           reason="shape_lip_contact's band on its closing half alone: below 0.75 a quarter of the "
                  "speaker's closures (/p b m/, 7-22 frames each) are seen open on the front view; below "
-                 "0.25 three in four, the lips read as never closing (two, as lips_never_touch). "
-                 "Charged with lips_never_touch: lips that never touch are the same fault, charged once "
-                 "in C",
+                 "0.25 three in four, the lips read as never closing (two, as a large separation). "
+                 "Charged with lips_apart_at_start (Table A's row judged again in C): lips held apart "
+                 "at the first and last frame are the lips that do not close, charged once in C",
           text="the lips do not close where the speaker closes them",
           kind="fidelity",
           measure="shape:m_lip_closure",
-          charged_with="lips_never_touch"),
+          charged_with="lips_apart_at_start"),
     Check(name="lips_do_not_open",
           table="C",
           component="lips",
@@ -795,10 +803,11 @@ _ALL: list[Check] = [
           unit="fraction",
           frames="frames with the lips open",
           description="distance of the upper-teeth share inside the lip opening from an even split",
-          thresholds=(0.30,),
+          thresholds=(round(CENTERED_SHARE - 0.5, 2),),
           negatives=(1,),
           direction="higher",
-          reason="an even split is 0; 0.3 means a 4:1 split either way (centered too high or too low)",
+          reason="an even split is 0; 0.15 is CENTERED_SHARE either way, where the front renders stop "
+                 "showing similar portions of upper and lower teeth (lips_centered_high)",
           text="lips centered too high or too low",
           kind="image",
           measure="image:m_centering_offset",
@@ -1057,7 +1066,7 @@ _ALL: list[Check] = [
           thresholds=(2.0, 4.0),
           negatives=(1, 2),
           direction="higher",
-          reason="lips that touch are within 1.5 mm (lips_never_touch): a lip 2 mm RMS off its pellet "
+          reason="lips that touch are within 1.5 mm (LIPS_TOUCH_MM): a lip 2 mm RMS off its pellet "
                  "opens where the speaker closed; 4 mm is a third of a speaker's lip aperture range in "
                  "speech (two negatives)",
           text="the lips do not follow the recorded lip pellets",
@@ -1195,6 +1204,29 @@ _ALL: list[Check] = [
           text="the lips do not meet where the speaker's lips meet, or meet where they part",
           kind="fidelity",
           measure="shape:m_lip_contact"),
+    Check(name="lips_never_touch",
+          table="G",
+          component="lips",
+          view="front",
+          unit="mm",
+          frames="all frames",
+          description="smallest gap between the lips' edges (61 above 58) over the whole task file",
+          thresholds=(LIPS_TOUCH_MM, 4.0),
+          ranges=((1.4, 2.0), None),
+          range_reason="as lips_apart_at_start's",
+          negatives=(1, 2),
+          direction="higher",
+          reason="cassi-farm's own measure, not the judges': they looked for lips too far apart at the "
+                 "starting and ending frame (thesis 5.3.1; lips_apart_at_start), not over the whole "
+                 "file. The bands as lips_apart_at_start's (1.5 mm reads as touching, 4 mm a large "
+                 "separation). Speech files only, as Tables A-C: speech closes the lips (/p b m/), a jaw "
+                 "wagged open or lips pushed forward need not. Charged with shape_lip_contact: lips that "
+                 "never touch are closures seen open, one fault charged once in G",
+          text="the lips never touch in the whole task",
+          kind="geometry",
+          measure="measures:m_lips_never_touch",
+          skip_tasks=ORAL_MOTOR_TASKS,
+          charged_with="shape_lip_contact"),
     Check(name="shape_mouth_width",
           table="G",
           component="lips",
@@ -1214,7 +1246,9 @@ _ALL: list[Check] = [
                  "of the outline; 10 mm, a fifth of a mouth, is a plainly wrong face (two negatives)",
           text="the mouth is too wide or too narrow for a face",
           kind="fidelity",
-          measure="shape:m_mouth_width"),
+          measure="shape:m_mouth_width",
+          at_rest="the width of the mouth at its first frame is the face's shape, not a movement: a "
+                  "face that stands still keeps the width of its rest, which is judged as any rest"),
     Check(name="shape_rounding",
           table="G",
           component="lips",
@@ -1315,7 +1349,7 @@ def registry_table() -> pd.DataFrame:
                               negatives=list(c.negatives), direction=c.direction,
                               counted=c.counted, tasks=None if c.tasks is None else list(c.tasks),
                               skip_tasks=list(c.skip_tasks),
-                              charged_with=c.charged_with, text=c.text,
+                              charged_with=c.charged_with, at_rest=c.at_rest, text=c.text,
                               description=c.description, reason=c.reason)
                          for c in CHECKS.values()])
 

@@ -219,7 +219,9 @@ def test_2_1_identical_to_2_0_for_well_centred_subjects(face, profile, rec, anim
     # The toy's inside edge starts ~4 units above 226: not 20 below (the text's reading).
     a21 = Cassi21(reading="text").animate(profile, face, rec)
     assert a21.diagnostics["thickness_rule"].iloc[0] == "equal"
-    np.testing.assert_array_equal(a21.positions, anims["cassi-2.0"].positions)
+    # the thickness is 2.0's; the tuning of OUTER_ABC_CALC is each version's own (TUNINGS)
+    np.testing.assert_array_equal(a21.positions,
+                                  Cassi20(tuning="2.1").animate(profile, face, rec).positions)
     # ... but lower than 20 above: the default (results) reading adjusts it.
     assert anims["cassi-2.1"].diagnostics["thickness_rule"].iloc[0] == "low-lips"
 
@@ -232,7 +234,8 @@ def test_2_1_leaves_lips_centred_high_alone(face, profile, rec):
     d = a21.diagnostics
     assert d["low_lips_inside_edge"].iloc[0] > LK.LOW_LIPS_THRESHOLD
     assert d["low_lips_margin"].iloc[0] < 0 and d["thickness_rule"].iloc[0] == "equal"
-    np.testing.assert_array_equal(a21.positions, Cassi20().animate(profile, face, high).positions)
+    np.testing.assert_array_equal(a21.positions,
+                                  Cassi20(tuning="2.1").animate(profile, face, high).positions)
 
 
 def test_2_1_reading_is_a_parameter():
@@ -311,8 +314,9 @@ def test_real_face_runs_all_lip_versions(real_face, profile):
 def test_real_face_no_jump_at_the_ellipse_switch(real_face, profile):
     """Thesis 4.2.5 / Table 5.9: on a wide jaw-wagging task (task 106) the lips switch between
     horizontal and vertical ellipses without a frame jump larger than the data's own (the
-    largest per-row step of the lip pellets' vertices 67 and 49)."""
-    anim = Cassi20().animate(profile, real_face, toy_recording(1200, wag_deg=20.0))
+    largest per-row step of the lip pellets' vertices 67 and 49). The shared tuning (rho 0.1, a
+    band of 5 c' units, under which the toy's wag switches 8 times)."""
+    anim = Cassi20(tuning="shared").animate(profile, real_face, toy_recording(1200, wag_deg=20.0))
     kind = anim.diagnostics["ellipse"].to_numpy()
     switches = np.nonzero(kind[1:] != kind[:-1])[0]
     assert len(switches) >= 4
@@ -321,6 +325,22 @@ def test_real_face_no_jump_at_the_ellipse_switch(real_face, profile):
     data = max(np.linalg.norm(np.diff(anim.vertex(v), axis=0), axis=1).max() for v in (67, 49))
     assert step[switches].max() <= data
     assert step.max() <= 1.05 * data
+
+
+def test_real_face_2_0_jumps_where_c_prime_leaves_the_band_and_2_1_does_not(real_face, profile):
+    """Thesis 5.4: 2.0, untuned (rho 1), snaps the width from Eq. 4.14's c to c' in one row
+    where c' leaves the band near c_rest (the toy's upper lip moves 15 c' units and more);
+    2.1 (rho 0.1) spreads the same change over rows (on this toy 14.7 and 2.2 times the pellets'
+    largest step per row)."""
+    rec = toy_recording(1200, wag_deg=20.0)
+    lips = np.asarray(LIP_VERTICES) - 1
+    ratio = {}
+    for version in (Cassi20(), Cassi21()):
+        anim = version.animate(profile, real_face, rec)
+        step = np.linalg.norm(np.diff(anim.positions[:, lips], axis=0), axis=-1).max(axis=1)
+        data = max(np.linalg.norm(np.diff(anim.vertex(v), axis=0), axis=1).max() for v in (67, 49))
+        ratio[version.name] = step.max() / data
+    assert ratio["cassi-2.0"] > 4.0 * ratio["cassi-2.1"], ratio
 
 
 @settings(max_examples=25, deadline=None,
@@ -334,7 +354,7 @@ def test_2_1_differs_from_2_0_exactly_for_low_lip_subjects(face, lipthick, ul_dy
     what follows them) change."""
     prof = dataclasses.replace(toy_profile(), lipthick=lipthick)
     rec = _ul_raised(toy_recording(60), ul_dy)   # the upper lip starts higher or lower
-    a20 = Cassi20().animate(prof, face, rec)
+    a20 = Cassi20(tuning="2.1").animate(prof, face, rec)    # 2.1's tuning: only thickness differs
     a21 = Cassi21(reading=reading).animate(prof, face, rec)
     z226 = face.vertices[225, 2]
     edge = a20.vertex(67)[0, 2] - a20.diagnostics["currthick"].iloc[0]

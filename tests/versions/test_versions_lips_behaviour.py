@@ -7,6 +7,8 @@ tests/versions/test_versions_cassi2x.py.
 """
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -24,6 +26,8 @@ from cassi.versions.lips import (
     inside_edge_start,
     lip_frames,
 )
+from cassi.versions.lips_ellipse import (BRANCH_LABELS, OuterAbcParams, outer_abc_step,
+                                         tuning)
 from cassi.versions.lips_thickness import (EQUAL_THICKNESS, LOW_LIPS_THICKNESS, LowLipsReading,
                                            is_low_lips)
 
@@ -442,3 +446,79 @@ def test_c_prime_is_guarded_before_eq_4_8():
     assert d["c_prime_unclipped"][-1] < K.C_MIN
     assert d["c_prime"].min() == pytest.approx(K.C_MIN)
     assert d["a"][-1] <= d["a"][at_max] + 1e-9
+
+
+# --- each version's tuning of OUTER_ABC_CALC (thesis 5.4: 2.0's switch jitters, 2.1's not) ---
+#: The stand-in subject with a scale: 4 Parke units a millimetre.
+SUBJECT_MM = dataclasses.replace(SUBJECT, units_per_mm=4.0)
+
+
+def wandering_jaw_wagging(n=1200, wander_mm=1.0):
+    """The jaw wagging with the upper lip wandering fore and aft by ``wander_mm``: c' crosses the
+    band near c_rest (0.5 mm of the upper lip), as a real speaker's lip may while the jaw wags."""
+    ul, ll = jaw_wagging_trajectory(n)
+    t = np.arange(n) * 0.006866
+    ul = ul.copy()
+    ul[:, 0] = 100.0 + wander_mm * 4.0 * np.sin(2 * np.pi * 0.37 * t)
+    return ul, ll
+
+
+def _switch_and_band_steps(lips, ul, ll):
+    """(largest lip-vertex step per row over the pellets' largest, number of ellipse switches)."""
+    kind = lips.diagnostics["ellipse"]
+    switches = np.nonzero(kind[1:] != kind[:-1])[0]
+    data_step = max(np.linalg.norm(np.diff(p, axis=0), axis=1).max() for p in (ul, ll))
+    lip_step = np.linalg.norm(np.diff(lips.xyz, axis=0), axis=-1).max(axis=1)
+    return lip_step.max() / data_step, len(switches)
+
+
+def test_each_version_has_its_tuning_and_the_shared_one_stays_an_option():
+    assert tuning("2.0").rho == K.RHO_20 == 1.0 and tuning("2.1").rho == K.RHO == 0.1
+    assert tuning("2.0").near_rest_mm == tuning("2.1").near_rest_mm == K.NEAR_REST_MM
+    assert tuning("shared") == OuterAbcParams()
+    assert tuning("shared").band == (K.NEAR_C_REST, K.NEAR_C_REST)
+    with pytest.raises(CassiInputError, match="unknown lip tuning"):
+        tuning("2.2")
+
+
+def test_the_band_near_rest_is_half_a_millimetre_of_the_upper_lip():
+    p = tuning("2.0").for_subject(SUBJECT.x_rest, SUBJECT.x_max, SUBJECT.x_min, 4.0)
+    # 0.5 mm = 2 units of x; Eq. 4.13: 65 c' over 25 units forward, 20 over 30 units back
+    assert p.band == pytest.approx((2.0 * 65 / 25, 2.0 * 20 / 30))
+    shared = tuning("shared")
+    assert shared.for_subject(100.0, 125.0, 70.0, 4.0) is shared
+    with pytest.raises(CassiInputError, match="units per mm"):
+        tuning("2.1").for_subject(100.0, 125.0, 70.0, None)
+    # c' 3 units above rest (lips back): outside this band (1.33), inside the shared one (5)
+    assert outer_abc_step(30.0, 68.0, 70.0, 29.0, 60.0, False, p)[2] == BRANCH_LABELS.index("3c-ii")
+    assert outer_abc_step(30.0, 68.0, 70.0, 29.0, 60.0, False, tuning("shared"))[2] == \
+        BRANCH_LABELS.index("3a")
+
+
+def test_2_0_jitters_at_the_switch_where_c_prime_leaves_the_band_and_2_1_does_not():
+    """Section 5.4: 2.1 "improved the motion of the lips so that there is no longer a jitter in the
+    transition from horizontal to vertical ellipse". With the upper lip wandering 1 mm, c' leaves
+    the band around the switches; 2.0 (rho 1) snaps the width from Eq. 4.14's c to c' in one
+    row, 2.1 (rho 0.1) does not."""
+    ul, ll = wandering_jaw_wagging()
+    r20, n20 = _switch_and_band_steps(lip_frames(ul, ll, REST, SUBJECT_MM, params=tuning("2.0")),
+                                      ul, ll)
+    r21, n21 = _switch_and_band_steps(lip_frames(ul, ll, REST, SUBJECT_MM, params=tuning("2.1")),
+                                      ul, ll)
+    assert n20 >= 2 and n21 >= 2, "the trajectory must exercise the ellipse switch"
+    assert r20 > 3.0, r20        # a jump of several pellet steps in one row
+    assert r21 <= 1.3, r21       # about the pellets' own step
+
+
+def test_2_0_without_smoothing_is_stable():
+    """rho = 1 keeps no memory in c: after the pellets stop the lips stand still at once, and
+    the width stays within step 7's limits."""
+    ul, ll = wandering_jaw_wagging(600)
+    ul = np.r_[ul, np.repeat(ul[-1:], 100, 0)]
+    ll = np.r_[ll, np.repeat(ll[-1:], 100, 0)]
+    lips = lip_frames(ul, ll, REST, SUBJECT_MM, params=tuning("2.0"))
+    assert np.isfinite(lips.xyz).all()
+    still = lips.xyz[601:]
+    np.testing.assert_allclose(still, np.repeat(still[:1], len(still), 0), atol=1e-9)
+    a = lips.diagnostics["a"]
+    assert a.min() >= K.A_MIN and a.max() <= K.A_MAX

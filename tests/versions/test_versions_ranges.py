@@ -11,6 +11,7 @@ from cassi.common.errors import CassiInputError
 from cassi.versions import constants, lips_constants
 from cassi.versions.cassi10 import NoseClearanceStage
 from cassi.versions.cassi20 import Cassi20
+from cassi.versions.cassi21 import Cassi21
 from cassi.versions.lips_ellipse import limit_abc
 from cassi.versions.lips_thickness import current_thickness
 from cassi.versions.ranges import RANGED_MODULES, constant_set, ranged_constants
@@ -74,12 +75,15 @@ def test_no_version_reads_a_ranged_constant_at_import():
 
 def test_a_setting_reaches_what_a_version_builds_and_is_undone():
     with constant_set("lips_constants.RHO", 0.2), constant_set("constants.NOSE_LIP_MIN_GAP_MM", 3.0):
-        assert Cassi20().params.rho == 0.2 and NoseClearanceStage().min_gap_mm == 3.0
+        assert Cassi21().params.rho == 0.2 and NoseClearanceStage().min_gap_mm == 3.0
+    with constant_set("lips_constants.NEAR_REST_MM", 1.0):
+        assert Cassi20().params.near_rest_mm == Cassi21().params.near_rest_mm == 1.0
     with constant_set("lips_constants.THICKEN_GAIN", 0.6):
         assert current_thickness(10.0, [0.0])[0] == pytest.approx(16.0)
     with constant_set("lips_constants.A_MAX", 104.0):
         assert limit_abc([200.0], [0.0])[0][0] == 104.0
-    assert Cassi20().params.rho == lips_constants.RHO == 0.1
+    assert Cassi21().params.rho == lips_constants.RHO == 0.1
+    assert Cassi20().params.near_rest_mm == lips_constants.NEAR_REST_MM == 0.5
     assert NoseClearanceStage().min_gap_mm == constants.NOSE_LIP_MIN_GAP_MM == 2.0
     assert current_thickness(10.0, [0.0])[0] == pytest.approx(14.0)
 

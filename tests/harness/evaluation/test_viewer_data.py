@@ -91,24 +91,26 @@ def test_a_viewer_link_opens_in_the_view_its_check_is_judged_from():
 
 
 def test_the_viewer_charges_a_fault_once_as_the_report_does():
-    # lips_apart_at_start is charged with lips_never_touch (registry): the viewer lists both,
+    # lips_do_not_close is charged with lips_apart_at_start (registry): the viewer lists both,
     # the second with no negative of its own and the report's note saying why
+    from cassi.harness.rubric import CHECKS
+
     def rows(check, neg, frame):
         base = dict(subject="JW11", task=106, rep=1, version="cassi-1.0", view="geometry",
-                    table="A", component="lips", check=check, value=5.0, unit="mm",
-                    threshold=1.5, detail="", synthetic=True)
+                    table=CHECKS[check].table, component="lips", check=check, value=5.0,
+                    unit="mm", threshold=1.5, detail="", synthetic=True)
         return [{**base, "frame": -1, "negatives": neg}, {**base, "frame": frame, "negatives": neg}]
-    res = pd.DataFrame(rows("lips_never_touch", 2, 40) + rows("lips_apart_at_start", 1, 0)
+    res = pd.DataFrame(rows("lips_apart_at_start", 2, 40) + rows("lips_do_not_close", 1, 0)
                        + rows("lips_pressed", 0, 7))
     ev = {e["check"]: e for e in _events(res)[("JW11", 106, 1, "cassi-1.0")]}
-    assert (ev["lips_never_touch"]["negatives"], ev["lips_never_touch"]["note"]) == (2, "")
-    apart = ev["lips_apart_at_start"]
-    assert (apart["negatives"], apart["raw_negatives"]) == (0, 1)
-    assert "lips_never_touch" in apart["note"]
+    assert (ev["lips_apart_at_start"]["negatives"], ev["lips_apart_at_start"]["note"]) == (2, "")
+    closing = ev["lips_do_not_close"]
+    assert (closing["negatives"], closing["raw_negatives"]) == (0, 1)
+    assert "lips_apart_at_start" in closing["note"]
     assert (ev["lips_pressed"]["negatives"], ev["lips_pressed"]["raw_negatives"]) == (0, 0)
     # fired first, by what is charged
     assert [e["check"] for e in _events(res)[("JW11", 106, 1, "cassi-1.0")]] == [
-        "lips_never_touch", "lips_apart_at_start", "lips_pressed"]
+        "lips_apart_at_start", "lips_do_not_close", "lips_pressed"]
 
 
 def test_an_event_shows_the_value_the_subject_page_shows():

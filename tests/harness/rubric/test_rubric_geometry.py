@@ -317,7 +317,7 @@ CASES = {
     "teeth_slope_down": (5, p_slope_down, [3.0, 8.0], [0, 1]),
     "teeth_too_far_apart": (5, p_teeth_apart, [2.0, 7.0], [0, 1]),
     "lips_never_touch": (5, p_open_lips, [0.5, 2.5, 6.0], [0, 1, 2]),
-    "lips_apart_at_start": (5, p_open_at_start, [0.5, 2.5], [0, 1]),
+    "lips_apart_at_start": (5, p_open_at_start, [0.5, 2.5, 6.0], [0, 1, 2]),
     "lips_pressed": (5, p_pressed, [1.0, 3.0], [0, 1]),
     "lower_lip_below_teeth": (5, p_lower_lip_below, [0.05, 0.3, 0.7], [0, 1, 2]),
     "lips_through_teeth": (5, p_lip_through_teeth, [0.2, 1.5], [0, 1]),
@@ -399,6 +399,35 @@ def test_crossing_the_version_handles_is_not_the_table_a_overlap():
     assert run(a, 5, checks=["lips_overlap"]).loc["lips_overlap", "negatives"] == 0
     a.diagnostics["lips_overlap"] = False
     assert run(a, 5, checks=["lips_overlap"]).loc["lips_overlap", "negatives"] == 1
+
+
+def test_lip_contact_is_judged_at_the_first_and_the_last_frame():
+    """Thesis 5.3.1: the front view at the starting and ending frame shows whether the lips
+    lightly touch, are too far apart or too close together: a fault at the end counts as one at
+    the start; lips parted in between are not a contact fault; and the whole file's smallest gap
+    is cassi-farm's own measure, in Table G."""
+    checks = ["lips_apart_at_start", "lips_pressed", "lips_never_touch"]
+    last = BASE[5].positions.shape[0] - 1
+
+    def lower_lip_moved(frames, dz):
+        a = S.copy(BASE[5])
+        a.positions[frames, M.lower_lip, 2] += dz
+        return run(a, 5, checks=checks)
+
+    r = lower_lip_moved(slice(-6, None), -2.5)                      # apart at the end only
+    assert r.loc["lips_apart_at_start", "negatives"] == 1
+    assert f"worst frame {last}" in r.loc["lips_apart_at_start", "detail"]
+    assert r.loc["lips_never_touch", "negatives"] == 0              # they touch at the start
+    assert lower_lip_moved(slice(-6, None), -6.0).loc["lips_apart_at_start", "negatives"] == 2
+    r = lower_lip_moved(slice(-4, None), 3.0)                       # pressed at the end only
+    assert r.loc["lips_pressed", "negatives"] == 1
+    assert f"worst frame {last}" in r.loc["lips_pressed", "detail"]
+    r = lower_lip_moved(slice(6, -6), -6.0)                         # apart between the two
+    assert (r.loc[checks, "negatives"] == 0).all(), r.loc[checks, ["value", "detail"]]
+    r = lower_lip_moved(slice(None), -2.5)                          # apart in every frame
+    assert r.loc["lips_apart_at_start", "negatives"] == 1
+    assert r.loc["lips_never_touch", "negatives"] == 1
+    assert (r.loc["lips_apart_at_start", "table"], r.loc["lips_never_touch", "table"]) == ("A", "G")
 
 
 def test_jaw_turned_down_at_initialization_reads_long_not_square():

@@ -102,19 +102,41 @@ def test_lips_that_follow_the_recording_pass(face):
 
 
 def test_a_still_face_scores_worst_on_contact_rounding_and_the_tongue_between_pellets(face):
+    """Every Table G measure of movement gives a still face its most negatives; a measure of the
+    face at rest (``Check.at_rest``, declared with its reason) judges the still face as it judges
+    a moving face with the same rest."""
     rec = recording()
     still = np.repeat(np.asarray(face.vertices, float)[None], F, 0)
-    r = judge(face, still, rec)
-    for check in ("shape_lip_contact", "shape_rounding", "shape_tongue_t2"):
-        c = R.get_check(check)
-        assert r.loc[check, "negatives"] == max(c.negatives), (check, r.loc[check, "detail"])
+    r, moving = judge(face, still, rec), judge(face, lips_that_follow(face, rec), rec)
+    at_rest = [c for c in SHAPE if R.get_check(c).at_rest]
+    assert at_rest == ["shape_mouth_width"]
+    for check in SHAPE:
+        if check in at_rest:
+            assert r.loc[check, "value"] == moving.loc[check, "value"], check
+            assert r.loc[check, "negatives"] == moving.loc[check, "negatives"], check
+        else:
+            c = R.get_check(check)
+            assert r.loc[check, "negatives"] == max(c.negatives), (check, r.loc[check, "detail"])
     # a face that never changes its contact shares nothing with the recording's closures
     assert r.loc["shape_lip_contact", "value"] == pytest.approx(0.0)
     assert r.loc["shape_rounding", "value"] == pytest.approx(0.0)
     # Parke's tongue stays where the model has it, centimetres from the recorded T2 and T3
     assert r.loc[["shape_tongue_t2", "shape_tongue_t3"], "value"].min() > 6.0
-    # the width at rest is a shape, not a movement: Parke's rest mouth is an adult's
-    assert r.loc["shape_mouth_width", "negatives"] == 0
+
+
+def test_a_measure_of_the_face_at_rest_reads_the_rest_only(face):
+    """What ``at_rest`` declares holds: lips twice as wide after the first frame leave every such
+    measure where the rest puts it, and each says why it reads the rest."""
+    rec = recording()
+    still = np.repeat(np.asarray(face.vertices, float)[None], F, 0)
+    wide = lips_that_follow(face, rec, width=2.0)
+    wide[0] = still[0]
+    r, rest = judge(face, wide, rec), judge(face, still, rec)
+    at_rest = [c for c in R.CHECKS.values() if c.at_rest]
+    assert at_rest and all(c.frames == "first frame" for c in at_rest)
+    for c in at_rest:
+        assert r.loc[c.name, "value"] == rest.loc[c.name, "value"], c.name
+    assert "not a movement" in R.get_check("shape_mouth_width").at_rest
 
 
 def test_an_oracle_on_the_pellets_with_lips_twice_as_wide_is_caught(face):

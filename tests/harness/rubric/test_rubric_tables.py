@@ -23,43 +23,50 @@ def cell(results, table, version, component="lips", subject="JW11"):
 
 
 def test_a_fault_counts_once_per_subject_with_its_worst_file():
-    res = pd.concat([rows("cassi-1.0", [("lips_never_touch", 1), ("tongue_through_teeth", 1)]),
-                     rows("cassi-1.0", [("lips_never_touch", 2)], task=21)])
+    res = pd.concat([rows("cassi-1.0", [("lips_apart_at_start", 1), ("tongue_through_teeth", 1)]),
+                     rows("cassi-1.0", [("lips_apart_at_start", 2)], task=21)])
     # per-frame evidence rows never count
     ev = rows("cassi-1.0", [("tongue_through_teeth", 3)]).assign(frame=10)
     res = pd.concat([res, ev])
     assert cell(res, "A", "cassi-1.0")["negatives"] == 2
     assert cell(res, "A", "cassi-1.0", "tongue")["negatives"] == 1
     v = R.verdicts(res).set_index(["table", "check"])
-    assert v.loc[("A", "lips_never_touch"), "tasks"] == "5, 21"
-    assert v.loc[("A", "lips_never_touch"), "fired_files"] == 2
-    assert cell(res, "A", "cassi-1.0")["text"] == "-- lips too far apart, never touching"
-
-
-def test_one_fault_one_charge():
-    # lips that never touch are separated at the start too: the gap is charged once
-    both = rows("cassi-1.0", [("lips_never_touch", 1), ("lips_apart_at_start", 1)])
-    c = cell(both, "A", "cassi-1.0")
-    assert c["negatives"] == 1 and "separated at the start" not in c["text"]
-    v = R.verdicts(both).set_index(["table", "check"])
-    assert v.loc[("A", "lips_apart_at_start"), "raw_negatives"] == 1
-    assert "lips_never_touch" in v.loc[("A", "lips_apart_at_start"), "note"]
-    # ... also when another of the subject's files showed the lips never touching
-    across = pd.concat([rows("cassi-1.0", [("lips_never_touch", 0), ("lips_apart_at_start", 1)]),
-                        rows("cassi-1.0", [("lips_never_touch", 2)], task=21)])
-    assert cell(across, "A", "cassi-1.0")["negatives"] == 2
-    # lips apart at the start only (they touch later): charged
-    alone = rows("cassi-1.0", [("lips_never_touch", 0), ("lips_apart_at_start", 1)])
-    assert cell(alone, "A", "cassi-1.0")["negatives"] == 1
+    assert v.loc[("A", "lips_apart_at_start"), "tasks"] == "5, 21"
+    assert v.loc[("A", "lips_apart_at_start"), "fired_files"] == 2
+    assert cell(res, "A", "cassi-1.0")["text"] == "-- lips too far apart at the start or end, not touching"
 
 
 def test_table_c_is_table_a_lips_plus_its_own_checks():
-    res = rows("cassi-1.0", [("lips_never_touch", 1), ("tongue_through_teeth", 1),
+    res = rows("cassi-1.0", [("lips_apart_at_start", 1), ("tongue_through_teeth", 1),
                              ("lips_too_large_moving", 1)])
     c = cell(res, "C", "cassi-1.0")
     assert c["negatives"] == 2                        # the lip row of A + C's own, not the tongue
-    assert "tongue" not in c["text"] and "never touching" in c["text"]
+    assert "tongue" not in c["text"] and "too far apart" in c["text"]
     assert cell(res, "A", "cassi-1.0")["negatives"] == 1
+    # Table G's whole-file lips_never_touch (cassi-farm's measure) is not a Table A row: not in C
+    g = rows("cassi-1.0", [("lips_never_touch", 2)])
+    assert set(R.verdicts(g)["table"]) == {"G"}
+
+
+def test_one_fault_one_charge():
+    # lips held apart at the first and last frame are lips that do not close where the speaker
+    # closes them: one fault, charged once in C
+    both = rows("cassi-1.0", [("lips_apart_at_start", 1), ("lips_do_not_close", 1)])
+    c = cell(both, "C", "cassi-1.0")
+    assert c["negatives"] == 1 and "do not close where" not in c["text"]
+    v = R.verdicts(both).set_index(["table", "check"])
+    assert v.loc[("C", "lips_do_not_close"), "raw_negatives"] == 1
+    assert "lips_apart_at_start" in v.loc[("C", "lips_do_not_close"), "note"]
+    # ... also when another of the subject's files showed the lips apart
+    across = pd.concat([rows("cassi-1.0", [("lips_apart_at_start", 0), ("lips_do_not_close", 1)]),
+                        rows("cassi-1.0", [("lips_apart_at_start", 2)], task=21)])
+    assert cell(across, "C", "cassi-1.0")["negatives"] == 2
+    # lips that touch at both frames but stay open in the speaker's closures: charged
+    alone = rows("cassi-1.0", [("lips_apart_at_start", 0), ("lips_do_not_close", 1)])
+    assert cell(alone, "C", "cassi-1.0")["negatives"] == 1
+    # Table G: lips that never touch in the file are closures seen open, charged once there
+    g = rows("cassi-1.0", [("shape_lip_contact", 2), ("lips_never_touch", 1)])
+    assert cell(g, "G", "cassi-1.0")["negatives"] == 2
 
 
 def _two_files(version, first, second):
@@ -81,25 +88,25 @@ def test_table_c_looks_worse_on_the_same_files_earns_one_more():
 
 def test_table_c_marked_improvement_earns_one_fewer():
     # same rating (1 negative) but the fault is gone from half the shared files and nothing worse
-    prev = _two_files("cassi-1.0", [("lips_never_touch", 1)], [("lips_never_touch", 1)])
-    cur = _two_files("cassi-2.0", [("lips_never_touch", 1)], [("lips_never_touch", 0)])
+    prev = _two_files("cassi-1.0", [("lips_apart_at_start", 1)], [("lips_apart_at_start", 1)])
+    cur = _two_files("cassi-2.0", [("lips_apart_at_start", 1)], [("lips_apart_at_start", 0)])
     c = cell(pd.concat([prev, cur]), "C", "cassi-2.0")
     assert c["negatives"] == 0 and c["adjust"] == -1
     assert "marked improvement over cassi-1.0" in c["reason"]
 
 
 def test_table_c_better_and_worse_at_once_keeps_the_count():
-    prev = _two_files("cassi-1.0", [("lips_never_touch", 1), ("lips_overlap", 0)],
-                      [("lips_never_touch", 1), ("lips_overlap", 0)])
-    cur = _two_files("cassi-2.0", [("lips_never_touch", 0), ("lips_overlap", 1)],
-                     [("lips_never_touch", 0), ("lips_overlap", 0)])
+    prev = _two_files("cassi-1.0", [("lips_apart_at_start", 1), ("lips_overlap", 0)],
+                      [("lips_apart_at_start", 1), ("lips_overlap", 0)])
+    cur = _two_files("cassi-2.0", [("lips_apart_at_start", 0), ("lips_overlap", 1)],
+                     [("lips_apart_at_start", 0), ("lips_overlap", 0)])
     c = cell(pd.concat([prev, cur]), "C", "cassi-2.0")
     assert c["adjust"] == 0 and c["negatives"] == 1
 
 
 def test_table_c_rule_applies_only_where_the_ratings_are_the_same():
-    prev = _two_files("cassi-1.0", [("lips_never_touch", 2)], [("lips_never_touch", 0)])
-    cur = _two_files("cassi-2.0", [("lips_never_touch", 1)], [("lips_never_touch", 1)])
+    prev = _two_files("cassi-1.0", [("lips_apart_at_start", 2)], [("lips_apart_at_start", 0)])
+    cur = _two_files("cassi-2.0", [("lips_apart_at_start", 1)], [("lips_apart_at_start", 1)])
     c = cell(pd.concat([prev, cur]), "C", "cassi-2.0")
     assert c["adjust"] == 0 and c["negatives"] == 1 and "ratings differ" in c["reason"]
 
@@ -112,15 +119,15 @@ def test_table_c_compares_only_the_files_both_versions_judged():
 
 
 def test_summaries_name_the_checks_that_decided():
-    same = pd.concat([rows("cassi-1.0", [("lips_never_touch", 1)]),
-                      rows("cassi-2.0", [("lips_never_touch", 1)])])
+    same = pd.concat([rows("cassi-1.0", [("lips_apart_at_start", 1)]),
+                      rows("cassi-2.0", [("lips_apart_at_start", 1)])])
     s = [x for x in R.version_summaries(same) if "lip placement" in x][0]
-    assert "matches" in s and "the same faults decided both: lips_never_touch" in s
-    diff = pd.concat([rows("cassi-1.0", [("lips_never_touch", 2)]),
-                      rows("cassi-2.0", [("lips_never_touch", 0), ("lips_overlap", 1)])])
+    assert "matches" in s and "the same faults decided both: lips_apart_at_start" in s
+    diff = pd.concat([rows("cassi-1.0", [("lips_apart_at_start", 2)]),
+                      rows("cassi-2.0", [("lips_apart_at_start", 0), ("lips_overlap", 1)])])
     s = [x for x in R.version_summaries(diff) if "lip placement" in x][0]
     assert s.startswith("cassi-2.0 improves lip placement over cassi-1.0")
-    assert "decided by lips_never_touch (0 against 2 negatives)" in s
+    assert "decided by lips_apart_at_start (0 against 2 negatives)" in s
 
 
 def test_table_f_summary_names_the_worst_version():
@@ -132,8 +139,8 @@ def test_table_f_summary_names_the_worst_version():
 
 
 def test_history_totals_and_empty_inputs():
-    res = pd.concat([rows("cassi-1.0", [("lips_never_touch", 1)]),
-                     rows("cassi-2.0", [("lips_never_touch", 0)])])
+    res = pd.concat([rows("cassi-1.0", [("lips_apart_at_start", 1)]),
+                     rows("cassi-2.0", [("lips_apart_at_start", 0)])])
     t = R.version_totals(res).set_index("version")["negatives"]
     assert t["cassi-1.0"] == 2 and t["cassi-2.0"] == 0       # Table A + Table C
     assert R.component_ratings(pd.DataFrame()).empty and R.verdicts(pd.DataFrame()).empty
@@ -145,7 +152,7 @@ def test_versions_whose_checks_agree_are_said_to_match_whatever_table_c_rule_add
     negatives on every check 'match', and the sentence says where the totals' gap comes from."""
     from cassi.harness.rubric import tables as T
 
-    v = pd.DataFrame({"version": ["b", "c"], "table": ["C", "C"], "check": ["lips_never_touch"] * 2,
+    v = pd.DataFrame({"version": ["b", "c"], "table": ["C", "C"], "check": ["lips_apart_at_start"] * 2,
                       "negatives": [2, 2]})
     both = T._per_check(v, "C", "b", "c")
     assert (both["a"] == both["b"]).all()
@@ -156,9 +163,9 @@ def test_versions_whose_checks_agree_are_said_to_match_whatever_table_c_rule_add
 def test_the_sentence_says_what_table_c_rule_added_when_every_check_agrees():
     """End to end: 2.0 fires in more shared files than 1.0 at the same rating (+1 against 1.0);
     2.1 has 2.0's negatives on every check, so it 'matches' 2.0 and the sentence names the +1."""
-    res = pd.concat([_two_files("cassi-1.0", [("lips_never_touch", 1)], [("lips_never_touch", 0)]),
-                     _two_files("cassi-2.0", [("lips_never_touch", 1)], [("lips_never_touch", 1)]),
-                     _two_files("cassi-2.1", [("lips_never_touch", 1)], [("lips_never_touch", 1)])])
+    res = pd.concat([_two_files("cassi-1.0", [("lips_apart_at_start", 1)], [("lips_apart_at_start", 0)]),
+                     _two_files("cassi-2.0", [("lips_apart_at_start", 1)], [("lips_apart_at_start", 1)]),
+                     _two_files("cassi-2.1", [("lips_apart_at_start", 1)], [("lips_apart_at_start", 1)])])
     assert cell(res, "C", "cassi-2.0")["adjust"] == 1 and cell(res, "C", "cassi-2.1")["adjust"] == 0
     s = [x for x in R.version_summaries(res) if "lip placement over cassi-2.0" in x][0]
     assert s.startswith("cassi-2.1 matches lip placement over cassi-2.0"), s

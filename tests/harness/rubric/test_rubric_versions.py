@@ -165,3 +165,24 @@ def test_the_2_1_criterion_margin_is_a_whole_task_row(subject, version):
     # a run that asks for named checks gets only those
     assert R.run_geometry_checks(anim, face, prof, task=5, subject="JW11",
                                  checks=["teeth_front_overlap"])["view"].eq("geometry").all()
+
+
+def test_2_0_s_switch_jitter_is_charged_and_2_1_s_is_not(subject):
+    """Thesis 5.4 / Table 5.9: the judges charged 2.0 with "a jitter in the transition from
+    horizontal to vertical ellipse" and not 2.1. Planted on JW11's task 106: the upper lip wanders
+    0.5 mm fore and aft (the synthetic one stays within 0.23 mm of rest, inside the band near
+    c_rest where rho never acts), so c' leaves the band around the switches."""
+    corpus, prof, face = subject
+    rec = corpus.subject("JW11").load(106, 1)
+    xy = np.array(rec.xy_mm, np.float64)
+    t = np.arange(xy.shape[0]) * 0.006866
+    xy[:, 0, 0] += 0.5 * np.sin(2 * np.pi * 0.37 * t)
+    rec = dataclasses.replace(rec, xy_mm=xy)
+    from cassi.versions.registry import get_version
+
+    r = {v: _run(subject, get_version(v).animate(prof, face, rec), 106,
+                 ["corner_jump_switch"]).loc["corner_jump_switch"]
+         for v in ("cassi-2.0", "cassi-2.1")}
+    assert r["cassi-2.0"]["negatives"] == 1 and r["cassi-2.0"]["value"] > 3.0, r["cassi-2.0"]
+    assert "ellipse switch" in r["cassi-2.0"]["detail"]
+    assert r["cassi-2.1"]["negatives"] == 0, r["cassi-2.1"]
