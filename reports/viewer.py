@@ -32,6 +32,7 @@ from cassi.harness.evaluation.frames import VIEWER_STRIDE
 from cassi.harness.evaluation.stages import read_masks_blob
 from cassi.harness.evaluation.viewerdata import read_viewer_blob
 from cassi.harness.rubric import CHECKS
+from cassi.harness.rubric.model import TABLE_TOPICS, TABLES
 from cassi.harness.rubric.image import FrameMasks, mouth_opening
 from cassi.harness.rubric.tables import file_verdicts
 from cassi.renderer.gltf import AXES
@@ -39,7 +40,7 @@ from cassi.renderer.views import VIEWS, material_for
 from cassi.reports.runio import Run, order_versions
 
 __all__ = ["VIEWER_DIR", "STATIC_DIR", "viewer_page", "viewer_href", "write_viewers",
-           "TABLE_COLOURS", "MASK_COLOURS", "mask_overlay"]
+           "TABLE_COLOURS", "MASK_COLOURS", "mask_overlay", "table_legend"]
 
 VIEWER_DIR = "viewer"
 STATIC_DIR = "static"
@@ -47,6 +48,12 @@ _STATIC_FILES = ("three.min.js", "three.LICENSE.txt", "viewer.js")
 #: One colour per rubric table for the timeline's event marks (colour-blind safe: Okabe-Ito).
 TABLE_COLOURS = {"A": "#E69F00", "B": "#56B4E9", "C": "#009E73", "D": "#F0E442",
                  "E": "#0072B2", "F": "#D55E00", "G": "#CC79A7"}
+
+
+def table_legend() -> list[dict]:
+    """The timeline's legend: each rubric table's letter, mark colour, thesis table and topic."""
+    return [{"letter": t, "colour": TABLE_COLOURS[t], "thesis": TABLES[t][0],
+             "title": TABLES[t][1], "topic": TABLE_TOPICS[t]} for t in TABLES]
 
 
 def viewer_page(subject_slug: str, task: int, rep: int) -> str:
@@ -123,6 +130,10 @@ def _version_payload(data, events: list[dict], renders: list[dict]) -> dict:
         "triangles": _array(data.triangles, stream=data.deflated["triangles"]),
         "part_of": _array(data.part_of.astype(np.int16)), "parts": colours,
         "palate_top": top, "model": _array(data.model, stream=data.deflated["model"]),
+        # the pellets' map into this face (Parke (x, z) = XRMB (x, y) mm * units_per_mm +
+        # xrmb_origin; None for older data): 3D pellet markers, and the A/B distance in mm
+        "units_per_mm": data.units_per_mm,
+        "xrmb_origin": None if data.xrmb_origin is None else [float(x) for x in data.xrmb_origin],
         "events": events, "renders": renders}
 
 
@@ -250,7 +261,8 @@ def write_viewers(run: Run, out: Path, env, *, slug, audio_for=None, images=None
         atomic_write_text(dest, env.get_template("viewer.html.j2").render(
             subject=subject, task=task, rep=rep, synthetic=run.synthetic,
             versions=list(versions), data=f"{stem}.js", static="../../static",
-            index="../../index.html", subject_page=payload["subject_page"]))
+            index="../../index.html", subject_page=payload["subject_page"],
+            legend=table_legend(), stride=VIEWER_STRIDE))
         pages[(subject, task, rep)] = page
     return pages
 
