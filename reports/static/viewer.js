@@ -610,15 +610,18 @@
     // time axis: seconds on the recording's clock (the sound's and the labels')
     const [a0] = LANES.axis;
     ctx.strokeStyle = "#444"; ctx.fillStyle = "#333"; ctx.beginPath(); ctx.moveTo(PAD, a0 + 0.5); ctx.lineTo(TL.width - 6, a0 + 0.5);
-    for (const t of timeTicks()) { ctx.moveTo(t.x + 0.5, a0); ctx.lineTo(t.x + 0.5, a0 + 5); ctx.fillText(t.label, t.x + 2, a0 + 15); }
+    for (const t of timeTicks()) {
+      ctx.moveTo(t.x + 0.5, a0); ctx.lineTo(t.x + 0.5, a0 + 5);
+      if (t.x + 2 + ctx.measureText(t.label).width < TL.width - 2) ctx.fillText(t.label, t.x + 2, a0 + 15);
+    }
     ctx.stroke(); ctx.fillText("time", 2, a0 + 15);
     // cursor
     ctx.strokeStyle = "#000"; ctx.beginPath(); ctx.moveTo(xOf(S.row), 0); ctx.lineTo(xOf(S.row), TL.height); ctx.stroke();
   }
 
-  function timeTicks() {   // whole steps of 0.1 .. 60 s, at least 60 px apart
+  function timeTicks() {   // whole steps of 0.1 .. 60 s, at least 80 px apart
     const t0 = rowTime(S.first), t1 = rowTime(S.last), pxPerS = (TL.width - PAD - 6) / Math.max(1e-6, t1 - t0);
-    const step = [0.1, 0.2, 0.5, 1, 2, 5, 10, 15, 30, 60].find((s) => s * pxPerS >= 60) || 60;
+    const step = [0.1, 0.2, 0.5, 1, 2, 5, 10, 15, 30, 60].find((s) => s * pxPerS >= 80) || 60;
     const out = [];
     for (let i = Math.ceil(t0 / step - 1e-9); i * step <= t1 + 1e-9; i++) {
       const sec = i * step;
