@@ -10,8 +10,9 @@ DecompressionStream). Strings from data files reach the page only inside that JS
 set as text by the script, never as HTML.
 
 The address's fragment selects what opens: ``#frame=ROW&a=VERSION&b=VERSION&check=NAME&view=VIEW``
-(:func:`viewer_href`); a subject page's negatives link there, at the frame that earned them and
-in the view the check is judged from (its registry ``view``).
+(:func:`viewer_href`; the page adds ``mode=overlay|diff`` and ``pellets=0`` as they change); a
+subject page's negatives link there, at the frame that earned them and in the view the check is
+judged from (its registry ``view``).
 """
 from __future__ import annotations
 

@@ -43,8 +43,8 @@ from cassi.harness.farm.jobs import npz_bytes
 from cassi.harness.rubric.fidelity import virtual_pellets
 from cassi.versions.mapping import XrmbToParke
 
-__all__ = ["VIEWER_FORMAT", "READABLE_FORMATS", "STEP_UNITS", "DEFLATED", "ViewerData", "viewer_blob",
-           "read_viewer_blob"]
+__all__ = ["VIEWER_FORMAT", "READABLE_FORMATS", "STEP_UNITS", "DEFLATED", "ViewerData",
+           "viewer_blob", "read_viewer_blob"]
 
 #: Bumped when the blob's arrays change meaning (it is part of the stage's outputs' digest
 #: through the code hash; readers refuse other formats).

@@ -1,5 +1,6 @@
-"""The task viewer in a real browser: Debian's headless Chromium driven by Playwright, on a real
-run (JW11 task 106, cassi-1.0 and cassi-2.1, front renders) and its report, opened from disk.
+"""The task viewer in a real browser: Debian's headless Chromium driven by Playwright, on real
+runs (JW11 task 106, cassi-1.0 and cassi-2.1, front renders; JW11 task 19; JW11 task 106 in
+parke-1974, cassi-1.0 and cassi-3.0, geometry only) and their reports, opened from disk.
 
 WebGL runs on Chromium's software rasteriser (SwiftShader) here; the golden screenshot allows
 for what differs between CPUs (see :func:`test_front_view_matches_the_golden`).
@@ -529,7 +530,8 @@ def _blobs(run: Path, task: int = 106) -> dict:
     from cassi.reports.runio import load_run
     att = load_run(run).attachments
     att = att[(att["name"] == "viewer") & (att["task"] == task)]
-    return {v: read_viewer_blob(Path(path).read_bytes()) for v, path in zip(att["version"], att["path"])}
+    return {v: read_viewer_blob(Path(path).read_bytes())
+            for v, path in zip(att["version"], att["path"])}
 
 
 def test_the_difference_view_colours_b_by_its_distance_to_a_in_mm(report_ab, browser):
@@ -563,7 +565,8 @@ def test_the_difference_view_colours_b_by_its_distance_to_a_in_mm(report_ab, bro
     changed = np.abs(diff.astype(int) - side.astype(int)).max(axis=-1) > 40
     assert changed[:, w + 4:].mean() > 0.05 and changed[:, :w - 4].mean() < 0.002
     # a reopened address is in the difference view
-    q = Page(browser, _viewer_url(rep, f"#frame={frame}&a=cassi-1.0&b=parke-1974&mode=diff")).ready()
+    q = Page(browser, _viewer_url(rep, f"#frame={frame}&a=cassi-1.0&b=parke-1974&mode=diff"))
+    q.ready()
     assert q.page.evaluate("window.cassiViewer.diff().top") == pytest.approx(d["top"])
     assert p.errors == [] and q.errors == []
     q.page.close()
@@ -614,27 +617,25 @@ def test_measured_and_model_pellets_are_markers_where_the_version_maps_them(repo
     assert np.allclose(shown["model"][0][1:], [ul[2], ul[0]], atol=1e-2)
     # drawn: black where the recording's pellet is, cyan where the model's, gone when off
     on = p.pixels().astype(int)
-    where = p.page.evaluate("""(pts) => { const c = window.cassiViewer.three().camera;
-        const el = document.getElementById('three');
-        return pts.map((q) => { const v = new THREE.Vector3(...q).project(c);
-            return [Math.round((v.x + 1) / 2 * el.clientWidth), Math.round((1 - v.y) / 2 * el.clientHeight)]; }); }""",
-                            [shown["measured"][i] for i in range(8) if shown["measured"][i]]
-                            + shown["model"])
-    nm = sum(1 for q in shown["measured"] if q)
-    apart = [i for i in range(8) if shown["measured"][i]
-             and np.linalg.norm(np.subtract(shown["measured"][i], shown["model"][i])) > 4.5 * s]
+
+    def pixel(q):   # a point of the scene -> its pixel on the canvas (one viewport: A alone)
+        return p.page.evaluate("""(q) => {
+            const v = new THREE.Vector3(...q).project(window.cassiViewer.three().camera);
+            const el = document.getElementById('three');
+            return [Math.round((1 - v.y) / 2 * el.clientHeight),
+                    Math.round((v.x + 1) / 2 * el.clientWidth)]; }""", q)
+    apart = [i for i, q in enumerate(shown["measured"])
+             if q and np.linalg.norm(np.subtract(q, shown["model"][i])) > 4.5 * s]
     assert apart, "no measured pellet away from its model site"
-    mi = [i for i in range(8) if shown["measured"][i]]
-    for i in apart:
-        x, y = where[mi.index(i)]
-        assert on[y, x].max() < 90, ("measured", i, on[y, x])
-    for i in range(8):
-        x, y = where[nm + i]
+    where = [pixel(shown["measured"][i]) for i in apart] + [pixel(q) for q in shown["model"]]
+    for y, x in where[:len(apart)]:
+        assert on[y, x].max() < 90, ("measured", on[y, x])
+    for y, x in where[len(apart):]:
         r, g, b = on[y, x]
-        assert g > r + 60 and b > r + 60, ("model", i, on[y, x])
+        assert g > r + 60 and b > r + 60, ("model", on[y, x])
     p.page.click("#pellets")
     off = p.pixels().astype(int)
-    for x, y in where:
+    for y, x in where:
         assert np.abs(off[y, x] - on[y, x]).max() > 40
     legend = p.page.text_content("#pellet-legend")
     assert "measured" in legend and "model" in legend
