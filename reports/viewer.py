@@ -10,8 +10,9 @@ DecompressionStream). Strings from data files reach the page only inside that JS
 set as text by the script, never as HTML.
 
 The address's fragment selects what opens: ``#frame=ROW&a=VERSION&b=VERSION&check=NAME&view=VIEW``
-(:func:`viewer_href`); a subject page's negatives link there, at the frame that earned them and
-in the view the check is judged from (its registry ``view``).
+(:func:`viewer_href`; the page adds ``mode=overlay|diff`` and ``pellets=0`` as they change); a
+subject page's negatives link there, at the frame that earned them and in the view the check is
+judged from (its registry ``view``).
 """
 from __future__ import annotations
 
@@ -32,6 +33,7 @@ from cassi.harness.evaluation.frames import VIEWER_STRIDE, linked_view
 from cassi.harness.evaluation.stages import read_masks_blob
 from cassi.harness.evaluation.viewerdata import read_viewer_blob
 from cassi.harness.rubric import CHECKS
+from cassi.harness.rubric.model import TABLE_TOPICS, TABLES
 from cassi.harness.rubric.image import FrameMasks, mouth_opening
 from cassi.harness.rubric.tables import file_verdicts
 from cassi.renderer.gltf import AXES
@@ -40,7 +42,7 @@ from cassi.reports.runio import Run, order_versions
 
 __all__ = ["VIEWER_DIR", "STATIC_DIR", "viewer_page", "viewer_href", "write_viewers",
            "version_payload", "viewer_payload", "write_viewer_page", "copy_static",
-           "TABLE_COLOURS", "MASK_COLOURS", "mask_overlay"]
+           "TABLE_COLOURS", "MASK_COLOURS", "mask_overlay", "table_legend"]
 
 VIEWER_DIR = "viewer"
 STATIC_DIR = "static"
@@ -48,6 +50,12 @@ _STATIC_FILES = ("three.min.js", "three.LICENSE.txt", "viewer.js")
 #: One colour per rubric table for the timeline's event marks (colour-blind safe: Okabe-Ito).
 TABLE_COLOURS = {"A": "#E69F00", "B": "#56B4E9", "C": "#009E73", "D": "#F0E442",
                  "E": "#0072B2", "F": "#D55E00", "G": "#CC79A7"}
+
+
+def table_legend() -> list[dict]:
+    """The timeline's legend: each rubric table's letter, mark colour, thesis table and topic."""
+    return [{"letter": t, "colour": TABLE_COLOURS[t], "thesis": TABLES[t][0],
+             "title": TABLES[t][1], "topic": TABLE_TOPICS[t]} for t in TABLES]
 
 
 def viewer_page(subject_slug: str, task: int, rep: int) -> str:
@@ -124,6 +132,10 @@ def version_payload(data, events: list[dict], renders: list[dict]) -> dict:
         "triangles": _array(data.triangles, stream=data.deflated["triangles"]),
         "part_of": _array(data.part_of.astype(np.int16)), "parts": colours,
         "palate_top": top, "model": _array(data.model, stream=data.deflated["model"]),
+        # the pellets' map into this face (Parke (x, z) = XRMB (x, y) mm * units_per_mm +
+        # xrmb_origin; None for older data): 3D pellet markers, and the A/B distance in mm
+        "units_per_mm": data.units_per_mm,
+        "xrmb_origin": None if data.xrmb_origin is None else [float(x) for x in data.xrmb_origin],
         "events": events, "renders": renders}
 
 
@@ -272,7 +284,8 @@ def write_viewer_page(dest: Path, payload: dict, env, *, static: str, index: str
     atomic_write_text(dest, env.get_template("viewer.html.j2").render(
         subject=payload["subject"], task=payload["task"], rep=payload["rep"],
         synthetic=payload["synthetic"], versions=payload["versions"], data=f"{dest.stem}.js",
-        static=static, index=index, subject_page=payload["subject_page"], blind=blind))
+        static=static, index=index, subject_page=payload["subject_page"], blind=blind,
+        legend=table_legend(), stride=payload["stride"]))
 
 
 def _rate(data) -> float:

@@ -17,7 +17,11 @@ job (subject, task file, version), a deterministic ``.npz``:
   sign[w]);
 - ``measured``, ``model`` float32 (K, 8, 2): the recorded pellets (NaN where not valid) and the
   model's pellet sites (:func:`cassi.harness.rubric.fidelity.virtual_pellets`), XRMB frame, mm,
-  pellets in :data:`cassi.data.xrmb.files.PELLETS` order.
+  pellets in :data:`cassi.data.xrmb.files.PELLETS` order;
+- ``units_per_mm`` float64 and ``xrmb_origin`` float64 (2,): the version's map from the XRMB
+  frame to its face (:class:`cassi.versions.mapping.XrmbToParke`: Parke (x, z) = XRMB (x, y) *
+  units_per_mm + xrmb_origin), which places the pellets in 3D and turns Parke units into mm
+  (format 3; a format 2 blob has neither and reads as None).
 
 The large arrays (:data:`DEFLATED`: ``dq``, ``triangles``, ``measured``, ``model``) are
 stored as zlib streams of their little-endian bytes (``<name>_z`` uint8, ``<name>_shape``), made
@@ -39,12 +43,14 @@ from cassi.harness.farm.jobs import npz_bytes
 from cassi.harness.rubric.fidelity import virtual_pellets
 from cassi.versions.mapping import XrmbToParke
 
-__all__ = ["VIEWER_FORMAT", "STEP_UNITS", "DEFLATED", "ViewerData", "viewer_blob",
-           "read_viewer_blob"]
+__all__ = ["VIEWER_FORMAT", "READABLE_FORMATS", "STEP_UNITS", "DEFLATED", "ViewerData",
+           "viewer_blob", "read_viewer_blob"]
 
 #: Bumped when the blob's arrays change meaning (it is part of the stage's outputs' digest
 #: through the code hash; readers refuse other formats).
-VIEWER_FORMAT = 2
+VIEWER_FORMAT = 3
+#: Formats this reader still reads: 2 lacks the map (``units_per_mm``, ``xrmb_origin``).
+READABLE_FORMATS = (2, VIEWER_FORMAT)
 #: Quantisation step, Parke units: 1/16 unit = 0.016 mm (a tenth of XRMB's pellet noise), so
 #: a kept frame is within 0.008 mm of the animated one; int16 then holds +-2048 units, more
 #: than the head (about 925 units from chin to crown).
@@ -75,6 +81,10 @@ class ViewerData:
     model: np.ndarray
     #: The zlib streams of :data:`DEFLATED` arrays as stored (the report's page reads these).
     deflated: dict
+    #: The version's XRMB -> Parke map: scale (Parke units per mm) and where the XRMB origin
+    #: lands (Parke x, z); None in a format 2 blob.
+    units_per_mm: float | None = None
+    xrmb_origin: np.ndarray | None = None
 
     def positions(self) -> np.ndarray:
         """float32 (K, V, 3): every kept frame's vertices, dequantised."""
@@ -126,17 +136,20 @@ def viewer_blob(face, positions: np.ndarray, frames: np.ndarray, time_us: np.nda
         format=np.int64(VIEWER_FORMAT),
         frames=np.asarray(frames, np.int64), time_us=np.asarray(time_us, np.int64),
         base=pos[0], moving=moving, step=np.float64(STEP_UNITS), q0=qm[0],
+        units_per_mm=np.float64(mapping.scale), xrmb_origin=np.asarray(mapping.origin, np.float64),
         gather=gather.astype(np.int32), sign=sign.astype(np.int8),
         part_of=part_of.astype(np.int16), parts=np.asarray(topo.part_names, dtype=str),
         **packed)
 
 
 def read_viewer_blob(data: bytes) -> ViewerData:
-    """Decode :func:`viewer_blob`'s bytes (ValueError for another format)."""
+    """Decode :func:`viewer_blob`'s bytes (ValueError for a format not in
+    :data:`READABLE_FORMATS`)."""
     with np.load(io.BytesIO(data), allow_pickle=False) as z:
         fmt = int(z["format"])
-        if fmt != VIEWER_FORMAT:
-            raise ValueError(f"viewer data format {fmt}, this cassi-farm reads {VIEWER_FORMAT}")
+        if fmt not in READABLE_FORMATS:
+            raise ValueError(f"viewer data format {fmt}, this cassi-farm reads "
+                             f"{', '.join(map(str, READABLE_FORMATS))}")
         a = {k: z[k] for k in z.files if k != "format"}
     deflated = {}
     for name, dtype in DEFLATED.items():
@@ -146,5 +159,7 @@ def read_viewer_blob(data: bytes) -> ViewerData:
         a[name] = np.frombuffer(zlib.decompress(stream), dtype).reshape(shape)
     if a["model"].shape[1:] != (len(PELLETS), 2):
         raise ValueError(f"viewer data pellets are {a['model'].shape[1:]}, not ({len(PELLETS)}, 2)")
+    scale = a.pop("units_per_mm", None)
     return ViewerData(**{**a, "step": float(a["step"]), "parts": tuple(str(p) for p in a["parts"]),
-                         "deflated": deflated})
+                         "deflated": deflated,
+                         "units_per_mm": None if scale is None else float(scale)})

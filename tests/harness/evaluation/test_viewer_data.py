@@ -17,7 +17,7 @@ from cassi.harness.evaluation.viewerdata import (STEP_UNITS, read_viewer_blob, v
 from cassi.harness.rubric.fidelity import virtual_pellets
 from cassi.reports.report import _env, write_report
 from cassi.reports.runio import load_run
-from cassi.reports.viewer import _events, viewer_href
+from cassi.reports.viewer import _events, version_payload, table_legend, viewer_href
 from cassi.versions.mapping import XrmbToParke
 
 
@@ -65,6 +65,44 @@ def test_a_blob_gives_back_every_kept_frame_within_half_a_step(jw11_106):
     assert set(vd.parts) >= {"skin", "lips", "tongue"}
     # a small blob: well under the float positions of the kept frames
     assert len(blob) < positions[idx].nbytes / 10
+
+
+def test_a_blob_keeps_the_map_that_places_the_pellets_on_the_face(jw11_106):
+    """The viewer places pellets in 3D and turns Parke units into mm with the version's own
+    XRMB -> Parke map (thesis 4.1.1): scale p / d and vertex 226 as the XRMB origin."""
+    face, frames, positions, rec, profile = jw11_106
+    keep = viewer_frames(frames, None)
+    idx = np.searchsorted(frames, keep)
+    vd = read_viewer_blob(viewer_blob(
+        face, positions[idx], np.asarray(keep), np.asarray(rec.time_us)[keep],
+        np.asarray(rec.xy_mm)[keep], np.asarray(rec.valid)[keep], profile.jaw_length_mm))
+    mapping = XrmbToParke.from_face(face.vertices, profile.jaw_length_mm)
+    assert vd.units_per_mm == pytest.approx(face.units_per_mm) == pytest.approx(mapping.scale)
+    assert np.array_equal(vd.xrmb_origin, mapping.origin)
+    # the model's sites map back onto the vertices they were read from (upper lip: vertex N.UL)
+    from cassi.data.face import numbering as N
+    ul = vd.model[:, 0] * vd.units_per_mm + vd.xrmb_origin
+    assert np.allclose(ul, positions[idx][:, N.UL - 1][:, [0, 2]], atol=1e-3)
+
+
+def test_a_format_2_blob_still_reads_without_the_map(jw11_106):
+    """Stores written before format 3 still report: no map, so no pellet markers or mm."""
+    import io
+    face, frames, positions, rec, profile = jw11_106
+    keep = viewer_frames(frames, None)[:20]
+    idx = np.searchsorted(frames, keep)
+    blob = viewer_blob(face, positions[idx], np.asarray(keep), np.asarray(rec.time_us)[keep],
+                       np.asarray(rec.xy_mm)[keep], np.asarray(rec.valid)[keep],
+                       profile.jaw_length_mm)
+    with np.load(io.BytesIO(blob)) as z:
+        old = {k: z[k] for k in z.files if k not in ("units_per_mm", "xrmb_origin")}
+    buf = io.BytesIO()
+    np.savez(buf, **{**old, "format": np.int64(2)})
+    vd = read_viewer_blob(buf.getvalue())
+    assert vd.units_per_mm is None and vd.xrmb_origin is None
+    assert np.array_equal(vd.positions(), read_viewer_blob(blob).positions())
+    payload = version_payload(vd, [], [])
+    assert payload["units_per_mm"] is None and payload["xrmb_origin"] is None
 
 
 def test_a_blob_of_another_format_is_refused(jw11_106):
@@ -130,7 +168,7 @@ def test_the_page_escapes_what_it_is_given():
     html = _env().get_template("viewer.html.j2").render(
         subject="<script>alert(1)</script>", task=1, rep=1, synthetic=True,
         versions=['"><img src=x onerror=alert(1)>'], data="001_1.js", static="../../static",
-        index="../../index.html", subject_page="x.html")
+        index="../../index.html", subject_page="x.html", legend=table_legend(), stride=4)
     assert "<script>alert(1)" not in html and "&lt;script&gt;" in html
     assert "<img src=x" not in html
 
