@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -49,3 +50,15 @@ def write_subject(root: Path, name: str, recordings: dict, *, mis=(), palate=Non
 
 def write_metadata(root: Path, **meta) -> None:
     (root / "corpus.json").write_text(json.dumps(meta))
+
+
+def long_task_copy(corpus: Path, dest: Path) -> Path:
+    """A copy of ``corpus`` at ``dest`` whose JW12 task 2 is 30 times as long (about 30,000
+    rows), so that its geometry job runs for several seconds (a signal can land mid-run)."""
+    data = shutil.copytree(corpus, dest)
+    path = data / "JW12" / "tp002.txy"
+    rows = [line.split("\t") for line in path.read_text().splitlines()]
+    step = int(rows[1][0]) - int(rows[0][0])
+    path.write_text("".join("\t".join([str((k * len(rows) + i) * step), *r[1:]]) + "\n"
+                            for k in range(30) for i, r in enumerate(rows)))
+    return data

@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from test_viewer_browser import ARGS, BENIGN, _chromium
+from browsers import BENIGN, browser_for
 from cassi.harness.cli import main
 from cassi.reports.agree import read_human_ratings, read_key
 from cassi.reports.runio import load_run
@@ -27,12 +27,8 @@ def session(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def browser():
-    exe = _chromium()
-    sync_api = pytest.importorskip("playwright.sync_api", reason="Playwright for Python not installed")
-    with sync_api.sync_playwright() as p:
-        b = p.chromium.launch(executable_path=exe, args=ARGS)
+    with browser_for() as b:
         yield b
-        b.close()
 
 
 def test_rate_reload_export_and_agree(session, browser, tmp_path):

@@ -2,29 +2,21 @@
 screenshot, which must show the rating tables (their coloured cells) and the images."""
 from __future__ import annotations
 
-import os
-import shutil
 import subprocess
 
 import imageio.v3 as iio
 import numpy as np
 import pytest
 
+from browsers import chromium
 from reports_fixtures import image, results_rows, write_run
 from cassi.reports.report import write_report
 
 pytestmark = pytest.mark.browser
 
 
-def _chromium() -> str:
-    for name in (os.environ.get("CHROMIUM", ""), "chromium", "chromium-browser", "google-chrome"):
-        if name and shutil.which(name):
-            return shutil.which(name)
-    pytest.skip("no Chromium installed (.ci/run installs Debian's chromium)")
-
-
 def test_chromium_screenshot_shows_tables_and_images(tmp_path):
-    browser = _chromium()
+    browser = chromium()
     res = results_rows({("cassi-1.0", "JW11", "lip_gap_start"): 3,
                         ("cassi-2.0", "JW12", "tongue_through_teeth"): 6})
     run = write_run(tmp_path / "run", res, images={("JW11", 19, "cassi-1.0", "front", 0): image(1)})

@@ -4,11 +4,10 @@ banner, all above the fold; the details below it stay folded sections that the l
 from __future__ import annotations
 
 import json
-import os
-import shutil
 
 import pytest
 
+from browsers import chromium
 from reports_fixtures import results_rows, write_run
 from cassi.harness.rubric import table_totals, version_totals
 from cassi.reports.report import write_report
@@ -18,10 +17,7 @@ pytestmark = pytest.mark.browser
 
 @pytest.fixture(scope="module")
 def page(tmp_path_factory):
-    exe = next((shutil.which(n) for n in (os.environ.get("CHROMIUM", ""), "chromium",
-                                          "chromium-browser") if n and shutil.which(n)), None)
-    if exe is None:
-        pytest.skip("no Chromium installed (.ci/run installs Debian's chromium)")
+    exe = chromium()
     sync_api = pytest.importorskip("playwright.sync_api", reason="Playwright not installed")
     root = tmp_path_factory.mktemp("overview")
     before = write_run(root / "before", results_rows({("cassi-1.0", "JW11", "lip_gap_start"): 5}))

@@ -1,8 +1,6 @@
 """Thesis-style tables, comparisons and summaries from results tables."""
 from __future__ import annotations
 
-import pytest
-
 from reports_fixtures import results_rows
 from cassi.reports import compare as cmp
 from cassi.reports.tables import (component_ratings, markdown_table, rating_counts, thesis_table,

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import os
 import re
-import shutil
 from pathlib import Path
 
 import imageio.v3 as iio
@@ -18,6 +17,7 @@ import pandas as pd
 import pytest
 
 from testpaths import GOLDEN as GOLDEN_DIR
+from browsers import BENIGN, browser_for
 from cassi.harness.cli import main as cli_main
 from cassi.harness.rubric import CHECKS
 from cassi.renderer.compare import compare_images
@@ -27,21 +27,6 @@ pytestmark = [pytest.mark.browser, pytest.mark.render]
 
 GOLDEN = GOLDEN_DIR / "viewer_front_jw11_106_1023.png"
 REGEN = os.environ.get("CASSI_REGEN_VIEWER", "") not in ("", "0")
-ARGS = ["--no-sandbox", "--disable-background-networking", "--disable-component-update",
-        "--disable-sync", "--no-first-run", "--disable-quic",
-        # WebGL on SwiftShader, said explicitly: Chromium may stop falling back to it silently
-        "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
-#: Console messages that are not errors of the page: SwiftShader's performance notes.
-BENIGN = re.compile(r"GL Driver Message|GPU stall")
-
-
-def _chromium() -> str:
-    for name in (os.environ.get("CHROMIUM", ""), "chromium", "chromium-browser"):
-        if name and shutil.which(name):
-            return shutil.which(name)
-    pytest.skip("no Chromium installed (.ci/run installs Debian's chromium)")
-
-
 @pytest.fixture(scope="module")
 def report(tmp_path_factory):
     root = tmp_path_factory.mktemp("viewer")
@@ -55,12 +40,8 @@ def report(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def browser():
-    exe = _chromium()
-    sync_api = pytest.importorskip("playwright.sync_api", reason="Playwright for Python not installed")
-    with sync_api.sync_playwright() as p:
-        b = p.chromium.launch(executable_path=exe, args=ARGS)
+    with browser_for() as b:
         yield b
-        b.close()
 
 
 class Page:

@@ -4,7 +4,6 @@ path and do not outlive a killed worker, an unreachable cluster fails before any
 written, links out of the corpus say so, and SIGTERM stops the workers."""
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import signal
@@ -18,6 +17,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from data_helpers import long_task_copy
 from cassi.data.synth.corpus import make_corpus
 from cassi.harness.cli import main as cli_main
 from cassi.harness.evaluation import run as run_mod
@@ -177,13 +177,7 @@ def _alive(pid: int) -> bool:
 
 
 def test_sigterm_stops_the_workers_at_once(corpus, tmp_path):
-    data = shutil.copytree(corpus, tmp_path / "c")
-    path = data / "JW12" / "tp002.txy"
-    rows = [line.split("\t") for line in path.read_text().splitlines()]
-    step = int(rows[1][0]) - int(rows[0][0])
-    # A long task file (about 30,000 rows): its geometry job runs for several seconds.
-    path.write_text("".join("\t".join([str((k * len(rows) + i) * step), *r[1:]]) + "\n"
-                            for k in range(30) for i, r in enumerate(rows)))
+    data = long_task_copy(corpus, tmp_path / "c")
     out = tmp_path / "out"
     driver = subprocess.Popen([sys.executable, "-m", "cassi.harness.cli", "run", "--corpus",
                                str(data), "--subjects", "JW12", "--tasks", "2", "--versions",

@@ -7,7 +7,6 @@ from __future__ import annotations
 import http.server
 import os
 import secrets
-import shutil
 import signal
 import socket
 import subprocess
@@ -18,6 +17,7 @@ from pathlib import Path
 
 import pytest
 
+from data_helpers import long_task_copy
 from cassi.data.synth.corpus import make_corpus
 
 pytest.importorskip("ray")
@@ -99,14 +99,9 @@ def test_sigterm_while_ray_connects_ends_the_run(corpus, tmp_path):
         assert server.accepted.wait(60), proc.communicate()
         time.sleep(3)  # past the probe: inside Ray's connection retries
         assert proc.poll() is None, proc.communicate()
-        proc.send_signal(signal.SIGTERM)
-        t0 = time.monotonic()
-        _, err = proc.communicate(timeout=20)
-        assert time.monotonic() - t0 < 10
+        err = _terminate(proc, within_s=10)
     finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.communicate()
+        _kill(proc)
         server.close()
     assert proc.returncode == 128 + signal.SIGTERM and "terminated" in err, err
     assert not out.exists()
@@ -155,15 +150,19 @@ def head():
             proc.wait(timeout=30)
 
 
-def _long_task(corpus, tmp_path) -> Path:
-    data = shutil.copytree(corpus, tmp_path / "c")
-    path = data / "JW12" / "tp002.txy"
-    rows = [line.split("\t") for line in path.read_text().splitlines()]
-    step = int(rows[1][0]) - int(rows[0][0])
-    # A long task file (about 30,000 rows): its geometry job runs for several seconds.
-    path.write_text("".join("\t".join([str((k * len(rows) + i) * step), *r[1:]]) + "\n"
-                            for k in range(30) for i, r in enumerate(rows)))
-    return data
+def _terminate(proc, *, within_s: float) -> str:
+    """SIGTERM ``proc``; it must end within ``within_s``. Returns its stderr."""
+    proc.send_signal(signal.SIGTERM)
+    t0 = time.monotonic()
+    _, err = proc.communicate(timeout=within_s + 10)
+    assert time.monotonic() - t0 < within_s
+    return err
+
+
+def _kill(proc) -> None:
+    if proc.poll() is None:
+        proc.kill()
+        proc.communicate()
 
 
 @pytest.mark.ray
@@ -171,7 +170,7 @@ def _long_task(corpus, tmp_path) -> Path:
 def test_sigterm_mid_run_on_a_ray_cluster(corpus, tmp_path, request, cluster):
     """Ray's init replaces the run's SIGTERM handler (a local cluster's with ``sys.exit``, and
     in native code with one that kills the driver unwinding nothing)."""
-    data, out = _long_task(corpus, tmp_path), tmp_path / "out"
+    data, out = long_task_copy(corpus, tmp_path / "c"), tmp_path / "out"
     address, env = request.getfixturevalue("head") if cluster == "address" else (None, None)
     proc = _cassi_run(data, out, *(["--address", address] if address else []), env=env)
     try:
@@ -180,14 +179,9 @@ def test_sigterm_mid_run_on_a_ray_cluster(corpus, tmp_path, request, cluster):
             assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
             time.sleep(0.1)
         time.sleep(1.0)  # the job is running on the cluster
-        proc.send_signal(signal.SIGTERM)
-        t0 = time.monotonic()
-        _, err = proc.communicate(timeout=30)
-        assert time.monotonic() - t0 < 20
+        err = _terminate(proc, within_s=20)
     finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.communicate()
+        _kill(proc)
     assert proc.returncode == 128 + signal.SIGTERM and "terminated" in err, err
     left = sorted(p.name for p in out.iterdir())
     assert "tables.json" not in left and "results.parquet" not in left, left
