@@ -317,9 +317,12 @@ def _cell_faults(v: pd.DataFrame, text: str, links: dict, key: tuple) -> list[di
 
 
 def _viewer_images(run: Run, out: Path, place):
-    """``(subject, task, rep, version) -> renders`` for the viewer: every rendered frame and
-    view of the task file (``place``: :func:`_image_store`), hrefs relative to the viewer page;
-    at the frames an image check points at, the masks it read (:func:`mask_overlay`)."""
+    """``(subject, task, rep, version) -> renders`` for the viewer: every view of the task
+    file's first rendered frame and of each frame a check points at (the nearest rendered one
+    where it has none, as on the subject pages), ``place``: :func:`_image_store`, hrefs relative
+    to the viewer page; at the frames an image check points at, the masks it read
+    (:func:`mask_overlay`). The video grid's other renders stay in the run: the 3D view and the
+    videos show those frames, and they were four fifths of a night's report."""
     rend = run.renders
     groups = {k: g for k, g in rend.groupby(["subject", "task", "rep", "version"])} if len(rend) \
         else {}
@@ -333,11 +336,18 @@ def _viewer_images(run: Run, out: Path, place):
                  & ~res["view"].isin(["geometry", "trace"])]
     evidence = {(r.subject, int(r.task), int(r.rep), r.version, r.view, int(r.frame))
                 for r in judged.itertuples(index=False)}
+    pointed: dict[tuple, set[int]] = {}
+    for r in res[(res["frame"] >= 0) & res["table"].notna() & (res["view"] != "trace")] \
+            .itertuples(index=False):
+        pointed.setdefault((r.subject, int(r.task), int(r.rep), r.version), set()).add(int(r.frame))
 
     def images(subject, task, rep, version) -> list[dict]:
         g = groups.get((subject, task, rep, version))
         if g is None:
             return []
+        frames = {int(g["frame"].min())} | {_nearest_rendered(g, f) for f in
+                                             pointed.get((subject, int(task), int(rep), version), ())}
+        g = g[g["frame"].isin(frames)]
         found = []
         for v in g.sort_values(["frame", "view"]).itertuples(index=False):
             dest = place(str(v.path))

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import hashlib
+import os
 import re
 from pathlib import Path
 
@@ -12,7 +13,8 @@ from PIL import Image
 from reports_fixtures import image, results_rows, write_run
 from cassi.renderer.images import png_bytes
 from cassi.reports import media
-from cassi.reports.report import write_report
+from cassi.reports.report import _image_store, _viewer_images, write_report
+from cassi.reports.runio import load_run
 
 VIEWS = ("front", "side")
 
@@ -109,3 +111,20 @@ def test_an_encoding_in_the_media_cache_is_linked_not_made_again(tmp_path, monke
     second = media.store_image(src, tmp_path / "b" / "images", cache)
     assert second.read_bytes() == first.read_bytes() and cached.stat().st_nlink >= 3
     assert second.relative_to(tmp_path / "b") == first.relative_to(tmp_path / "a")
+
+
+def test_the_viewer_carries_the_first_frame_and_the_frames_checks_point_at(tmp_path):
+    """A grid render no check points at stays in the run; the frames that earned negatives
+    (every view) and the first frame are in the report, each link naming a stored picture."""
+    res = results_rows({("cassi-1.0", "JW11", "lip_gap_start"): 2}, subjects=("JW11",))
+    images = {("JW11", 19, "cassi-1.0", view, f): image(10 * f + i)
+              for i, view in enumerate(VIEWS) for f in (0, 3, 7)}
+    run = load_run(write_run(tmp_path / "run", res, images=images))
+    out = tmp_path / "report"
+    shown = _viewer_images(run, out, _image_store(out, None))("JW11", 19, 1, "cassi-1.0")
+    assert sorted((r["frame"], r["view"]) for r in shown) == \
+        sorted((f, view) for f in (0, 7) for view in VIEWS)
+    for r in shown:
+        path = os.path.normpath(out / "viewer" / "JW11" / r["href"])  # no viewer page here
+        assert np.array_equal(_pixels(path), images[("JW11", 19, "cassi-1.0", r["view"],
+                                                     r["frame"])])
