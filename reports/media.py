@@ -1,12 +1,13 @@
-"""Pictures for reports from a run's renders: copied thumbnails, contact sheets, a four-view
-video of every task file and side-by-side version comparisons (front view), each panel
-labelled, in real time, with the task's sound when the corpus has it. Reads image files (and
-the corpus's WAV files) only; never re-renders."""
+"""Pictures for reports from a run's renders: lossless content-addressed copies, contact
+sheets, a four-view video of every task file and side-by-side version comparisons (front
+view), each panel labelled, in real time, with the task's sound when the corpus has it. Reads
+image files (and the corpus's WAV files) only; never re-renders."""
 from __future__ import annotations
 
 import functools
 import hashlib
 import importlib.metadata as md
+import io
 import json
 import os
 import sys
@@ -16,7 +17,7 @@ import imageio.v3 as iio
 import numpy as np
 import pandas as pd
 
-from cassi.common.atomic import link_or_copy
+from cassi.common.atomic import atomic_write_bytes, link_or_copy
 from cassi.harness.farm.store import sha256_file
 from cassi.renderer import animate, images
 from cassi.data.xrmb.files import NOMINAL_PERIOD_US
@@ -25,11 +26,61 @@ from cassi.renderer.images import tile
 from cassi.harness.evaluation.frames import video_grid
 
 
-def copy_image(src: str | os.PathLike, dest: Path) -> Path:
-    """Put a render beside the report (so the report is self-contained), atomically: a hard
-    link where the run and the report share a file system (renders are never written again)."""
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    return link_or_copy(src, dest)
+#: A report's copies of renders: lossless WebP (``exact``: every pixel kept, under transparent
+#: alpha too). Measured on 300 of a run's 256-px renders (mostly front): method 1 gives 0.63 of
+#: the PNGs' bytes in 5.9 ms a render, method 0 0.76 in 2.5 ms, method 2 0.62 in 8.0 ms.
+WEBP_OPTIONS = {"lossless": True, "exact": True, "method": 1, "quality": 0}
+IMAGE_SUFFIX = ".webp"
+
+
+@functools.lru_cache(maxsize=None)
+def _webp_code() -> str:
+    """What a report image's bytes depend on besides the pixels: the options, Pillow and libwebp."""
+    from PIL import __version__ as pillow, features  # noqa: PLC0415 - Pillow comes with imageio
+
+    doc = {"options": WEBP_OPTIONS, "pillow": pillow, "libwebp": features.version("webp")}
+    return json.dumps(doc, sort_keys=True)
+
+
+def webp_bytes(src: str | os.PathLike) -> bytes:
+    """The image file ``src`` (a render's PNG: RGB, or RGBA) as lossless WebP: the same pixels,
+    none of the PNG's text chunks, so renders with the same pixels give the same bytes."""
+    from PIL import Image  # noqa: PLC0415
+
+    with Image.open(src) as img:
+        img.load()
+        if img.mode not in ("RGB", "RGBA"):
+            img = img.convert("RGBA" if "A" in img.getbands() else "RGB")
+        buf = io.BytesIO()
+        img.save(buf, "WEBP", **WEBP_OPTIONS)
+    return buf.getvalue()
+
+
+def store_image(src: str | os.PathLike, images: Path, cache: Path | None = None) -> Path:
+    """A render beside the report, content-addressed: ``images/<ab>/<sha256>.webp``, named by
+    the SHA-256 of its lossless WebP bytes (:func:`webp_bytes`), so a picture that several
+    renders, pages or versions show is stored once. With ``cache`` (a nightly store's media),
+    an encoding made before from the same PNG bytes and codec is linked, not made again."""
+    cached = None
+    if cache is not None:
+        key = hashlib.sha256(f"{sha256_file(src)} {_webp_code()}".encode()).hexdigest()
+        cached = cache / f"{key}{IMAGE_SUFFIX}"
+    if cached is not None and cached.is_file():
+        data = cached.read_bytes()
+    else:
+        data = webp_bytes(src)
+    digest = hashlib.sha256(data).hexdigest()
+    dest = images / digest[:2] / f"{digest}{IMAGE_SUFFIX}"
+    if not dest.is_file():
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        if cached is not None and cached.is_file():
+            link_or_copy(cached, dest)
+        else:
+            atomic_write_bytes(dest, data, durable=False)
+    if cached is not None and not cached.is_file():
+        cache.mkdir(parents=True, exist_ok=True)
+        link_or_copy(dest, cached)
+    return dest
 
 
 def read_rgb8(path) -> np.ndarray:

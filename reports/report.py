@@ -1,10 +1,12 @@
 """``cassi report``: a self-contained HTML report (plus CSV and Markdown tables) of one run.
 
-Everything comes from the run's files; images are copied beside the report; every string from
-data files goes through Jinja2's autoescaping; file names derived from data are slugged.
+Everything comes from the run's files; renders are stored beside the report once each, as
+lossless WebP named by their content; every string from data files goes through Jinja2's
+autoescaping; file names derived from data are slugged.
 """
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
@@ -257,10 +259,20 @@ def _worst_first(fv: pd.DataFrame) -> pd.DataFrame:
                           ascending=[False, False, True, True, True], kind="mergesort")
 
 
-def _image_dest(out: Path, subject: str, version: str, task: int, rep: int, frame: int,
-                view: str) -> Path:
-    """Where a render goes beside the report (subject pages and viewer share the file)."""
-    return out / "images" / slug(subject) / slug(version) / \
+def _image_store(out: Path, cache: Path | None):
+    """``render path -> its copy beside the report``: content-addressed lossless WebP
+    (:func:`media.store_image`), which the subject pages and the viewer share; each render is
+    encoded once per report."""
+    @functools.lru_cache(maxsize=None)
+    def place(src: str) -> Path:
+        return media.store_image(src, out / "images", cache)
+    return place
+
+
+def _mask_dest(out: Path, subject: str, version: str, task: int, rep: int, frame: int,
+               view: str) -> Path:
+    """Where the masks an image check read at a frame are drawn beside the report."""
+    return out / "images" / "masks" / slug(subject) / slug(version) / \
         f"{int(task):03d}_{int(rep)}_{int(frame):05d}_{slug(view)}.png"
 
 
@@ -298,10 +310,13 @@ def _cell_faults(v: pd.DataFrame, text: str, links: dict, key: tuple) -> list[di
     return faults
 
 
-def _viewer_images(run: Run, out: Path):
-    """``(subject, task, rep, version) -> renders`` for the viewer: every rendered frame and
-    view of the task file (hard-linked beside the report), hrefs relative to the viewer page;
-    at the frames an image check points at, the masks it read (:func:`mask_overlay`)."""
+def _viewer_images(run: Run, out: Path, place):
+    """``(subject, task, rep, version) -> renders`` for the viewer: every view of the task
+    file's first rendered frame and of each frame a check points at (the nearest rendered one
+    where it has none, as on the subject pages), ``place``: :func:`_image_store`, hrefs relative
+    to the viewer page; at the frames an image check points at, the masks it read
+    (:func:`mask_overlay`). The video grid's other renders stay in the run: the 3D view and the
+    videos show those frames, and they were four fifths of a night's report."""
     rend = run.renders
     groups = {k: g for k, g in rend.groupby(["subject", "task", "rep", "version"])} if len(rend) \
         else {}
@@ -315,21 +330,27 @@ def _viewer_images(run: Run, out: Path):
                  & ~res["view"].isin(["geometry", "trace"])]
     evidence = {(r.subject, int(r.task), int(r.rep), r.version, r.view, int(r.frame))
                 for r in judged.itertuples(index=False)}
+    pointed: dict[tuple, set[int]] = {}
+    for r in res[(res["frame"] >= 0) & res["table"].notna() & (res["view"] != "trace")] \
+            .itertuples(index=False):
+        pointed.setdefault((r.subject, int(r.task), int(r.rep), r.version), set()).add(int(r.frame))
 
     def images(subject, task, rep, version) -> list[dict]:
         g = groups.get((subject, task, rep, version))
         if g is None:
             return []
+        frames = {int(g["frame"].min())} | {_nearest_rendered(g, f) for f in
+                                             pointed.get((subject, int(task), int(rep), version), ())}
+        g = g[g["frame"].isin(frames)]
         found = []
         for v in g.sort_values(["frame", "view"]).itertuples(index=False):
-            dest = _image_dest(out, subject, version, task, rep, v.frame, v.view)
-            if not dest.is_file():
-                media.copy_image(v.path, dest)
+            dest = place(str(v.path))
             item = {"frame": int(v.frame), "view": str(v.view),
                     "href": os.path.relpath(dest, out / "viewer" / slug(subject))}
             key = (subject, int(task), int(rep), version, v.view, int(v.frame))
             if key in evidence and key in masks:
-                over = dest.with_name(dest.stem + "_mask.png")
+                over = _mask_dest(out, subject, version, task, rep, v.frame, v.view)
+                over.parent.mkdir(parents=True, exist_ok=True)
                 if not over.is_file():
                     mask_overlay(Path(masks[key]).read_bytes(), int(v.frame), over)
                 item["mask"] = os.path.relpath(over, out / "viewer" / slug(subject))
@@ -344,8 +365,8 @@ def _nearest_rendered(renders: pd.DataFrame, frame: int) -> int | None:
 
 
 def _views_at(run: Run, rend: pd.DataFrame, subject: str, task: int, rep: int, version: str,
-              frame: int, out: Path) -> tuple[int | None, list[dict]]:
-    """The four views of the rendered frame nearest ``frame`` (copied beside the report)."""
+              frame: int, out: Path, place) -> tuple[int | None, list[dict]]:
+    """The four views of the rendered frame nearest ``frame`` (``place``: :func:`_image_store`)."""
     g = rend[(rend["task"] == task) & (rend["rep"] == rep) & (rend["version"] == version)] \
         if len(rend) else rend
     if not len(g):
@@ -353,9 +374,7 @@ def _views_at(run: Run, rend: pd.DataFrame, subject: str, task: int, rep: int, v
     near = _nearest_rendered(g, frame)
     images = []
     for v in g[g["frame"] == near].sort_values("view").itertuples(index=False):
-        dest = _image_dest(out, subject, version, task, rep, near, v.view)
-        if not dest.is_file():
-            media.copy_image(v.path, dest)
+        dest = place(str(v.path))
         images.append({"href": os.path.relpath(dest, out / "subjects"),
                        "alt": f"{v.view} view, frame {near}", "view": v.view})
     return near, images
@@ -366,7 +385,7 @@ def _fmt(x) -> str:
 
 
 def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
-                  rule: pd.DataFrame, out: Path, env, viewers: dict | None = None) -> str:
+                  rule: pd.DataFrame, out: Path, env, place, viewers: dict | None = None) -> str:
     """Per version and table: the checks that earned negatives first (value, threshold and its
     side, the thesis's words, the four views of the frame pointed at), silent checks folded."""
     evidence = linked_frames(run.results[run.results["subject"] == subject])
@@ -398,7 +417,8 @@ def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
                                 base="../")
                         if sheets < MAX_SHEETS_PER_VERSION:
                             near, item["images"] = _views_at(run, rend, subject, int(r.task),
-                                                             int(r.rep), version, frame, out)
+                                                             int(r.rep), version, frame, out,
+                                                             place)
                             item["rendered"] = near
                             sheets += bool(item["images"])
                     fired.append(item)
@@ -610,15 +630,17 @@ def _rescored(run: Run, cr: pd.DataFrame) -> list[str]:
 
 
 def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
-                encoding: "_Encoding") -> str:
+                encoding: "_Encoding", media_cache: Path | None) -> str:
     """Subject pages, tables and plots, then index.html's text (the videos awaited last)."""
     fv = file_verdicts(run.results)
     cr = component_ratings(run.results)
     rule = table_c_rule(run.results, fv=fv)
     subjects = sorted(fv["subject"].dropna().unique())
+    place = _image_store(out, media_cache)
     viewers = write_viewers(run, out, env, slug=slug, audio_for=_audio_for(run),
-                            images=_viewer_images(run, out))
-    subject_links = [{"name": s, "href": _subject_page(run, s, fv, cr, rule, out, env, viewers),
+                            images=_viewer_images(run, out, place))
+    subject_links = [{"name": s, "href": _subject_page(run, s, fv, cr, rule, out, env, place,
+                                                       viewers),
                       "viewers": [{"task": k[1], "rep": k[2], "href": v}
                                   for k, v in sorted(viewers.items()) if k[0] == s]}
                      for s in subjects]
@@ -665,8 +687,9 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
     history : DataFrame, optional
         Columns night, version, negatives: a trend plot over nights (``cassi nightly``).
     media_cache : path, optional
-        Videos made before from the same renders, sound and code (a nightly store's media):
-        linked instead of encoded again.
+        Videos made before from the same renders, sound and code, and renders' WebP copies
+        made before from the same PNG and codec (a nightly store's media): linked instead of
+        encoded again.
     ratings : path, optional
         Ratings people gave (:mod:`cassi.reports.agree`): the report's agreement section, and
         agreement.json / .md / .csv beside index.html.
@@ -681,9 +704,10 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
         write_agreement(agree, out)
     env = _env()
     # first, so that the videos encode while the pages and tables below are written
-    encoding = _start_videos(run, out, None if media_cache is None else Path(media_cache))
+    cache = None if media_cache is None else Path(media_cache)
+    encoding = _start_videos(run, out, cache)
     try:
-        html = _index_html(run, previous, out, env, agree, history, encoding)
+        html = _index_html(run, previous, out, env, agree, history, encoding, cache)
     except BaseException:
         encoding.close()
         raise

@@ -7,6 +7,7 @@ for what differs between CPUs (see :func:`test_front_view_matches_the_golden`).
 """
 from __future__ import annotations
 
+import json
 import os
 import re
 from pathlib import Path
@@ -206,15 +207,17 @@ def test_front_view_matches_the_golden(report, browser):
     p.page.close()
 
 
-def _rendered(run: Path, version: str, view: str) -> list[int]:
-    rend = pd.read_parquet(run / "renders.parquet")
-    return sorted(int(f) for f in rend[(rend["task"] == 106) & (rend["version"] == version)
-                                       & (rend["view"] == view)]["frame"])
+def _carried(report: Path, version: str, view: str) -> list[int]:
+    """The frames whose ``view`` render of ``version`` the report carries for JW11 task 106."""
+    text = (report / "viewer" / "JW11" / "106_1.js").read_text()
+    data = json.loads(text[text.index("{"):text.rindex("}") + 1])
+    return sorted(r["frame"] for r in data["version_data"][version]["renders"]
+                  if r["view"] == view)
 
 
 def test_the_render_panel_follows_the_view(report, browser):
     run, rep = report
-    frame = _rendered(run, "cassi-1.0", "front")[1]
+    frame = _carried(rep, "cassi-1.0", "front")[-1]
     p = Page(browser, _viewer_url(rep, f"#frame={frame}&a=cassi-1.0&view=side")).ready()
     assert "no Mitsuba render of frame" in p.page.text_content("#renders")
     assert "(side view)" in p.page.text_content("#renders")
@@ -222,6 +225,9 @@ def test_the_render_panel_follows_the_view(report, browser):
     assert p.page.text_content("#renders .meta") == \
         f"cassi-1.0: Mitsuba render, front view, frame {frame}"
     assert p.page.locator("#renders img").count() >= 1
+    # the WebP copy decodes in the browser at the render's size
+    assert p.page.evaluate("document.querySelector('#renders img').naturalWidth") == \
+        iio.imread(run / pd.read_parquet(run / "renders.parquet")["path"].iloc[0]).shape[1]
     p.page.click("button[data-view='top']")
     assert "(top view)" in p.page.text_content("#renders")
     assert p.page.locator("#renders img").count() == 0 and p.errors == []
