@@ -36,6 +36,7 @@ from cassi.harness.rubric.paired import (BOOTSTRAP_N, BOOTSTRAP_SEED, TIE_TOLERA
                                          bootstrap_median, paired_comparisons, paired_sentence,
                                          sign_test)
 from cassi.reports.sensitivity import sensitivity_section
+from cassi.harness.rubric.thesis_findings import reproduced
 from cassi.reports.tables import markdown_table
 from cassi.reports.viewer import mask_overlay, viewer_href, write_viewers
 from cassi.data.corpus.disk import Corpus
@@ -629,6 +630,19 @@ def _rescored(run: Run, cr: pd.DataFrame) -> list[str]:
     return notes
 
 
+def _thesis_findings(cr: pd.DataFrame, out: Path) -> dict | None:
+    """What the run reproduces of the judges' findings (rubric.thesis_findings' rules), also as
+    tables/thesis_findings.md and .csv; None when the run has none of CASSI's versions."""
+    table = reproduced(pd.DataFrame(), ratings=cr)
+    if (table["reproduced"] == "not judged").all():
+        return None
+    csv, md = out / "tables" / "thesis_findings.csv", out / "tables" / "thesis_findings.md"
+    atomic_write_text(csv, table.to_csv(index=False, lineterminator="\n"))
+    atomic_write_text(md, markdown_table(table.set_index("table")))
+    return {"rows": table.to_dict("records"), "csv": csv.relative_to(out).as_posix(),
+            "md": md.relative_to(out).as_posix()}
+
+
 def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
                 encoding: "_Encoding", media_cache: Path | None) -> str:
     """Subject pages, tables and plots, then index.html's text (the videos awaited last)."""
@@ -662,6 +676,7 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
         tables=_table_sections(run, cr, out, _fault_links(run, fv, viewers)),
         criterion=_criterion(run, out), rescored=_rescored(run, cr),
         sensitivity=sensitivity_section(run.root, out),
+        thesis=_thesis_findings(cr, out),
         videos=encoding.videos(),
         rules=AGGREGATION_RULES,
         subjects=subject_links, trend=trend, gate=gate,
