@@ -17,16 +17,37 @@ their parabolic track (the thesis names tracks only for the seven centre-line ve
 inside corner 287 keeps its share of the outer half-width and its height above the mouth's
 centre line (the thesis uses 287 as the inner outline's corner but does not say how it moves).
 
-All lengths are in Parke units (the face model's units; the thesis's c_rest = 65 is in them).
+All lengths are in Parke units, the face model's units. The thesis's c values (c_rest = 65 and
+every value on its scale) were chosen on the thesis's face; here they are rescaled to this face
+by C_SCALE (see C_REST).
 """
 from __future__ import annotations
 
+import math
+
 # --- Stated by the thesis -------------------------------------------------------------------
 
-#: Key c values of Eq. 4.13 (section 4.2.1): resting, fully rounded and fully stretched lips.
-C_REST: float = 65.0
-C_MIN: float = 0.0
-C_MAX: float = 85.0
+#: The thesis's c_rest (section 4.2.2: c_rest = 65, "selected by viewing the computer animated
+#: face and determining positions which seemed natural for resting").
+THESIS_C_REST: float = 65.0
+#: c_rest on this face, by the thesis's own criterion: the c whose resting ellipse draws this
+#: face's neutral mouth. The neutral face has its corner 70 at y = 98 and half its 67-49 height
+#: b0 = 33.75 (the closed-lip span, cassi.data.face.build.CLOSED_LIP_SPAN, plus the 5-unit resting
+#: gap); at c = c_rest vertex 70 lies CORNER_STRETCH_AT_REST (8) beyond a, so a0 = 90 and Eq. 4.8
+#: gives c_rest = sqrt(a0^2 - b0^2) = 83.4. With 65 the resting ellipse drew the mouth up to a
+#: fifth narrower than the face's own (synthetic JW27 task 20 started 35.8 mm wide, the face's
+#: neutral mouth is 43.3 mm at JW27's scale; adult means 52.0 and 55.9 mm, the rubric's
+#: MOUTH_WIDTH_RANGE_MM).
+C_REST: float = 83.4
+#: Every value on the thesis's c scale (its key c values, the rounding onset, the c bands and the
+#: width limits chosen from them) is the thesis's or this project's value times C_SCALE, so that
+#: each keeps its place between rest, fully rounded and fully stretched (Eq. 4.13 is linear in c).
+C_SCALE: float = C_REST / THESIS_C_REST
+
+#: Key c values of Eq. 4.13 (section 4.2.1): resting (above), fully rounded and fully stretched
+#: lips (thesis 0 and 85).
+C_MIN: float = 0.0 * C_SCALE
+C_MAX: float = 85.0 * C_SCALE
 
 #: Rate at which the outer width follows a change of height in branches 3(a), 3(b) and
 #: 3(c)iii of OUTER_ABC_CALC (Figure 4.18): ``a := prev_a +/- (prev_b - b) / 10.0``.
@@ -35,9 +56,10 @@ WIDTH_RATE_DIVISOR: float = 10.0
 #: p of the parabolic track, Eq. 4.19 (section 4.2.2): "the chosen p value was -37".
 TRACK_P: float = -37.0
 
-#: Step 8 of Algorithm LIP MOVEMENT: the lips are rounding (and thicken) when c' < 50.
-#: The same 50 bounds the 2.1 blend: "the c' values occur between 0 and 50" (section 4.3.3).
-ROUNDING_ONSET_C: float = 50.0
+#: Step 8 of Algorithm LIP MOVEMENT: the lips are rounding (and thicken) when c' < 50 (thesis
+#: scale, times C_SCALE). The same value bounds the 2.1 blend: "the c' values occur between 0 and
+#: 50" (section 4.3.3).
+ROUNDING_ONSET_C: float = 50.0 * C_SCALE
 
 #: Section 4.3.1: the threshold of 2.1's comparison, "20 points" (Parke units: 6.1 mm for JW11
 #: at p/d = 3.29 units/mm) between vertex 226 and the upper lip's starting inside edge,
@@ -97,12 +119,12 @@ RHO: float = 0.1
 #: c_rest around a switch, the width snaps from Eq. 4.14's c to c' in one row: that jitter.
 RHO_20: float = 1.0
 
-#: "c' is near c_rest" (steps 3(a), 3(b)), the band of the "shared" tuning: |c' - c_rest| <=
-#: NEAR_C_REST, in c' units for every subject.
-#: Reason: c spans 20 units between rest (65) and fully stretched (85); a quarter of that span
-#: (5 units) is a lip that has barely moved forward or back, which is what "lips dropping /
-#: rising with little side to side movement of the corners" describes.
-NEAR_C_REST: float = 5.0
+#: "c' is near c_rest" (steps 3(a), 3(b)): |c' - c_rest| <= NEAR_C_REST.
+#: Reason: c spans 20 units between rest (65) and fully stretched (85) on the thesis's scale; a
+#: quarter of that span (5 units, times C_SCALE) is a lip that has barely moved forward or back,
+#: which is what "lips dropping / rising with little side to side movement of the corners"
+#: describes.
+NEAR_C_REST: float = 5.0 * C_SCALE
 
 #: "c' is near c_rest" for CASSI 2.0 and 2.1: the upper lip pellet lies within NEAR_REST_MM of
 #: the subject's rest x (maxprotru.txt's REST UL), i.e. a band of NEAR_REST_MM times Eq. 4.13's
@@ -115,31 +137,32 @@ NEAR_C_REST: float = 5.0
 NEAR_REST_MM: float = 0.5
 
 #: "c' is small (for round lips)" in step 3(c)ii: c' < SMALL_C_PRIME.
-#: Reason: half of the rounding onset (50): the lips are more than half way from the start
-#: of rounding to fully rounded, so the width follows Eq. 4.8 (a near-circle) even when the
-#: mouth is open tall, instead of the slow vertical-ellipse rule.
-SMALL_C_PRIME: float = 25.0
+#: Reason: half of the rounding onset (50 on the thesis's scale, times C_SCALE): the lips are more
+#: than half way from the start of rounding to fully rounded, so the width follows Eq. 4.8 (a
+#: near-circle) even when the mouth is open tall, instead of the slow vertical-ellipse rule.
+SMALL_C_PRIME: float = 25.0 * C_SCALE
 
 #: Step 7 of LIP MOVEMENT: "place limits on the a and c values ... to restrict the shape".
-#: A_MIN: 40 units, about 60 % of a resting half-width (a ~ c_rest = 65 with closed lips):
-#: real lips at full protrusion keep roughly that fraction of their resting width; without
+#: A_MIN: 40 units times C_SCALE, about 60 % of a resting half-width (a ~ c_rest with closed
+#: lips): real lips at full protrusion keep roughly that fraction of their resting width; without
 #: it Eq. 4.8 with c' = 0 and closed lips gives a pinhole mouth (a = b ~ 0).
-A_MIN: float = 40.0
-#: A_MAX: 110 units = sqrt(c_max^2 + 70^2): fully stretched lips (c = 85) opened to a wide
+A_MIN: float = 40.0 * C_SCALE
+#: A_MAX: sqrt(c_max^2 + 70^2) (129.6 units): fully stretched lips (c = c_max) opened to a wide
 #: jaw-wagging height on the face model (b ~ 70, a 10-12 degree wag) and no wider, so the
 #: corners (at most a + 13.7) stay inside the cheeks (the face model's resting corner is at 98).
-A_MAX: float = 110.0
-#: C_LIMIT: c never exceeds c_max = 85, the most stretched shape the thesis defines; it also
+A_MAX: float = math.hypot(C_MAX, 70.0)
+#: C_LIMIT: c never exceeds c_max, the most stretched shape the thesis defines; it also
 #: caps the focal distance of tall vertical ellipses (Eq. 4.14 'otherwise').
 C_LIMIT: float = C_MAX
 
 #: Vertex 70 "is placed at a when c = 0; otherwise ... increasingly far from a as c becomes
 #: larger" (section 4.2.1): y70 = a + CORNER_STRETCH_AT_REST * (c / c_rest)^2 for a horizontal
-#: ellipse. Reason: 8 units (2 mm at the face model's 0.25 mm a unit) beyond a at rest (c = 65),
-#: 13.7 when fully stretched (c = 85): a visible sharpening, about a tenth of the half-width,
-#: without a beak. Quadratic, not linear, in c because c = sqrt(a^2 - b^2) changes infinitely
-#: fast as the ellipse nears the switch (b -> a) while c^2 changes smoothly: on jaw-wagging
-#: tasks on the face model (12-28 degrees) a linear rule (0.15 c) made the lips step up to 1.23
+#: ellipse. Reason: 8 units (2 mm at the face model's 0.25 mm a unit; a length on the face, not
+#: a c value, so not rescaled) beyond a at rest (c = c_rest), 13.7 when fully stretched
+#: (c = c_max): a visible sharpening, about a tenth of the half-width, without a beak.
+#: Quadratic, not linear, in c because c = sqrt(a^2 - b^2) changes infinitely fast as the
+#: ellipse nears the switch (b -> a) while c^2 changes smoothly: on jaw-wagging tasks on the face
+#: model (12-28 degrees) a linear rule (0.15 c) made the lips step up to 1.23
 #: times the lip pellets' largest step per row at the switch, the quadratic one at most 1.0.
 #: On a vertical ellipse: CORNER_READING.
 CORNER_STRETCH_AT_REST: float = 8.0
@@ -164,9 +187,10 @@ CORNER_READING: str = "results"
 #: the pair would close at the corner (y = a) where the outline itself ends.
 MIDDLE_PAIR_TAPER: tuple[float, float, float] = (1.0, 2.0 / 3.0, 1.0 / 3.0)
 
-#: Step 8: currthick = Thick * (1 + THICKEN_GAIN * t), t = (50 - c') / 50 clipped to [0, 1].
-#: Reason: continuous with Thick at the onset c' = 50 and 40 % thicker when fully rounded,
-#: visibly pouted yet short of "lips too big at maximum protrusion" (thesis Table 5.8).
+#: Step 8: currthick = Thick * (1 + THICKEN_GAIN * t), t = (onset - c') / onset clipped to [0, 1]
+#: (onset: ROUNDING_ONSET_C). Reason: continuous with Thick at the onset and 40 % thicker when
+#: fully rounded, visibly pouted yet short of "lips too big at maximum protrusion" (thesis
+#: Table 5.8).
 THICKEN_GAIN: float = 0.4
 
 #: Thick (4.2.3) is lipthick * p / 2, half the UL-LL distance at the first valid row mapped by
@@ -240,14 +264,17 @@ RANGES: dict[str, tuple[float, float, str]] = {
     "NEAR_REST_MM": (0.25, 1.0, "half to twice the XRMB pellets' 0.5 mm precision: below 0.25 mm "
                               "the band is finer than the recording resolves, past 1 mm it holds "
                               "a lip that visibly moved forward or back"),
-    "NEAR_C_REST": (2.5, 10.0, "an eighth to a half of the 20 units between rest and fully "
-                               "stretched: lips that have barely moved forward or back"),
-    "SMALL_C_PRIME": (15.0, 35.0, "'c' is small': from 70 % to 30 % of the way from the rounding "
-                                  "onset (50) to fully rounded"),
-    "A_MIN": (33.0, 46.0, "lips at full protrusion keep about 60 % of their resting width: 50-70 % "
-                          "of a resting half-width of ~65 units"),
-    "A_MAX": (104.0, 117.0, "the same rule as the value with a wide wag's height b of 60-80 units "
-                            "instead of 70"),
+    "NEAR_C_REST": (2.5 * C_SCALE, 10.0 * C_SCALE,
+                    "an eighth to a half of the span between rest and fully stretched: lips that "
+                    "have barely moved forward or back"),
+    "SMALL_C_PRIME": (15.0 * C_SCALE, 35.0 * C_SCALE,
+                      "'c' is small': from 70 % to 30 % of the way from the rounding onset to "
+                      "fully rounded"),
+    "A_MIN": (33.0 * C_SCALE, 46.0 * C_SCALE,
+              "lips at full protrusion keep about 60 % of their resting width: 50-70 % of a "
+              "resting half-width of ~c_rest"),
+    "A_MAX": (math.hypot(C_MAX, 60.0), math.hypot(C_MAX, 80.0),
+              "the same rule as the value with a wide wag's height b of 60-80 units instead of 70"),
     "CORNER_STRETCH_AT_REST": (4.0, 12.0, "1-3 mm beyond a at rest (0.25 mm a unit): a visible "
                                           "sharpening, short of a beak"),
     "THICKEN_GAIN": (0.2, 0.6, "rounded lips visibly pout, the thesis gives no figure: 20-60 % "

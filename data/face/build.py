@@ -276,6 +276,44 @@ def _mouth_expression(lay: Layout):
     lay.regions["mouth_expression"] = keys
 
 
+#: The closed-lip span, Parke units: the two lips' own heights on the centre line,
+#: (z67 - z61) + (z58 - z49), i.e. 67 to 49 with the lips closed. Published vermilion heights
+#: are measured so (labrale superius to stomion plus stomion to labrale inferius, lips closed), and
+#: the pellets the face's 67 and 49 carry sit on the vermilion borders; the face is mapped by p/d
+#: (thesis 4.1.1), so the span is a share of the jaw-pellet spacing: 17.05 mm, men's upper plus
+#: lower vermilion height (5.9 + 11.15 mm, Pietruski & Majak 2022, Aesthet. Surg. J. 42:1130;
+#: :data:`cassi.data.synth.subjects.VERMILION_HEIGHTS_MM`), over 38.39 mm, the mean of the real
+#: jaw-pellet spacings (MNI-MNM) the project holds, JW11's 42.6 mm (median of 43,260 real frames)
+#: and JW45's 34.18 mm (thesis Figure 3.9; both in :data:`cassi.data.synth.subjects.SUBJECTS`,
+#: both men, hence the men's heights): 0.4441 of the face's jaw length p (140.72 units).
+CLOSED_LIP_SPAN = 62.5
+#: The designed lips' centre-line heights (z at the centre line, Parke units), before the span
+#: is applied: the inner edges 61 and 58 (the resting gap between them, 5 units, 1.25 mm, the lips
+#: lightly apart) and the share of each lip (equal) are the design's; each lip is scaled about its
+#: inner edge so that the two heights add up to CLOSED_LIP_SPAN.
+_LIP_ROWS_DESIGN = {
+    # name: (x at centre, z at centre)
+    "upper_outer": (394.0, -222.0),   # 67: UL pellet site, top edge of the upper lip
+    "upper_middle": (389.0, -238.0),  # 64
+    "upper_inner": (368.0, -249.0),   # 61
+    "lower_inner": (366.0, -254.0),   # 58
+    "lower_mu": (380.0, -259.0),      # 55
+    "lower_ml": (389.0, -269.0),      # 52
+    "lower_outer": (388.0, -281.0),   # 49: LL pellet site, bottom edge of the lower lip
+}
+
+
+def lip_rows() -> dict[str, tuple[float, float]]:
+    """The lips' centre-line (x, z) by row name, with the closed-lip span applied."""
+    d = _LIP_ROWS_DESIGN
+    up_edge, low_edge = d["upper_inner"][1], d["lower_inner"][1]
+    design_span = (d["upper_outer"][1] - up_edge) + (low_edge - d["lower_outer"][1])
+    f = CLOSED_LIP_SPAN / design_span
+    return {name: (x, (up_edge if name.startswith("upper") else low_edge)
+                   + f * (z - (up_edge if name.startswith("upper") else low_edge)))
+            for name, (x, z) in d.items()}
+
+
 def _lips(lay: Layout) -> dict:
     """Parke's lips (Figures 3.7, 4.4, 4.5, 4.17): rows of 3 vertices from the centre line
     (y = 0, a/3, 2a/3) plus the corners 70 (outer), 300 (middle), 287 (inner).
@@ -289,16 +327,7 @@ def _lips(lay: Layout) -> dict:
     def xtrack(x0, y, k=0.0068):
         return x0 - k * y ** 2
     ell = np.sqrt(1.0 - (ys / a) ** 2)
-    rows = {
-        # name: (x at centre, z at centre, z falloff toward the corner)
-        "upper_outer": (394.0, -222.0),   # 67: UL pellet site, top edge of the upper lip
-        "upper_middle": (389.0, -238.0),  # 64
-        "upper_inner": (368.0, -249.0),   # 61
-        "lower_inner": (366.0, -254.0),   # 58
-        "lower_mu": (380.0, -259.0),      # 55
-        "lower_ml": (389.0, -269.0),      # 52
-        "lower_outer": (388.0, -281.0),   # 49: LL pellet site, bottom edge of the lower lip
-    }
+    rows = lip_rows()
     numbers = {
         "upper_outer": N.UPPER_OUTER, "upper_middle": N.UPPER_MIDDLE,
         "upper_inner": N.UPPER_INNER, "lower_inner": N.LOWER_INNER,

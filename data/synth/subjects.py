@@ -87,9 +87,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+#: Adult vermilion heights (mm) by sex, (upper, lower): Pietruski & Majak 2022 (Aesthet. Surg. J.
+#: 42:1130, men) and Pietruski et al. 2022 (Aesthet. Plast. Surg., women). They place the resting
+#: lips here and set the face's closed-lip span (:data:`cassi.data.face.build.CLOSED_LIP_SPAN`).
+VERMILION_HEIGHTS_MM = {"M": (5.9, 11.15), "F": (6.47, 11.64)}
 #: Resting lip midpoint above the incisor tip (mm) by sex, from published norms (see the module
 #: docstring): incisor display at rest minus half the vermilion-height difference.
-LIP_MID_BY_SEX = {"M": round(1.91 - (11.15 - 5.9) / 2, 1), "F": round(3.40 - (11.64 - 6.47) / 2, 1)}
+LIP_MID_BY_SEX = {sex: round(display - (VERMILION_HEIGHTS_MM[sex][1] - VERMILION_HEIGHTS_MM[sex][0])
+                             / 2, 1) for sex, display in (("M", 1.91), ("F", 3.40))}
 #: Resting lip midpoints measured on real recordings (module docstring).
 LIP_MID_REAL = {"JW45": 0.9, "JW11": -1.9}
 

@@ -95,8 +95,8 @@ def test_2_0_rounds_forward_and_stretches_back():
     lips = lip_frames(ul, ll, REST, SUBJECT)
     d = lips.diagnostics
     rest, rounded, stretched = 0, 299, len(ul) - 1
-    # c' follows Eq. 4.13: 65 at rest, 0 at MAX UL, 85 at MIN UL.
-    assert d["c_prime"][[rest, rounded, stretched]] == pytest.approx([65.0, 0.0, 85.0])
+    # c' follows Eq. 4.13: c_rest at rest, c_min at MAX UL, c_max at MIN UL.
+    assert d["c_prime"][[rest, rounded, stretched]] == pytest.approx([K.C_REST, K.C_MIN, K.C_MAX])
     a, y70 = d["a"], lips.vertex(70)[:, 1]
     # Forward: narrower mouth (rounded); back: wider than at rest (stretched).
     assert a[rounded] < 0.75 * a[rest] and y70[rounded] < 0.75 * y70[rest]
@@ -152,11 +152,11 @@ def test_vertex_70_at_a_when_round_and_farther_as_c_grows():
     a, c = lips.diagnostics["a"], lips.diagnostics["c"]
     beyond = lips.vertex(70)[:, 1] - a
     assert (lips.diagnostics["ellipse"] == "horizontal").all()
-    # 8 (c / 65)^2: 8 units at rest, 0 at c = 0.
-    np.testing.assert_allclose(beyond, K.CORNER_STRETCH_AT_REST * (c / 65.0) ** 2, atol=1e-9)
+    # 8 (c / c_rest)^2: 8 units at rest, 0 at c = 0.
+    np.testing.assert_allclose(beyond, K.CORNER_STRETCH_AT_REST * (c / K.C_REST) ** 2, atol=1e-9)
     assert c.min() < 1.0 and beyond[c.argmin()] < 2e-3
-    assert corner_stretch(65.0, False) == pytest.approx(8.0)
-    assert corner_stretch(85.0, False) == pytest.approx(8.0 * (85 / 65) ** 2)
+    assert corner_stretch(K.C_REST, False) == pytest.approx(8.0)
+    assert corner_stretch(K.C_MAX, False) == pytest.approx(8.0 * (85 / 65) ** 2)
     assert corner_stretch(40.0, True) == 0.0
     order = np.argsort(c)
     assert np.all(np.diff(beyond[order]) >= -1e-12)
@@ -247,7 +247,7 @@ def test_the_texts_corner_moves_out_on_a_vertical_ellipse():
     """Section 4.2.1's words as an option (CornerReading.TEXT): vertex 70 beyond a as c grows on
     a vertical ellipse too; by default (RESULTS) it stays at a there. Horizontal frames are the
     same either way, and neither reading jumps at the switch (c = 0 there)."""
-    ul, ll = jaw_wagging_trajectory()
+    ul, ll = jaw_wagging_trajectory(amp=80.0)  # wide enough for tall (vertical) openings
     default = lip_frames(ul, ll, REST, SUBJECT)
     text = lip_frames(ul, ll, REST, SUBJECT, corner="text")
     d = default.diagnostics
@@ -256,7 +256,7 @@ def test_the_texts_corner_moves_out_on_a_vertical_ellipse():
     beyond_default = default.vertex(70)[:, 1] - d["a"]
     beyond_text = text.vertex(70)[:, 1] - d["a"]
     np.testing.assert_allclose(beyond_default[vertical], 0.0, atol=1e-9)
-    np.testing.assert_allclose(beyond_text, K.CORNER_STRETCH_AT_REST * (d["c"] / 65.0) ** 2,
+    np.testing.assert_allclose(beyond_text, K.CORNER_STRETCH_AT_REST * (d["c"] / K.C_REST) ** 2,
                                atol=1e-9)
     assert beyond_text[vertical].max() > 2.0  # the corner moves out on the wide opening
     np.testing.assert_allclose(text.xyz[~vertical], default.xyz[~vertical], atol=1e-9)
@@ -264,7 +264,7 @@ def test_the_texts_corner_moves_out_on_a_vertical_ellipse():
     data_step = max(np.linalg.norm(np.diff(p, axis=0), axis=1).max() for p in (ul, ll))
     step = np.linalg.norm(np.diff(text.xyz, axis=0), axis=-1).max(axis=1)
     assert step[switches].max() <= data_step
-    assert corner_stretch(40.0, True, "text") == pytest.approx(8.0 * (40 / 65) ** 2)
+    assert corner_stretch(40.0, True, "text") == pytest.approx(8.0 * (40 / K.C_REST) ** 2)
     with pytest.raises(ValueError):
         corner_stretch(40.0, True, "prose")
 
@@ -386,9 +386,9 @@ def test_2_1_adjusts_thickness_and_blends_287():
     # The outer outline and the thickness total do not change; the inside edge moves up.
     np.testing.assert_allclose(two1.vertex(68), two0.vertex(68))
     assert np.all(two1.vertex(61)[:, 2] > two0.vertex(61)[:, 2])
-    # 287's z: the 2.0 value while c' >= 50, vertex 60's when fully rounded (c' = 0).
+    # 287's z: the 2.0 value while c' >= the onset, vertex 60's when fully rounded (c' = 0).
     cp = two1.diagnostics["c_prime"]
-    not_round = cp >= 50
+    not_round = cp >= K.ROUNDING_ONSET_C
     np.testing.assert_allclose(two1.vertex(287)[not_round, 2], two0.vertex(287)[not_round, 2])
     full = cp <= 0
     assert full.any()

@@ -48,6 +48,10 @@ from cassi.versions.lips_track import track_x, track_y_for_x
 # Explicit tuning for the hand-worked OUTER_ABC_CALC cases, so they do not depend on the chosen
 # defaults in lips_constants.
 P = OuterAbcParams(rho=0.3, near_c_rest=5.0, small_c_prime=25.0, c_rest=65.0)
+#: The thesis's key c values and rounding onset (on the thesis's face), for the hand-worked cases;
+#: the defaults are rescaled to this project's face (lips_constants.C_SCALE).
+THESIS_C = {"c_rest": 65.0, "c_min": 0.0, "c_max": 85.0}
+THESIS_ONSET = 50.0
 
 
 # --- Equation 4.13 ---------------------------------------------------------------------------
@@ -65,13 +69,17 @@ P = OuterAbcParams(rho=0.3, near_c_rest=5.0, small_c_prime=25.0, c_rest=65.0)
     ],
 )
 def test_eq_4_13_c_prime(x, expected):
-    assert c_prime(x, 10.0, 20.0, 0.0) == pytest.approx(expected)
+    assert c_prime(x, 10.0, 20.0, 0.0, **THESIS_C) == pytest.approx(expected)
 
 
 def test_eq_4_13_vectorised_and_thesis_constants():
     x = np.array([15.0, 20.0, 0.0, 10.0])
-    np.testing.assert_allclose(c_prime(x, 10.0, 20.0, 0.0), [32.5, 0.0, 85.0, 65.0])
-    assert (K.C_REST, K.C_MIN, K.C_MAX) == (65.0, 0.0, 85.0)
+    np.testing.assert_allclose(c_prime(x, 10.0, 20.0, 0.0, **THESIS_C), [32.5, 0.0, 85.0, 65.0])
+    # the defaults: the thesis's key values rescaled to this face, the same place on Eq. 4.13
+    assert K.THESIS_C_REST == 65.0
+    assert (K.C_REST, K.C_MIN, K.C_MAX) == pytest.approx((83.4, 0.0, 85.0 * 83.4 / 65.0))
+    np.testing.assert_allclose(c_prime(x, 10.0, 20.0, 0.0), [32.5 * K.C_SCALE, 0.0, K.C_MAX,
+                                                             K.C_REST])
 
 
 @pytest.mark.parametrize("rest, mx, mn", [(10, 10, 0), (10, 20, 10), (10, 5, 20)])
@@ -262,7 +270,9 @@ def test_thick_from_lipthick():
     ],
 )
 def test_step8_currthick(cp, expected):
-    assert current_thickness(10.0, cp, gain=0.4) == pytest.approx(expected)
+    assert current_thickness(10.0, cp, onset=THESIS_ONSET, gain=0.4) == pytest.approx(expected)
+    # the default onset is the thesis's 50 on this face's c scale: the same lip, the same result
+    assert current_thickness(10.0, cp * K.C_SCALE, gain=0.4) == pytest.approx(expected)
 
 
 def test_centreline_equal_thickness():
@@ -320,8 +330,11 @@ def test_hermite_sum_is_one_and_monotone(t):
 
 def test_blend_inner_corner():
     # c' = 37.5 -> t = (50 - 37.5)/50 = 0.25: 0.84375 * 10 + 0.15625 * 20 = 11.5625.
-    assert blend_inner_corner_z(10.0, 20.0, 37.5) == pytest.approx(11.5625)
-    assert blend_inner_corner_z(10.0, 20.0, 50.0) == pytest.approx(10.0)   # not yet rounding
-    assert blend_inner_corner_z(10.0, 20.0, 70.0) == pytest.approx(10.0)
-    assert blend_inner_corner_z(10.0, 20.0, 0.0) == pytest.approx(20.0)    # fully rounded
-    np.testing.assert_allclose(rounding_t([60.0, 50.0, 25.0, 0.0, -5.0]), [0, 0, 0.5, 1, 1])
+    on = THESIS_ONSET
+    assert blend_inner_corner_z(10.0, 20.0, 37.5, onset=on) == pytest.approx(11.5625)
+    assert blend_inner_corner_z(10.0, 20.0, 50.0, onset=on) == pytest.approx(10.0)  # not rounding
+    assert blend_inner_corner_z(10.0, 20.0, 70.0, onset=on) == pytest.approx(10.0)
+    assert blend_inner_corner_z(10.0, 20.0, 0.0, onset=on) == pytest.approx(20.0)   # fully round
+    np.testing.assert_allclose(rounding_t([60.0, 50.0, 25.0, 0.0, -5.0], onset=on),
+                               [0, 0, 0.5, 1, 1])
+    assert blend_inner_corner_z(10.0, 20.0, 37.5 * K.C_SCALE) == pytest.approx(11.5625)

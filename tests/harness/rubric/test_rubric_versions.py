@@ -20,24 +20,34 @@ from cassi.harness.rubric import geometry as G
 VERSIONS = ("parke-1974", "cassi-1.0", "cassi-2.0", "cassi-2.1")
 
 
-@pytest.fixture(scope="module")
-def subject():
+def _subject(name):
     from cassi.data.corpus.disk import Corpus
-    from cassi.data.face.model import build_face
     from cassi.data.corpus.profile import preprocess
     from cassi.data.synth.corpus import default_corpus
 
     corpus = Corpus(default_corpus())
-    prof = preprocess(corpus, ["JW11"])["JW11"]
+    prof = preprocess(corpus, [name])[name]
     face = subject_face(palate_mm=prof.palate_mm, head_measures=prof.head_measures)
     return corpus, prof, face
+
+
+@pytest.fixture(scope="module")
+def subject():
+    return _subject("JW11")
+
+
+@pytest.fixture(scope="module")
+def switching_subject():
+    """JW16: its jaw wagging (task 106) opens the 2.x mouths taller than wide in about a quarter
+    of the frames; JW11's, with its wide resting mouth (lips_constants.C_REST), never does."""
+    return _subject("JW16")
 
 
 def _animate(subject, version, task):
     from cassi.versions.registry import get_version
 
     corpus, prof, face = subject
-    rec = corpus.subject("JW11").load(task, 1)
+    rec = corpus.subject(prof.subject).load(task, 1)
     return get_version(version).animate(prof, face, rec)
 
 
@@ -47,7 +57,7 @@ def _with(anim, positions):
 
 def _run(subject, anim, task, checks=None):
     _, prof, face = subject
-    df = R.run_geometry_checks(anim, face, prof, task=task, subject="JW11", checks=checks)
+    df = R.run_geometry_checks(anim, face, prof, task=task, subject=prof.subject, checks=checks)
     return df[(df["frame"] == -1) & (df["view"] == "geometry")].set_index("check")
 
 
@@ -122,7 +132,8 @@ def test_planted_defects_fire_on_every_version(subject, version):
 
 
 @pytest.mark.parametrize("version", ("cassi-2.0", "cassi-2.1"))
-def test_one_frame_jump_at_the_ellipse_switch_fires(subject, version):
+def test_one_frame_jump_at_the_ellipse_switch_fires(switching_subject, version):
+    subject = switching_subject
     anim = _animate(subject, version, 106)
     before = _run(subject, anim, 106, ["corner_jump_switch"]).loc["corner_jump_switch"]
     b = anim.diagnostics["ellipse"].to_numpy()       # horizontal <-> vertical
