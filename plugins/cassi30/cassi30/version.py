@@ -258,6 +258,13 @@ class ThickTongueStage:
         # (the tongue is pressed down, not flattened).
         top = v[..., :K.DORSUM_COLUMNS, :]
         bound = plan["palate"](top[..., 0], top[..., 1]) - margin
+        # The mesh's edges run straight between the stations: under a palate that dips between
+        # two of them, the edge would cross it though both ends keep the margin. So each point
+        # also keeps under the palate halfway to its neighbours along the tongue.
+        mid = 0.5 * (top[:, 1:] + top[:, :-1])
+        between = plan["palate"](mid[..., 0], mid[..., 1]) - margin
+        bound[:, 1:] = np.minimum(bound[:, 1:], between)
+        bound[:, :-1] = np.minimum(bound[:, :-1], between)
         dz = soft_below(top[..., 2], bound, w) - top[..., 2]
         v[..., :K.DORSUM_COLUMNS, 2] += dz
         under = np.arange(K.DORSUM_COLUMNS, v.shape[2])
