@@ -6,7 +6,7 @@ from cassi.harness.farm.results import normalize
 from cassi.harness.rubric.registry import CHECKS
 from cassi.reports.report import write_report
 
-from tests.reports_fixtures import write_run
+from reports_fixtures import write_run
 
 
 def _row(version, check, value):

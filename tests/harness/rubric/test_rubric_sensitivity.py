@@ -16,7 +16,7 @@ from cassi.harness.rubric.model import Check
 from cassi.harness.rubric.registry import CHECKS
 from cassi.versions.ranges import ranged_constants
 
-from tests.reports_fixtures import write_run
+from reports_fixtures import write_run
 
 #: Table B's jaw_long (1.15, range 1.13-1.165) decides cassi-2.0 against cassi-1.0; Table A's
 #: lips_pressed (2.0, range 1.0-3.0) decides it by more than its range can move.
