@@ -456,7 +456,7 @@ SUBJECT_MM = dataclasses.replace(SUBJECT, units_per_mm=4.0)
 def wandering_jaw_wagging(n=1200, wander_mm=1.0):
     """The jaw wagging with the upper lip wandering fore and aft by ``wander_mm``: c' crosses the
     band near c_rest (0.5 mm of the upper lip), as a real speaker's lip may while the jaw wags."""
-    ul, ll = jaw_wagging_trajectory(n)
+    ul, ll = jaw_wagging_trajectory(n, amp=80.0)  # wide enough for tall (vertical) openings
     t = np.arange(n) * 0.006866
     ul = ul.copy()
     ul[:, 0] = 100.0 + wander_mm * 4.0 * np.sin(2 * np.pi * 0.37 * t)
@@ -483,15 +483,17 @@ def test_each_version_has_its_tuning_and_the_shared_one_stays_an_option():
 
 def test_the_band_near_rest_is_half_a_millimetre_of_the_upper_lip():
     p = tuning("2.0").for_subject(SUBJECT.x_rest, SUBJECT.x_max, SUBJECT.x_min, 4.0)
-    # 0.5 mm = 2 units of x; Eq. 4.13: 65 c' over 25 units forward, 20 over 30 units back
-    assert p.band == pytest.approx((2.0 * 65 / 25, 2.0 * 20 / 30))
+    # 0.5 mm = 2 units of x; Eq. 4.13: c_rest - c_min over 25 units forward, c_max - c_rest
+    # over 30 units back
+    assert p.band == pytest.approx((2.0 * (K.C_REST - K.C_MIN) / 25, 2.0 * (K.C_MAX - K.C_REST) / 30))
     shared = tuning("shared")
     assert shared.for_subject(100.0, 125.0, 70.0, 4.0) is shared
     with pytest.raises(CassiInputError, match="units per mm"):
         tuning("2.1").for_subject(100.0, 125.0, 70.0, None)
-    # c' 3 units above rest (lips back): outside this band (1.33), inside the shared one (5)
-    assert outer_abc_step(30.0, 68.0, 70.0, 29.0, 60.0, False, p)[2] == BRANCH_LABELS.index("3c-ii")
-    assert outer_abc_step(30.0, 68.0, 70.0, 29.0, 60.0, False, tuning("shared"))[2] == \
+    # c' 3 units above rest (lips back): outside this band (1.71), inside the shared one (6.4)
+    c3 = K.C_REST + 3.0
+    assert outer_abc_step(30.0, c3, 70.0, 29.0, 60.0, False, p)[2] == BRANCH_LABELS.index("3c-ii")
+    assert outer_abc_step(30.0, c3, 70.0, 29.0, 60.0, False, tuning("shared"))[2] == \
         BRANCH_LABELS.index("3a")
 
 
