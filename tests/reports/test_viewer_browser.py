@@ -100,9 +100,13 @@ def test_play_advances_the_frame_and_changes_the_canvas(report, browser):
     # play got under load varies, and so does how much the face moved since frame 600).
     q = Page(browser, _viewer_url(rep, f"#frame={after}&a=cassi-1.0")).ready()
     assert q.frame() == after
-    same = np.abs(played.astype(int) - q.pixels().astype(int)).max(axis=-1) > 24
+    opened = q.pixels()
+    same = np.abs(played.astype(int) - opened.astype(int)).max(axis=-1) > 24
     changed = np.abs(played.astype(int) - shot.astype(int)).max(axis=-1) > 24
-    assert same.sum() < 20 and changed.sum() > 5 * max(same.sum(), 10), \
+    # where play stopped is a matter of load: the face there may be near frame 600's (a wag's
+    # full period later), so the played canvas is held against what that frame shows when opened
+    expected = np.abs(opened.astype(int) - shot.astype(int)).max(axis=-1) > 24
+    assert same.sum() < 20 and abs(int(changed.sum()) - int(expected.sum())) < 20, \
         "the canvas did not follow the frame while playing"
     assert p.errors == [] and q.errors == []
     q.page.close()
