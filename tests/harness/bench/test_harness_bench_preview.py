@@ -16,7 +16,9 @@ def test_farm_preview_benchmark_reports_every_view_beside_a_bare_render():
     views = ("front", "side", "half", "top")
     assert set(out["by_view"]) == set(views) == set(out["bare_mi_render_frames_per_s"])
     frames = {v["frames"] for v in out["by_view"].values()}
-    assert len(frames) == 1 and frames.pop() >= 20  # every view renders the same frames
+    # every view renders the same grid; a check's evidence frames (the frames the report links)
+    # come on top in the view it is judged from only
+    assert min(frames) >= 20 and max(frames) <= 1.1 * min(frames), frames
     assert out["farm_preview_frames_per_s"] > 0 and out["farm_efficiency_vs_bare"] > 0
     assert 0 < out["farm_preview_cpu_frames_per_s"] and out["farm_cpu_efficiency_vs_bare"] > 0
     assert headline({"farm_preview": out}) == {

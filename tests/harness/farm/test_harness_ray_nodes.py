@@ -96,7 +96,8 @@ def test_outputs_travel_back_from_a_node_that_cannot_see_them(two_nodes, tmp_pat
                       "--stride", "0", "--extremes", "1", "--out", out)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["counts"]["done"] == 3 and summary["counts"]["failed"] == 0  # geometry, render, image
+    # geometry, render, image, and the evidence renders of the frames the report links
+    assert summary["counts"]["done"] >= 3 and summary["counts"]["failed"] == 0, summary["counts"]
     renders = pd.read_parquet(out / "renders.parquet")
     assert len(renders) and all((out / p).is_file() for p in renders["path"])
     # geometry and image checks, and cassi-2.1's lip criterion margin (view "criterion")
