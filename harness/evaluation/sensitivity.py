@@ -15,7 +15,6 @@ from __future__ import annotations
 import json
 import tempfile
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import pandas as pd
@@ -24,7 +23,9 @@ from cassi.common.atomic import atomic_write_text
 from cassi.common.errors import CassiInputError
 from cassi.harness.evaluation.caches import get_corpus, get_face, get_profile
 from cassi.harness.evaluation.stages import checked_animation
+from cassi.harness.farm.executors import LocalExecutor
 from cassi.harness.farm.results import normalize, read_results
+from cassi.harness.farm.workers import thread_env
 from cassi.harness.rubric import sensitivity as S
 from cassi.renderer.views import VIEW_NAMES
 from cassi.versions.protocol import version_face
@@ -100,8 +101,13 @@ def sensitivity(run: str | Path, out: str | Path | None = None, *, only: str | N
     evaluated: list[tuple[S.Setting, dict]] = []
     if only in (None, "thresholds"):
         t0 = time.perf_counter()
+        base_totals = {k: v for k, v in base.items() if k[0] == "totals"}
         for setting, check in S.threshold_settings():
-            evaluated.append((setting, S.findings(S.regraded(results, check), kinds=("totals",))))
+            reached = S.tables_reached(check)
+            rows = results[results["table"].isin(reached)]
+            found = {k: v for k, v in base_totals.items() if k[1] not in reached}
+            found.update(S.findings(S.regraded(rows, check), kinds=("totals",)))
+            evaluated.append((setting, found))
         n = sum(s.kind == "threshold" for s, _ in evaluated)
         timing["threshold_settings"] = n
         timing["threshold_s_each"] = round((time.perf_counter() - t0) / max(n, 1), 2)
@@ -119,6 +125,20 @@ def sensitivity(run: str | Path, out: str | Path | None = None, *, only: str | N
     return doc
 
 
+def _in_order(pool: LocalExecutor, fn, calls: list[tuple]) -> list:
+    """``fn(*args)`` for every call on the pool's workers, the values in the calls' order; a
+    failed call fails the analysis with its reason."""
+    for i, args in enumerate(calls):
+        pool.submit(str(i), fn, *args)
+    values: dict[int, object] = {}
+    while pool.pending():
+        for item in pool.wait():
+            if not item.ok:
+                raise RuntimeError(f"a geometry setting failed: {item.error}")
+            values[int(item.key)] = item.value
+    return [values[i] for i in range(len(calls))]
+
+
 def _version_settings(results, meta, workers, timing, log) -> list[tuple[S.Setting, dict]]:
     files = _files(meta)
     versions = [v for v in meta.get("versions_resolved") or results["version"].unique()]
@@ -127,12 +147,12 @@ def _version_settings(results, meta, workers, timing, log) -> list[tuple[S.Setti
     synthetic = bool(meta.get("synthetic"))
     evaluated, spent = [], []
     workers = workers or int(meta.get("workers_resolved") or 1)
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    with LocalExecutor(workers, env=thread_env(1)) as pool:   # the farm's process pool
         for c in ranged_constants().values():
             for end in (c.low, c.high):
                 t0 = time.perf_counter()
-                rows = list(pool.map(_geometry_rows, *zip(*[(corpus, s, t, r, v, c.name, end)
-                                                            for s, t, r, v in jobs])))
+                rows = _in_order(pool, _geometry_rows,
+                                 [(corpus, s, t, r, v, c.name, end) for s, t, r, v in jobs])
                 evaluated.append((S.Setting("version", c.name, end, c.value),
                                   S.findings(_with_geometry(results, rows, synthetic))))
                 spent.append(time.perf_counter() - t0)

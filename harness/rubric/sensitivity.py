@@ -26,7 +26,7 @@ import pandas as pd
 from cassi.common.errors import CassiInputError
 from cassi.harness.rubric.model import TABLE_TOPICS, Check
 from cassi.harness.rubric.paired import paired_comparisons
-from cassi.harness.rubric.registry import CHECKS
+from cassi.harness.rubric.registry import CHECKS, TABLE_C_FROM_A
 from cassi.harness.rubric.tables import component_ratings, order_versions
 
 __all__ = ["Setting", "TABLE_COLUMNS", "robustness_table", "threshold_ranges", "threshold_settings", "regraded", "verify_grades", "findings",
@@ -115,6 +115,18 @@ def _pairs(versions) -> list[tuple[str, str]]:
 def _winner(a: str, b: str, score_a: float, score_b: float) -> str:
     """The better of ``a`` and ``b`` by a score where higher is better."""
     return a if score_a > score_b else b if score_b > score_a else TIE
+
+
+def tables_reached(check: Check) -> set[str]:
+    """The tables whose cells a change of ``check``'s grades can move: its own, Table C for the
+    lip rows of Table A it repeats, and Table A whenever C is reached (C is aggregated from
+    them). Findings of every other table stay the baseline's."""
+    reached = {check.table}
+    if check.table == "A" and check.component in TABLE_C_FROM_A:
+        reached.add("C")
+    if "C" in reached:
+        reached.add("A")
+    return reached
 
 
 def findings(results: pd.DataFrame, *, kinds=FINDING_KINDS) -> dict[tuple, str]:

@@ -134,3 +134,15 @@ def test_every_ranged_threshold_has_its_reason_and_the_self_graded_check_none():
     assert all(len(t["reason"]) > 20 for t in ranged)
     # m_tongue_teeth grades from both sets' depths: its stored value cannot be re-graded
     assert not CHECKS["tongue_through_teeth"].ranges
+
+
+def test_a_threshold_reaches_its_table_and_the_tables_built_from_it():
+    """Only these tables are aggregated again for a threshold setting (the others keep the
+    baseline's findings): Table A's lip rows are Table C's too, and C is aggregated with them."""
+    from cassi.harness.rubric import CHECKS
+    from cassi.harness.rubric.sensitivity import tables_reached
+
+    assert tables_reached(CHECKS["lips_pressed"]) == {"A", "C"}
+    assert tables_reached(CHECKS["lips_do_not_close"]) == {"A", "C"}
+    assert tables_reached(CHECKS["jaw_long"]) == {"B"}
+    assert tables_reached(CHECKS["tongue_through_teeth"]) == {"A"}
