@@ -14,7 +14,7 @@ from typing import Callable
 import pandas as pd
 
 from cassi.harness.rubric.model import GOOD_RATINGS
-from cassi.harness.rubric.tables import component_ratings
+from cassi.harness.rubric.tables import component_ratings, table_totals
 
 __all__ = ["ThesisFinding", "THESIS_FINDINGS", "reproduced", "ABOUT_HALF", "ABOUT_TWO_THIRDS"]
 
@@ -41,8 +41,10 @@ class ThesisFinding:
 
 
 def _totals(cr: pd.DataFrame, table: str) -> dict[str, int]:
-    t = cr[cr["table"] == table]
-    return {v: int(n) for v, n in t.groupby("version")["negatives"].sum().items()}
+    """Negatives per version in ``table``: the one aggregation's table totals."""
+    t = table_totals(pd.DataFrame(), ratings=cr)
+    t = t[t["table"] == table]
+    return dict(zip(t["version"], t["negatives"].astype(int)))
 
 
 def _share(cr: pd.DataFrame, table: str, version: str, ratings) -> tuple[float, int]:
@@ -67,17 +69,18 @@ def _table_b(cr):
 
 
 def _steps(cr, table):
+    """How many fewer negatives ``table`` has from 1.0 to 2.0 and from 2.0 to 2.1."""
     t = _totals(cr, table)
-    return t, t[V10] - t[V20], t[V20] - t[V21]
+    return t[V10] - t[V20], t[V20] - t[V21]
 
 
 def _table_c(cr):
-    t, first, second = _steps(cr, "C")
+    first, second = _steps(cr, "C")
     return second > first >= 0, f"{V10} -> {V20}: {first:+d} fewer, {V20} -> {V21}: {second:+d} fewer"
 
 
 def _table_d(cr):
-    t, first, second = _steps(cr, "D")
+    first, second = _steps(cr, "D")
     return first > second >= 0, f"{V10} -> {V20}: {first:+d} fewer, {V20} -> {V21}: {second:+d} fewer"
 
 
