@@ -396,6 +396,8 @@ _ALL: list[Check] = [
           description="share of the teeth pixels inside the lip opening that are upper teeth (median over open "
                       "frames)",
           thresholds=(CENTERED_SHARE,),
+          ranges=((0.62, 0.75),),
+          range_reason="the blind judgements of the planted centring series changed between shares of 0.62 and 0.75 (one face 0.62-0.66, the other with shadowed teeth 0.70-0.80): where similar portions end lies in that span",
           negatives=(1,),
           direction="higher",
           reason="well centered = similar portions of upper and lower teeth (thesis 5.3.1, Figure 5.9); "
@@ -416,6 +418,8 @@ _ALL: list[Check] = [
           description="share of the teeth pixels inside the lip opening that are lower teeth (median over open "
                       "frames): the mirror of lips_centered_high",
           thresholds=(CENTERED_SHARE,),
+          ranges=((0.62, 0.75),),
+          range_reason="the blind judgements of the planted centring series changed between shares of 0.62 and 0.75 (one face 0.62-0.66, the other with shadowed teeth 0.70-0.80): where similar portions end lies in that span",
           negatives=(1,),
           direction="higher",
           reason="judged symmetrically with lips_centered_high (CENTERED_SHARE): the renders put the end "
@@ -804,6 +808,8 @@ _ALL: list[Check] = [
           frames="frames with the lips open",
           description="distance of the upper-teeth share inside the lip opening from an even split",
           thresholds=(round(CENTERED_SHARE - 0.5, 2),),
+          ranges=((0.12, 0.25),),
+          range_reason="the same span as lips_centered_high/low's, as a distance from an even split",
           negatives=(1,),
           direction="higher",
           reason="an even split is 0; 0.15 is CENTERED_SHARE either way, where the front renders stop "
