@@ -80,9 +80,10 @@ def cmd_sensitivity(args: argparse.Namespace) -> int:
 
 
 def task_positions(corpus_dir, subject: str, task: int, rep: int, version: str):
-    """Face (the one ``version`` animates), recording rows int64 (F,) and positions float32
-    (F, V, 3) Parke units of ``version`` animating one task file; ``neutral``: the subject's
-    neutral face in every row."""
+    """Face (the one ``version`` animates), recording rows int64 (F,), positions float32
+    (F, V, 3) Parke units of ``version`` animating one task file and the rows' times int64 (F,)
+    us (the recording's clock, at its own rate); ``neutral``: the subject's neutral face in
+    every row."""
     corpus = get_corpus(corpus_dir)
     rec = corpus.subject(subject).load(task, rep)
     ver = None if version == NEUTRAL else get_version(version)  # unknown: did-you-mean error
@@ -91,10 +92,12 @@ def task_positions(corpus_dir, subject: str, task: int, rep: int, version: str):
     if ver is None:
         n = len(rec.time_us)
         verts = np.asarray(face.vertices, np.float32)
-        return face, np.arange(n, dtype=np.int64), np.broadcast_to(verts, (n, *verts.shape))
+        return (face, np.arange(n, dtype=np.int64), np.broadcast_to(verts, (n, *verts.shape)),
+                np.asarray(rec.time_us, np.int64))
     anim = ver.animate(profile, face, rec)
     face = get_version_face(corpus, subject, profile, ver)  # the face the version animated
-    return face, np.asarray(anim.frames, np.int64), np.asarray(anim.positions, np.float32)
+    return (face, np.asarray(anim.frames, np.int64), np.asarray(anim.positions, np.float32),
+            np.asarray(anim.time_us, np.int64))
 
 
 def cmd_gc(args: argparse.Namespace) -> int:

@@ -10,7 +10,7 @@ import numpy as np
 from cassi.common.errors import CassiInputError
 from cassi.common.lazy import resolve
 from cassi.data.face.topology import render_topology
-from cassi.data.xrmb.files import NOMINAL_PERIOD_US
+from cassi.data.xrmb.files import NOMINAL_PERIOD_US, recording_period_us
 from cassi.renderer.animate import animate_positions
 from cassi.renderer.commands import NEUTRAL
 from cassi.renderer.gltf import write_glb
@@ -28,12 +28,23 @@ def _frame_index(frames: np.ndarray, frame: int) -> int:
     return int(hits[0])
 
 
-def cmd_render(args) -> int:
+def _animated(args):
+    """(face, recording rows, positions, sample times us) from the command's positions provider.
+    A provider may leave the times out (three values): its rows are then XRMB's, 6866 us
+    apart."""
     provider = resolve(args.positions_provider)
+    face, frames, positions, *times = provider(args.corpus, args.subject, args.task, args.rep,
+                                               args.version)
+    frames = np.asarray(frames, np.int64)
+    time_us = np.asarray(times[0], np.int64) if times else frames * NOMINAL_PERIOD_US
+    return face, frames, positions, time_us
+
+
+def cmd_render(args) -> int:
     out = Path(args.out)
     if out.suffix.lower() not in (".png", ".exr"):
         raise CassiInputError("--out must end in .png or .exr", path=out)
-    face, frames, positions = provider(args.corpus, args.subject, args.task, args.rep, args.version)
+    face, frames, positions, _ = _animated(args)
     k = _frame_index(frames, args.frame)
     renderer = FaceRenderer(render_topology(face, half=(args.view == "half")), args.view,
                             args.preset, args.variant)
@@ -55,9 +66,8 @@ def cmd_render(args) -> int:
 
 
 def cmd_animate(args) -> int:
-    provider = resolve(args.positions_provider)
     views = [v.strip() for v in args.views.split(",") if v.strip()]
-    face, frames, positions = provider(args.corpus, args.subject, args.task, args.rep, args.version)
+    face, frames, positions, time_us = _animated(args)
     if args.start is not None or args.end is not None:
         keep = (frames >= (args.start if args.start is not None else frames.min())) & \
                (frames <= (args.end if args.end is not None else frames.max()))
@@ -67,14 +77,14 @@ def cmd_animate(args) -> int:
     if args.version == NEUTRAL:
         positions = positions[:1]  # a still face: one frame is the whole animation
     summary = animate_positions(face, positions, args.out, views=views, stride=args.stride,
-                                preset=args.preset, variant=args.variant, fps=args.fps)
+                                preset=args.preset, variant=args.variant, fps=args.fps,
+                                period_us=recording_period_us(time_us))
     print(summary["path"])
     log.info("animation: %s", summary)
     return 0
 
 
 def cmd_export(args) -> int:
-    provider = resolve(args.positions_provider)
     out = Path(args.out)
     if out.suffix.lower() != ".glb":
         raise CassiInputError("--out must end in .glb (binary glTF 2.0)", path=out)
@@ -82,14 +92,15 @@ def cmd_export(args) -> int:
         raise CassiInputError("--out is a directory", path=out)
     if args.stride < 1:
         raise CassiInputError(f"--stride must be at least 1, not {args.stride}")
-    face, frames, positions = provider(args.corpus, args.subject, args.task, args.rep, args.version)
+    face, frames, positions, time_us = _animated(args)
     if args.version == NEUTRAL:
         frames, positions = frames[:1], positions[:1]  # a still face: no animation
     frames, positions = frames[::args.stride], positions[::args.stride]
+    time_us = time_us[::args.stride][:len(frames)]
     if not len(frames):
         raise CassiInputError("the task has no animated frame")
     summary = write_glb(out, render_topology(face), face.vertices, positions,
-                        frames * (NOMINAL_PERIOD_US * 1e-6), quantize=args.positions == "int16",
+                        time_us * 1e-6, quantize=args.positions == "int16",
                         name=f"{args.subject} task {args.task} rep {args.rep} {args.version}",
                         mm_per_unit=1.0 / face.units_per_mm)  # the subject's size (d / p)
     print(out)

@@ -13,7 +13,7 @@ import numpy as np
 
 from cassi.common.atomic import replacing
 from cassi.common.errors import CassiInputError
-from cassi.data.xrmb.files import NOMINAL_PERIOD_US  # the XRMB frame period, us
+from cassi.data.xrmb.files import NOMINAL_PERIOD_US  # XRMB's period: the default, us
 
 from cassi.renderer.views import VIEW_NAMES
 from cassi.data.face.model import render_topology
@@ -101,9 +101,10 @@ def write_animation(path: str | os.PathLike, frames: Iterable[np.ndarray], *, fp
 def animate_positions(face, positions: np.ndarray, out: str | os.PathLike, *,
                       views: Sequence[str] = ("front", "side"), stride: int = 1,
                       preset: str = "preview", variant: str | None = None,
-                      fps: float | None = None) -> dict:
+                      fps: float | None = None, period_us: float = NOMINAL_PERIOD_US) -> dict:
     """Render frames 0, stride, 2*stride, ... of ``positions`` (float (F, V, 3), Parke units) in
-    ``views`` side by side and write the animation ``out`` (.mp4 or .gif).
+    ``views`` side by side and write the animation ``out`` (.mp4 or .gif), by default in real
+    time for rows ``period_us`` apart (the recording's period).
 
     ``face`` is the ``cassi.data.face.model.FaceModel`` whose topology the positions follow.
     Returns a summary dict (frames written, views, fps, variant, path).
@@ -119,7 +120,7 @@ def animate_positions(face, positions: np.ndarray, out: str | os.PathLike, *,
     renderers = [FaceRenderer(render_topology(face, half=(v == "half")), v, preset, variant)
                  for v in views]
     picked = positions[::stride]
-    fps = fps or realtime_fps(stride)
+    fps = fps or realtime_fps(stride, period_us=period_us)
     path = write_animation(out, animation_frames(renderers, picked), fps=fps)
     return {"path": str(path), "frames": int(len(picked)), "views": list(views), "fps": fps,
             "stride": stride, "preset": preset, "variant": renderers[0].variant}

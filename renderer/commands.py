@@ -24,7 +24,9 @@ log = logging.getLogger(__name__)
 #: The version name that stands for the subject's neutral face in every frame.
 NEUTRAL = "neutral"
 
-PositionsProvider = Callable[..., tuple[object, np.ndarray, np.ndarray]]
+#: ``(corpus, subject, task, rep, version) -> (face, rows, positions[, time_us])``: without the
+#: rows' times the rows are taken as XRMB's, 6866 us apart.
+PositionsProvider = Callable[..., tuple]
 
 
 def _task(p: argparse.ArgumentParser) -> None:
@@ -76,8 +78,8 @@ def register(sub, *, positions_provider: PositionsProvider | str) -> None:
     e = sub.add_parser("export", help="write a task's animated face as glTF 2.0 (.glb)",
                        description="Write the mirrored face of a task as binary glTF 2.0: one "
                                    "mesh, a primitive and material per part, one morph target "
-                                   "per kept frame keyed at the recording's times (6866 us x "
-                                   "STRIDE). Opens in Blender (File > Import > glTF 2.0) and "
+                                   "per kept frame keyed at the recording's own times (its "
+                                   "period x STRIDE: 6866 us on XRMB). Opens in Blender (File > Import > glTF 2.0) and "
                                    "any glTF viewer.")
     _task(e)
     e.add_argument("--format", default="gltf", choices=("gltf",), help="output format (gltf)")

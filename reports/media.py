@@ -95,8 +95,6 @@ def read_rgb8(path) -> np.ndarray:
     return img[..., :3].astype(np.uint8)
 
 
-#: The XRMB pellet time base: one recording row every 6866 us (cassi.data.xrmb.files).
-ROW_US = NOMINAL_PERIOD_US
 LABEL_PX = 14
 
 
@@ -136,13 +134,15 @@ def _media_code() -> str:
 
 
 def _video_key(frames: list[int], paths: pd.Series, columns, stride: int, subject: str,
-               task: int, audio: Path | None) -> str:
+               task: int, audio: Path | None, period_us: float = NOMINAL_PERIOD_US) -> str:
     """What a task video is made of: the renders (content-addressed: their names are their
     SHA-256), the panels, the time base, the labels, the sound and the code."""
     doc = {"columns": [list(c) for c in columns], "stride": stride, "subject": subject,
            "task": task, "frames": [[v, w, f, Path(str(paths[(v, w, f)])).name]
                                     for f in frames for v, w in columns],
            "audio": sha256_file(audio) if audio is not None else None, "code": _media_code()}
+    if period_us != NOMINAL_PERIOD_US:  # XRMB's keys stay those of the videos cached before
+        doc["period_us"] = float(period_us)
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
 
 
@@ -153,7 +153,8 @@ def _grid(renders: pd.DataFrame, columns, stride: int):
 
 
 def cached_video(renders: pd.DataFrame, *, stride: int, columns: list[tuple[str, str]],
-                 audio: Path | None = None, cache: Path | None = None) -> Path | None:
+                 audio: Path | None = None, cache: Path | None = None,
+                 period_us: float = NOMINAL_PERIOD_US) -> Path | None:
     """The file in ``cache`` that :func:`task_video` would link for these arguments, or None
     when there is none (nothing cached, no cache, or too few grid frames for a video)."""
     if cache is None:
@@ -162,18 +163,21 @@ def cached_video(renders: pd.DataFrame, *, stride: int, columns: list[tuple[str,
     if len(frames) < 2:
         return None
     subject, task = renders["subject"].iloc[0], int(renders["task"].iloc[0])
-    path = cache / f"{_video_key(frames, paths, columns, stride, subject, task, audio)}.mp4"
+    key = _video_key(frames, paths, columns, stride, subject, task, audio, period_us)
+    path = cache / f"{key}.mp4"
     return path if path.is_file() else None
 
 
 def task_video(renders: pd.DataFrame, dest: Path, *, stride: int, columns: list[tuple[str, str]],
-               audio: Path | None = None, cache: Path | None = None) -> dict | None:
+               audio: Path | None = None, cache: Path | None = None,
+               period_us: float = NOMINAL_PERIOD_US) -> dict | None:
     """A video of one task file: per frame, one labelled panel per (version, view) of
-    ``columns``, side by side, played in real time (one frame per ``stride`` rows of 6866 us).
+    ``columns``, side by side, played in real time (one frame per ``stride`` rows of
+    ``period_us``, the recording's period: 6866 us on XRMB, 2000 us on 500 Hz EMA).
 
     ``renders`` holds one subject, task and rep (columns version, view, frame, path). Each panel
-    is labelled with version, view, subject, task and time. With ``audio`` (the task's WAV, time
-    0 = the recording's first row) the video carries the sound in sync. Returns a description
+    is labelled with version, view, subject, task and time. With ``audio`` (the task's WAV, at
+    any sample rate; time 0 = the recording's first row) the video carries the sound in sync. Returns a description
     (path, frames, fps, stride, audio) or None when fewer than two grid frames exist in every
     panel. With ``cache`` (a directory shared between reports, e.g. a nightly store's media),
     a video made of the same renders, sound and code before is linked, not encoded again.
@@ -182,11 +186,11 @@ def task_video(renders: pd.DataFrame, dest: Path, *, stride: int, columns: list[
     if len(frames) < 2:
         return None
     subject, task = renders["subject"].iloc[0], int(renders["task"].iloc[0])
-    fps = 1e6 / (ROW_US * stride)
+    fps = 1e6 / (period_us * stride)
 
     def composed():
         for f in frames:
-            t = f * ROW_US / 1e6
+            t = f * period_us / 1e6
             panels = [label_panel(read_rgb8(paths[(v, w, f)]),
                                   [f"{v} | {w}", f"{subject} task {task} | t = {t:6.3f} s"])
                       for v, w in columns]
@@ -199,12 +203,13 @@ def task_video(renders: pd.DataFrame, dest: Path, *, stride: int, columns: list[
     dest.parent.mkdir(parents=True, exist_ok=True)
     cached = None
     if cache is not None:
-        cached = cache / f"{_video_key(frames, paths, columns, stride, subject, task, audio)}.mp4"
+        key = _video_key(frames, paths, columns, stride, subject, task, audio, period_us)
+        cached = cache / f"{key}.mp4"
     if cached is not None and cached.is_file():
         link_or_copy(cached, dest)
     else:
         write_animation(dest, composed(), fps=fps, quality=5, audio=audio,
-                        audio_start_s=frames[0] * ROW_US / 1e6, duration_s=duration)
+                        audio_start_s=frames[0] * period_us / 1e6, duration_s=duration)
         if cached is not None:
             cache.mkdir(parents=True, exist_ok=True)
             link_or_copy(dest, cached)

@@ -40,6 +40,7 @@ from cassi.harness.rubric.thesis_findings import reproduced
 from cassi.reports.tables import markdown_table
 from cassi.reports.viewer import mask_overlay, viewer_href, write_viewers
 from cassi.data.corpus.disk import Corpus
+from cassi.data.xrmb.files import NOMINAL_PERIOD_US
 
 #: How many fired checks per version and task file show the four views of their frame on a
 #: subject page (the rest link to the frame's number only).
@@ -444,14 +445,19 @@ def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
     return page.relative_to(out).as_posix()
 
 
+def _run_corpus(run: Run) -> Corpus | None:
+    """The run's corpus, or None when it cannot be opened (moved or removed since)."""
+    root = run.meta.get("corpus_resolved")
+    try:
+        return Corpus(root) if root else None
+    except Exception:  # noqa: BLE001 - a moved corpus must not stop the report
+        return None
+
+
 def _audio_for(run: Run):
     """``(subject, task, rep) -> WAV path or None`` from the run's corpus (None when the corpus
     cannot be opened: the videos are then silent, and say so)."""
-    root = run.meta.get("corpus_resolved")
-    try:
-        corpus = Corpus(root) if root else None
-    except Exception:  # noqa: BLE001 - a moved corpus must not stop the report
-        corpus = None
+    corpus = _run_corpus(run)
 
     def find(subject: str, task: int, rep: int):
         if corpus is None:
@@ -461,6 +467,19 @@ def _audio_for(run: Run):
         except Exception:  # noqa: BLE001
             return None
     return find
+
+
+def _period_for(run: Run):
+    """``(subject, task, rep) -> the recording's period, us`` from the run's corpus (XRMB's
+    6866 us when the recording cannot be read: a moved corpus must not stop the report)."""
+    corpus = _run_corpus(run)
+
+    def period(subject: str, task: int, rep: int) -> float:
+        try:
+            return corpus.subject(subject).load(task, rep).period_us
+        except Exception:  # noqa: BLE001
+            return float(NOMINAL_PERIOD_US)
+    return period
 
 
 #: Processes that encode a report's videos at once (each video is one ffmpeg stream, the
@@ -478,12 +497,14 @@ class _Encoding:
     def __init__(self, specs, out: Path, *, stride: int, media_cache: Path | None):
         self._specs, self._out = specs, out
         self._calls = [dict(renders=g, dest=dest, stride=stride, audio=audio, cache=media_cache,
-                            columns=columns) for _, _, dest, g, audio, columns in specs]
+                            columns=columns, period_us=period)
+                       for _, _, dest, g, audio, columns, period in specs]
         self._done: dict[int, dict | None] = {}
         todo = []
         for i, c in enumerate(self._calls):
             if media.cached_video(c["renders"], stride=stride, columns=c["columns"],
-                                  audio=c["audio"], cache=media_cache) is not None:
+                                  audio=c["audio"], cache=media_cache,
+                                  period_us=c["period_us"]) is not None:
                 self._done[i] = media.task_video(**c)
             else:
                 todo.append(i)
@@ -544,15 +565,15 @@ def _start_videos(run: Run, out: Path, media_cache: Path | None = None):
     stride = int(run.meta.get("animate_stride") or 0)
     if not len(run.renders) or stride < 1:
         return _Encoding([], out, stride=stride, media_cache=None)
-    audio_for = _audio_for(run)
-    specs = []  # (kind, label, dest, renders, audio, columns), encoded together below
+    audio_for, period_for = _audio_for(run), _period_for(run)
+    specs = []  # (kind, label, dest, renders, audio, columns, period), encoded together below
 
-    def add(kind, label, g, dest, audio, columns):
-        specs.append((kind, label, dest, g, audio, columns))
+    def add(kind, label, g, dest, audio, columns, period):
+        specs.append((kind, label, dest, g, audio, columns, period))
 
     for (subject, task, rep), g in run.renders.groupby(["subject", "task", "rep"]):
         task, rep = int(task), int(rep)
-        audio = audio_for(subject, task, rep)
+        audio, period = audio_for(subject, task, rep), period_for(subject, task, rep)
         stem = f"{slug(subject)}_{task:03d}_{rep}"
         name = f"{subject} task {task}" + (f" rep {rep}" if rep != 1 else "")
         all_views = [v for v in VIDEO_VIEWS if v in set(g["view"])]
@@ -569,12 +590,12 @@ def _start_videos(run: Run, out: Path, media_cache: Path | None = None):
                 continue  # rendered for the comparisons only
             dest = out / "videos" / f"{stem}_{slug(version)}.mp4"
             add("task", f"{name}, {version}", g, dest, audio,
-                [(version, v) for v in all_views])
+                [(version, v) for v in all_views], period)
         compared = [v for v in versions if COMPARISON_VIEW in on_grid[v]]
         if len(compared) > 1:
             dest = out / "animations" / f"{stem}_{COMPARISON_VIEW}.mp4"
             add("comparison", f"{name}, {COMPARISON_VIEW} view ({', '.join(compared)})", g,
-                dest, audio, [(v, COMPARISON_VIEW) for v in compared])
+                dest, audio, [(v, COMPARISON_VIEW) for v in compared], period)
     return _Encoding(specs, out, stride=stride, media_cache=media_cache)
 
 

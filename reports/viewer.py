@@ -28,8 +28,8 @@ import pandas as pd
 
 from cassi.common.atomic import atomic_write_bytes, atomic_write_text, link_or_copy
 from cassi.data.corpus.disk import Corpus
-from cassi.data.xrmb.files import PELLETS
-from cassi.harness.evaluation.frames import VIEWER_STRIDE, linked_view
+from cassi.data.xrmb.files import NOMINAL_PERIOD_US, PELLETS
+from cassi.harness.evaluation.frames import linked_view, viewer_stride
 from cassi.harness.evaluation.stages import read_masks_blob
 from cassi.harness.evaluation.viewerdata import read_viewer_blob
 from cassi.harness.rubric import CHECKS
@@ -268,7 +268,8 @@ def viewer_payload(run: Run, subject: str, task: int, rep: int, versions: dict, 
         "versions": list(versions), "version_data": versions,
         "measured": _array(first.measured, stream=first.deflated["measured"]),
         "measured_frames": _array(first.frames.astype(np.int32)),
-        "pellets": list(PELLETS), "views": _views(), "stride": VIEWER_STRIDE,
+        "pellets": list(PELLETS), "views": _views(),
+        "stride": viewer_stride(1e6 / _rate(first)),
         "rate_hz": _rate(first), "audio": audio_href, "labels": _labels(run, subject, task, rep),
         "waveform": _waveform(audio) if audio_href else None,
         "table_colours": TABLE_COLOURS, "subject_page": subject_page}
@@ -289,10 +290,12 @@ def write_viewer_page(dest: Path, payload: dict, env, *, static: str, index: str
 
 
 def _rate(data) -> float:
+    """The recording's rows per second, from the kept rows' numbers and times (XRMB's when
+    fewer than two rows were kept)."""
     t = np.asarray(data.time_us, np.float64)
     f = np.asarray(data.frames, np.float64)
     if len(t) < 2 or f[-1] == f[0]:
-        return 145.6
+        return 1e6 / NOMINAL_PERIOD_US
     return float((f[-1] - f[0]) / ((t[-1] - t[0]) / 1e6))
 
 

@@ -34,6 +34,7 @@ import numpy as np
 
 from cassi.data.face import numbering as N
 from cassi.common.errors import CassiInputError
+from cassi.data.xrmb.files import recording_period_us
 
 from cassi.versions import lips_constants as K
 from cassi.versions.lips_ellipse import (
@@ -709,14 +710,15 @@ class LipMovementStage:
             z226 = float(before[V_TEETH_TIP - 1, 2])
             rule, blend = self.policy.choose(ul[:1], ll[:1], rest, subject, z226)
             plan = {"rest": rest, "subject": subject, "rule": rule, "blend": blend,
-                    "before": before,
+                    "before": before, "period_us": recording_period_us(getattr(ctx.rec, "time_us", ())),
                     "criterion": self.policy.criterion(ul[:1], ll[:1], rest, subject, z226)}
             ctx.state["lips20"] = plan
         return plan
 
     def _frames(self, plan: dict, ul, ll, state: OuterAbcState | None = None) -> LipFrames:
         return lip_frames(ul, ll, plan["rest"], plan["subject"], rule=plan["rule"],
-                          blend_inner_corner=plan["blend"], params=self.params, state=state,
+                          blend_inner_corner=plan["blend"],
+                          params=self.params.for_period(plan["period_us"]), state=state,
                           corner=self.corner)
 
     def initialise(self, ctx: "TaskContext") -> None:

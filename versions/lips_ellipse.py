@@ -19,6 +19,7 @@ from typing import Callable
 import numpy as np
 
 from cassi.common.errors import CassiInputError
+from cassi.data.xrmb.files import NOMINAL_PERIOD_US
 
 from cassi.versions import lips_constants as K
 
@@ -173,6 +174,20 @@ class OuterAbcParams:
             self, near_rest_mm=None,
             near_forward=dx * (self.c_rest - K.C_MIN) / (x_max - x_rest),
             near_back=dx * (K.C_MAX - self.c_rest) / (x_rest - x_min))
+
+    def for_period(self, period_us: float) -> "OuterAbcParams":
+        """These parameters for a recording sampled every ``period_us``: rho is a rate per XRMB
+        row, so at another rate it is the same smoothing per second.
+
+        Step 3(c)i is defined per frame, but the thesis gives rho no value; the value here is
+        chosen for its time constant (about 65 ms at XRMB's rows, :data:`~.lips_constants.RHO`),
+        so a 500 Hz recording keeps that time constant: the memory (1 - rho) per row becomes
+        (1 - rho) ** (period / 6866 us). Unchanged on an XRMB recording (byte for byte) and for
+        rho 1 (no smoothing: 2.0)."""
+        if period_us == NOMINAL_PERIOD_US or self.rho == 1.0:
+            return self
+        rho = 1.0 - (1.0 - self.rho) ** (float(period_us) / NOMINAL_PERIOD_US)
+        return dataclasses.replace(self, rho=min(1.0, rho))
 
 
 #: Each version's OUTER_ABC_CALC tuning, by name (the thesis gives neither: 2.0 and 2.1 were

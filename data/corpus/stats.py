@@ -15,7 +15,10 @@ Per pellet (:data:`PELLET_COLUMNS`):
   ``p[t+1] - 2 p[t] + p[t-1]`` per coordinate, over triples of consecutive valid rows, pooled:
   acceleration times the squared row period plus tracking noise. At rest it is the noise (real
   JW45, thesis Figure 3.9: 1-7 um); in speech the movement adds to it (an acceleration of
-  1000 mm/s^2 is 47 um at 145.6 Hz).
+  1000 mm/s^2 is 47 um at 145.6 Hz). It is a figure per row, kept so because its rest part is
+  the tracker's noise per sample: at another rate the movement part scales with the squared
+  period (at 500 Hz, 1000 mm/s^2 is 4 um), so compare it only between recordings of one rate.
+  The speeds divide by the rows' own time differences and are the same at any rate.
 
 Whole-recording figures (:data:`SCALARS`):
 

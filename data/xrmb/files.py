@@ -7,7 +7,9 @@ per sample, 17 whitespace-separated integer columns::
 
     time_us ULx ULy LLx LLy T1x T1y T2x T2y T3x T3y T4x T4y MNIx MNIy MNMx MNMy
 
-Time in microseconds (nominal period 6866 us), coordinates in micrometres in the XRMB head frame
+Time in microseconds (XRMB's nominal period 6866 us; other recordings, such as EMA at 200-500 Hz,
+keep their own: :func:`recording_period_us` is a recording's period wherever one is needed),
+coordinates in micrometres in the XRMB head frame
 (thesis 3.2.3: origin between the tips of the central maxillary incisors, x along the maxillary
 occlusal plane with positive x out of the mouth, y normal to it with positive y toward the roof of
 the mouth). ``1000000`` marks a bad value (mistracked, missing or not yet tracked pellet); it
@@ -44,8 +46,8 @@ from cassi.data.xrmb.textlines import (decode_ascii, numbered_rows, parse_int, p
 __all__ = [
     "PELLETS", "BAD_VALUE", "NOMINAL_PERIOD_US", "JAW_WAGGING_TASK", "MAX_PROTRUSION_TASK",
     "ORAL_MOTOR_TASKS",
-    "N_COLUMNS", "COLUMN_NAMES", "TaskRecording",
-    "parse_task_name", "task_file_name", "parse_txy", "read_txy", "format_txy", "write_txy",
+    "N_COLUMNS", "COLUMN_NAMES", "TaskRecording", "recording_period_us", "rows_spanning",
+    "parse_task_name", "task_stem", "task_file_name", "parse_txy", "read_txy", "format_txy", "write_txy",
     "parse_outline", "format_outline", "read_pal", "write_pal", "check_palate_length",
     "MIN_PALATE_LENGTH_MM", "read_pha", "write_pha",
     "MistrackEntry", "MISTRACK_PELLET_CODES", "parse_mis", "read_mis", "format_mis", "write_mis",
@@ -81,6 +83,28 @@ _TASK_NAME_RE = re.compile(
 _MAX_ABS_UM = 500_000
 
 
+def recording_period_us(time_us) -> float:
+    """The sample period of a recording, us: the median interval of its sample times ``time_us``
+    (int (F,), increasing), so a few dropped or late rows do not change it; XRMB's nominal
+    :data:`NOMINAL_PERIOD_US` when fewer than two samples say otherwise.
+
+    The one home of "the period of a recording": every figure, window, video frame rate and
+    export time that depends on the rate reads it from here (6866.0 on an XRMB file, 2000.0 on
+    MOCHA-TIMIT's 500 Hz EMA)."""
+    t = np.asarray(time_us)
+    if t.shape[0] < 2:
+        return float(NOMINAL_PERIOD_US)
+    return float(np.median(np.diff(t)))
+
+
+def rows_spanning(duration_us: float, period_us: float, *, odd: bool = False) -> int:
+    """How many rows of ``period_us`` span ``duration_us`` (rounded, at least 1; with ``odd`` the
+    next odd number, for a centred window). A window stated in time gives the same count on
+    XRMB as the per-row constant it replaces: 62 ms at 6866 us is 9 rows, at 2000 us 31."""
+    n = max(1, int(round(float(duration_us) / float(period_us))))
+    return n | 1 if odd else n
+
+
 def parse_task_name(name: str) -> tuple[str | None, int, int]:
     """Subject (if the name carries it), task and repetition from a task file name.
 
@@ -99,9 +123,15 @@ def parse_task_name(name: str) -> tuple[str | None, int, int]:
     return (subject.upper() if subject else None), task, rep
 
 
+def task_stem(task: int, rep: int = 1) -> str:
+    """A task file's name without its suffix, ``tpNNN`` or ``tpNNN_R``: the stem its labels
+    and sound share (``tpNNN.TextGrid``, ``tpNNN.wav``)."""
+    return f"tp{task:03d}" if rep == 1 else f"tp{task:03d}_{rep}"
+
+
 def task_file_name(task: int, rep: int = 1) -> str:
     """The canonical file name for a task: ``tpNNN.txy`` or ``tpNNN_R.txy``."""
-    return f"tp{task:03d}.txy" if rep == 1 else f"tp{task:03d}_{rep}.txy"
+    return task_stem(task, rep) + ".txy"
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,6 +170,11 @@ class TaskRecording:
     @property
     def n_frames(self) -> int:
         return int(self.time_us.shape[0])
+
+    @property
+    def period_us(self) -> float:
+        """The recording's sample period, us (:func:`recording_period_us`)."""
+        return recording_period_us(self.time_us)
 
     @property
     def all_valid(self) -> np.ndarray:
@@ -261,7 +296,8 @@ def _table(text: str, *, path, warn) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _check_times(time_us: np.ndarray, line_numbers: np.ndarray, *, path, warn) -> None:
-    """Refuse a time that does not increase; warn of intervals off the nominal period."""
+    """Refuse a time that does not increase; warn of intervals off the file's own period (its
+    median interval: 6866 us on XRMB, 2000 us on a 500 Hz recording)."""
     dt = np.diff(time_us)
     bad_dt = np.flatnonzero(dt <= 0)
     if bad_dt.size:
@@ -270,10 +306,11 @@ def _check_times(time_us: np.ndarray, line_numbers: np.ndarray, *, path, warn) -
             f"time not increasing: {time_us[k]} us after {time_us[k - 1]} us",
             path=path, line=int(line_numbers[k]))
     if dt.size:
-        off = np.flatnonzero(np.abs(dt - NOMINAL_PERIOD_US) > 2)
+        period = recording_period_us(time_us)
+        off = np.flatnonzero(np.abs(dt - period) > 2)
         if off.size:
             k = int(off[0]) + 1
-            warn(f"{off.size} sample interval(s) differ from the nominal {NOMINAL_PERIOD_US} us "
+            warn(f"{off.size} sample interval(s) differ from the nominal {period:g} us "
                  f"(first: {int(dt[k - 1])} us)", line_numbers[k])
 
 

@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from cassi.data.xrmb.files import JAW_WAGGING_TASK, MAX_PROTRUSION_TASK
+from cassi.data.xrmb.files import JAW_WAGGING_TASK, MAX_PROTRUSION_TASK, NOMINAL_PERIOD_US, rows_spanning
 from cassi.harness.evaluation.config import DEFAULT_EXTREMES
 from cassi.harness.rubric import CHECKS, checks_for
 
@@ -201,9 +201,17 @@ def evidence_budget(task: int) -> dict[str, int]:
     return out
 
 
-#: The report's task viewer keeps every VIEWER_STRIDE-th recording row (145.6 / 4 = 36 Hz,
-#: above a video's 30 frames a second: a bilabial closure of 50-100 ms spans 2-3 kept frames).
+#: The report's task viewer keeps a recording row every VIEWER_STEP_US (every VIEWER_STRIDE-th
+#: XRMB row: 145.6 / 4 = 36 Hz, above a video's 30 frames a second: a bilabial closure of
+#: 50-100 ms spans 2-3 kept frames); a recording at another rate keeps as many rows a second
+#: (:func:`viewer_stride`: every 14th of a 500 Hz EMA recording).
 VIEWER_STRIDE = 4
+VIEWER_STEP_US = VIEWER_STRIDE * NOMINAL_PERIOD_US
+
+
+def viewer_stride(period_us: float) -> int:
+    """Every how many rows of a recording sampled every ``period_us`` the viewer keeps."""
+    return rows_spanning(VIEWER_STEP_US, period_us)
 
 
 def viewer_frames(frames: np.ndarray, rows: pd.DataFrame | None, *,

@@ -26,7 +26,7 @@ from cassi.harness.evaluation.caches import (get_corpus, get_face, get_neutral, 
 from cassi.harness.evaluation.config import Catalog
 from cassi.harness.evaluation.evalset import task_catalog
 from cassi.harness.evaluation.frames import (DEFAULT_EXTREMES, evidence_frames,
-                                             frames_to_render, image_views, viewer_frames)
+                                             frames_to_render, image_views, viewer_frames, viewer_stride)
 from cassi.harness.evaluation.viewerdata import viewer_blob
 from cassi.harness.evaluation.withheld import withheld_sites
 from cassi.harness.evaluation.inputs import (read_planned, verify_code, verify_profile,
@@ -38,7 +38,7 @@ from cassi.harness.rubric.image import depth_read
 from cassi.harness.rubric.measures import CRITERION_DIAGNOSTICS, DIAGNOSTICS_READ
 from cassi.renderer.images import png_bytes
 from cassi.renderer.views import PRESET_NAMES, VIEW_NAMES
-from cassi.data.xrmb.files import parse_txy
+from cassi.data.xrmb.files import parse_txy, recording_period_us
 from cassi.versions.registry import available_versions, get_version
 
 #: A geometry job's temporary directory: ``cassi-geometry-<pid>-<host>-<random>``, so the next
@@ -230,7 +230,8 @@ def _geometry_output(job: Job, ctx: StageContext, rec, anim: StreamedAnimation,
 
 def _viewer_output(rec, anim: StreamedAnimation, face, profile, rows: pd.DataFrame) -> bytes:
     """The report's task viewer data (:mod:`.viewerdata`) at :func:`viewer_frames`."""
-    keep = viewer_frames(anim.frames, rows)
+    stride = viewer_stride(recording_period_us(rec.time_us))
+    keep = viewer_frames(anim.frames, rows, stride=stride)
     idx = np.searchsorted(anim.frames, keep)
     xy = np.asarray(rec.xy_mm)[keep]
     return viewer_blob(face, anim.positions.take(idx), np.asarray(keep, np.int64),

@@ -14,12 +14,14 @@ import numpy as np
 import pandas as pd
 
 from cassi.common.errors import CassiInputError
+from cassi.data.xrmb.files import NOMINAL_PERIOD_US, rows_spanning
 
 from cassi.harness.rubric import geometry as G
 from cassi.harness.rubric.frames import ArrayFrames, Frames
 from cassi.harness.rubric.model import Measurement
-from cassi.harness.rubric.registry import (CHECKS, END_SHARE, JAW_NEAR_CLOSED_MM, JITTER_ORDER, JITTER_WINDOW,
-                       LIPS_BELOW_TEETH_MM, MIN_FRAMES, OFTEN_PERCENTILE, TEETH_HOLD_FRAMES, WIDE_OPEN_MM,
+from cassi.harness.rubric.registry import (CHECKS, END_SHARE, JAW_NEAR_CLOSED_MM, JITTER_ORDER, JITTER_WINDOW_MS,
+                       LIPS_BELOW_TEETH_MM, MIN_FAULT_MS, MIN_FRAMES, OFTEN_PERCENTILE, TEETH_HOLD_MS,
+                       WIDE_OPEN_MM,
                        WIDE_OPEN_SHARE)
 
 #: The ``Animation.diagnostics`` columns a measure reads (the geometry stage keeps only these of
@@ -51,10 +53,14 @@ class GeometryContext:
     neutral : float (V, 3) or None
         Parke's neutral face (``build_face()``), the reference for an unusual jaw (Table B).
     task : int or None
+    period_us : float
+        The recording's sample period (:func:`~cassi.data.xrmb.files.recording_period_us`):
+        the windows stated in ms (registry) become this recording's rows.
     """
 
     def __init__(self, positions, parts: G.MouthParts, *, rest=None, mm_per_unit: float = 1.0,
-                 diagnostics: pd.DataFrame | None = None, neutral=None, task: int | None = None):
+                 diagnostics: pd.DataFrame | None = None, neutral=None, task: int | None = None,
+                 period_us: float = NOMINAL_PERIOD_US):
         self.frames = positions if isinstance(positions, Frames) else ArrayFrames(positions)
         if self.frames.n_frames < 1:
             raise CassiInputError("positions must be (F, V, 3) with at least one frame")
@@ -72,6 +78,10 @@ class GeometryContext:
         self.diagnostics = diagnostics
         self.neutral = None if neutral is None else np.asarray(neutral, dtype=np.float64)
         self.task = task
+        # the registry's windows in this recording's rows (XRMB: 3, 15 and 9)
+        self.min_frames = rows_spanning(MIN_FAULT_MS * 1000, period_us)
+        self.teeth_hold_frames = rows_spanning(TEETH_HOLD_MS * 1000, period_us)
+        self.jitter_window = rows_spanning(JITTER_WINDOW_MS * 1000, period_us, odd=True)
 
     @property
     def F(self) -> int:
@@ -119,7 +129,7 @@ class GeometryContext:
     @functools.cached_property
     def end_frames(self) -> np.ndarray:
         """The last END_SHARE of frames (at least MIN_FRAMES): "especially at its end" (Table 5.3)."""
-        n = max(MIN_FRAMES, int(round(END_SHARE * self.F)))
+        n = max(self.min_frames, int(round(END_SHARE * self.F)))
         return np.arange(max(0, self.F - n), self.F)
 
 
@@ -138,8 +148,8 @@ def sustained(series: np.ndarray, *, worst: str = "max", k: int = MIN_FRAMES) ->
     return float(s[order[k - 1]]), int(order[0])
 
 
-def _m_sustained(series, *, worst="max", detail="") -> Measurement:
-    v, f = sustained(series, worst=worst)
+def _m_sustained(ctx, series, *, worst="max", detail="") -> Measurement:
+    v, f = sustained(series, worst=worst, k=ctx.min_frames)
     return Measurement(v, f, detail, frame_value=float(np.asarray(series)[f]) if f >= 0 else None)
 
 
@@ -158,14 +168,15 @@ def _teeth(ctx: GeometryContext, series: np.ndarray, *, closed_only: bool = Fals
     e = ctx.end_frames
     end = float(np.median(series[e]))
     during = np.flatnonzero(ctx.jaw_near_closed) if closed_only else np.arange(ctx.F)
-    held, hf = sustained(series[during], k=TEETH_HOLD_FRAMES)
+    hold = ctx.teeth_hold_frames
+    held, hf = sustained(series[during], k=hold)
     hf = int(during[hf]) if hf >= 0 else hf
-    if not np.isfinite(held) or end >= held or len(during) < TEETH_HOLD_FRAMES:
+    if not np.isfinite(held) or end >= held or len(during) < hold:
         f = int(e[np.argmax(series[e])])
         return Measurement(end, f, f"at the end: median over the last {len(e)} frames; held "
                                    f"during the task {held:.2f}", frame_value=float(series[f]))
     where = " with the jaw near closed" if closed_only else ""
-    return Measurement(held, hf, f"during the task: in {TEETH_HOLD_FRAMES} frames{where}; at the "
+    return Measurement(held, hf, f"during the task: in {hold} frames{where}; at the "
                                  f"end {end:.2f}", frame_value=float(series[hf]))
 
 
@@ -227,7 +238,7 @@ def m_lips_pressed(ctx):
 
 def m_lips_overlap(ctx):
     cross = np.where(ctx.handled_overlap, np.minimum(-ctx.gap, 0.0), -ctx.gap)
-    return _m_sustained(cross, detail="how far the lower lip's edge rises above the upper's, in "
+    return _m_sustained(ctx, cross, detail="how far the lower lip's edge rises above the upper's, in "
                                       "frames where the version does not handle the overlap")
 
 
@@ -257,7 +268,7 @@ def m_lower_lip_below_teeth(ctx):
 
 def m_lips_through_teeth(ctx):
     d = ctx.series(G.lip_teeth_penetration, ctx.parts, rest=ctx.rest) * ctx.mm
-    return _m_sustained(d, detail="lip vertices behind the front surface of the front teeth")
+    return _m_sustained(ctx, d, detail="lip vertices behind the front surface of the front teeth")
 
 
 def m_lower_lip_protrudes(ctx):
@@ -270,8 +281,8 @@ def m_lower_lip_protrudes(ctx):
 
 def m_tongue_teeth(ctx):
     up, lo = ctx.tongue_teeth["upper"], ctx.tongue_teeth["lower"]
-    du, fu = sustained(up)
-    dl, fl = sustained(lo)
+    du, fu = sustained(up, k=ctx.min_frames)
+    dl, fl = sustained(lo, k=ctx.min_frames)
     c = CHECKS["tongue_through_teeth"]
     through = int(du > c.thresholds[0]) + int(dl > c.thresholds[0])
     # thesis Table 5.3: one front set 1, both 2, very noticeably through both 3
@@ -283,7 +294,7 @@ def m_tongue_teeth(ctx):
 
 def m_tongue_palate(ctx):
     d = ctx.series(G.tongue_palate_penetration, ctx.parts) * ctx.mm
-    return _m_sustained(d, detail="tongue above the palatal surface (not counted by the thesis)")
+    return _m_sustained(ctx, d, detail="tongue above the palatal surface (not counted by the thesis)")
 
 
 def m_tongue_back_v(ctx):
@@ -293,7 +304,7 @@ def m_tongue_back_v(ctx):
     # centre line tip, T1-T4, back (numbering.TONGUE_CENTRE): the angle at T4 between T3 and
     # the anchored back vertex
     ang = ctx.series(G.profile_angle, t[3], t[4], t[5])
-    return _m_sustained(ang, worst="min", detail="side-view angle T3-T4-back of the tongue "
+    return _m_sustained(ctx, ang, worst="min", detail="side-view angle T3-T4-back of the tongue "
                                                  "(not counted by the thesis)")
 
 
@@ -405,7 +416,7 @@ def m_lips_from_chin(ctx):
 
 def _cave(ctx, a, m, b, what):
     c = ctx.series(G.concavity, a, m, b) - G.concavity(ctx.rest[None], a, m, b)[0]
-    return _m_sustained(c * ctx.mm, detail=f"{what} behind the chord of its neighbours, beyond rest")
+    return _m_sustained(ctx, c * ctx.mm, detail=f"{what} behind the chord of its neighbours, beyond rest")
 
 
 def m_above_lip_cave(ctx):
@@ -423,12 +434,12 @@ def m_chin_cave(ctx):
     rest: a chin flatter than Parke's but still convex reads as a smaller chin, not a cave."""
     p = ctx.parts
     c = ctx.series(G.concavity, p.below_lip[0], p.chin, p.chin_low)
-    return _m_sustained(c * ctx.mm, detail="chin (24) behind the chord 41 - underside of the chin")
+    return _m_sustained(ctx, c * ctx.mm, detail="chin (24) behind the chord 41 - underside of the chin")
 
 
 def m_lips_into_nose(ctx):
     c = ctx.series(G.lip_nose_clearance, ctx.parts, ctx.rest)
-    return _m_sustained(c, worst="min", detail="distance 67 - nose base over its rest value")
+    return _m_sustained(ctx, c, worst="min", detail="distance 67 - nose base over its rest value")
 
 
 def _outer_area(pos, p):
@@ -479,15 +490,16 @@ def _jitter(ctx, points):
     # the excess over the largest shake of the jaw and the lip pellets (the data's own jitter)
     p = ctx.parts
     ref = np.asarray([p.jaw_point, p.ul_outer, p.ll_outer])
-    if ctx.F < JITTER_WINDOW:
+    window = ctx.jitter_window
+    if ctx.F < window:
         return np.zeros(ctx.F)
-    return ctx.series(G.excess_jitter, points, ref, window=JITTER_WINDOW, order=JITTER_ORDER,
-                      halo=JITTER_WINDOW) * ctx.mm
+    return ctx.series(G.excess_jitter, points, ref, window=window, order=JITTER_ORDER,
+                      halo=window) * ctx.mm
 
 
 def m_lip_jitter(ctx):
     j = _jitter(ctx, _derived_lip_points(ctx.parts))
-    return _m_sustained(j, detail="lip acceleration beyond the jaw's and the lip pellets'")
+    return _m_sustained(ctx, j, detail="lip acceleration beyond the jaw's and the lip pellets'")
 
 
 def m_corner_jump(ctx):
@@ -500,7 +512,7 @@ def m_corner_jump(ctx):
     jump, sw = G.switch_jumps_from(ctx.series(G.corner_step_excess, p, halo=1), switch)
     jump = jump * ctx.mm
     jit = _jitter(ctx, np.asarray([p.corner, p.inner_corner]))
-    jv, jf = sustained(jit)
+    jv, jf = sustained(jit, k=ctx.min_frames)
     sv = float(jump.max()) if len(sw) else 0.0
     if sv >= jv:
         f = int(np.argmax(jump))
@@ -553,9 +565,9 @@ def m_lip_outline_angular(ctx):
 
 def m_lower_lip_through_lower_teeth(ctx):
     d = ctx.series(G.lip_teeth_penetration, ctx.parts, rest=ctx.rest, which="lower") * ctx.mm
-    return _m_sustained(d, detail="lower lip behind the front surface of the lower front teeth")
+    return _m_sustained(ctx, d, detail="lower lip behind the front surface of the lower front teeth")
 
 
 def m_corners_misplaced(ctx):
     d = ctx.series(G.corner_misplacement, ctx.parts) * ctx.mm
-    return _m_sustained(d, detail="corner 70 outside the band of 69 and 51")
+    return _m_sustained(ctx, d, detail="corner 70 outside the band of 69 and 51")

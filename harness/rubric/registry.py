@@ -27,28 +27,35 @@ import difflib
 import pandas as pd
 
 from cassi.common.errors import CassiInputError
-from cassi.data.xrmb.files import JAW_WAGGING_TASK, MAX_PROTRUSION_TASK, ORAL_MOTOR_TASKS
+from cassi.data.xrmb.files import (JAW_WAGGING_TASK, MAX_PROTRUSION_TASK, NOMINAL_PERIOD_US,
+                                   ORAL_MOTOR_TASKS, rows_spanning)
 
 from cassi.harness.rubric.model import Check
 
-__all__ = ["CHECKS", "get_check", "checks_for", "registry_table", "MIN_FRAMES", "SPEECH_TABLES",
+__all__ = ["CHECKS", "get_check", "checks_for", "registry_table", "MIN_FRAMES", "MIN_FAULT_MS", "SPEECH_TABLES",
            "TABLE_C_FROM_A", "MARKED_SHARE", "AGGREGATION_RULES", "CENTERED_SHARE"]
 
 # ----------------------------------------------------------------------------------------------
 # Windows: which frames and pixels a measure looks at
 # ----------------------------------------------------------------------------------------------
 
-#: A fault "during the task" must last this many frames (3 x 6.866 ms ~ 20 ms) before it counts:
+# The windows below are stated in time (the thesis fixes none of them per frame): a recording
+# at another rate (EMA at 500 Hz) is judged over the same milliseconds, in its own rows
+# (GeometryContext reads its period); the *_FRAMES names are their row counts at XRMB's 6866 us.
+
+#: A fault "during the task" must last MIN_FAULT_MS (3 x 6.866 ms ~ 20 ms) before it counts:
 #: a single-frame graze is invisible at 146 frames per second, which is why sustained measures
 #: take the MIN_FRAMES-th worst frame. One-frame jumps have their own check (corner_jump_switch).
-MIN_FRAMES = 3
+MIN_FAULT_MS = 20.0
+MIN_FRAMES = rows_spanning(MIN_FAULT_MS * 1000, NOMINAL_PERIOD_US)
 #: "During the task, especially at its end" (Table 5.3, teeth): the end is the last END_SHARE of
 #: the frames (at least MIN_FRAMES), where the jaw returns to rest and the half view holds still.
 END_SHARE = 0.05
 #: ... and during the task a teeth fault counts when held TEETH_HOLD_FRAMES frames (~100 ms): the
 #: teeth are judged from the half view, where a posture held a tenth of a second is seen while a
 #: passing phase of the jaw is not (a held consonant closure lasts 50-150 ms).
-TEETH_HOLD_FRAMES = 15
+TEETH_HOLD_MS = 100.0
+TEETH_HOLD_FRAMES = rows_spanning(TEETH_HOLD_MS * 1000, NOMINAL_PERIOD_US)
 #: A jaw open for speech slants the lower teeth down and parts them: that is the movement, not a
 #: fault. Slope and "too far apart" are therefore judged during the task only in the frames where
 #: the jaw (vertex 258) is within JAW_NEAR_CLOSED_MM of its most closed position in the task,
@@ -70,8 +77,10 @@ LIP_OUTLINE_KINK_DEG = 125.0
 #: (90th percentile), so a few frames at a turning point do not decide and a habit does.
 OFTEN_PERCENTILE = 90
 #: Lip jitter: shake is the distance from a Savitzky-Golay fit over JITTER_WINDOW frames of degree
-#: JITTER_ORDER (9 frames = 62 ms, shorter than a syllable, so speech movements are smooth in it).
-JITTER_WINDOW = 9
+#: JITTER_ORDER over JITTER_WINDOW_MS (9 frames = 62 ms, shorter than a syllable, so speech
+#: movements are smooth in it); the window is odd (centred on its frame).
+JITTER_WINDOW_MS = 62.0
+JITTER_WINDOW = rows_spanning(JITTER_WINDOW_MS * 1000, NOMINAL_PERIOD_US, odd=True)
 JITTER_ORDER = 2
 
 #: Lips are "open" for the image measures when the mouth opening covers at least this many pixels
@@ -142,10 +151,12 @@ RANGE_PERCENTILES = (5, 95)
 FIDELITY_MIN_RANGE_MM = 2.0
 #: Table F keeps the tract variables of these tasks as traces (results rows of view ``trace``,
 #: no table, never negatives) for the report's "model vs data" plot: task 106, jaw wagging,
-#: moves the jaw and lips through their whole range. Every TRACE_STEP-th frame (69 ms, 14.6 Hz,
-#: three samples per syllable at 5 syllables a second) keeps the results table small.
+#: moves the jaw and lips through their whole range. A frame every TRACE_STEP_MS (every 10th
+#: XRMB row, 14.6 Hz, three samples per syllable at 5 syllables a second) keeps the results
+#: table small; a recording at another rate keeps a frame every as many of its own rows.
 TRACE_TASKS = (JAW_WAGGING_TASK,)
-TRACE_STEP = 10
+TRACE_STEP_MS = 10 * NOMINAL_PERIOD_US / 1000
+TRACE_STEP = rows_spanning(TRACE_STEP_MS * 1000, NOMINAL_PERIOD_US)
 
 #: Table G: the model's lips "touch" when their inner edges (61 over 58) are at most this far
 #: apart: lips_apart_at_start's threshold (Parke's neutral 1.35 mm reads as lips lightly touching

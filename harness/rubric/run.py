@@ -18,8 +18,9 @@ from cassi.harness.rubric import geometry as G
 from cassi.harness.rubric.frames import ArrayFrames, Frames
 from cassi.harness.rubric.measures import CRITERION_DIAGNOSTICS, GeometryContext
 from cassi.harness.rubric.model import Check, Measurement
-from cassi.harness.rubric.registry import TRACE_STEP, TRACE_TASKS, checks_for, get_check
+from cassi.harness.rubric.registry import TRACE_STEP_MS, TRACE_TASKS, checks_for, get_check
 from cassi.data.face.model import build_face
+from cassi.data.xrmb.files import recording_period_us, rows_spanning
 from cassi.versions.mapping import XrmbToParke
 from cassi.harness.rubric.fidelity import FidelityContext, traces
 from cassi.harness.rubric.leaveout import LeaveOutContext
@@ -100,7 +101,8 @@ def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | N
     if neutral is None and face is not None:
         neutral = build_face().vertices
     ctx = GeometryContext(pos, parts, rest=rest, mm_per_unit=mm_per_unit,
-                          diagnostics=getattr(anim, "diagnostics", None), neutral=neutral, task=task)
+                          diagnostics=getattr(anim, "diagnostics", None), neutral=neutral, task=task,
+                          period_us=_period_us(anim, recording))
     ids = dict(subject=subject or getattr(profile, "subject", None), task=int(task), rep=int(rep),
                version=getattr(anim, "version", None))
     wanted = None if checks is None else {get_check(c).name for c in checks}
@@ -112,6 +114,16 @@ def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | N
     if wanted is None:
         rows.extend(criterion_rows(ctx.diagnostics, ids, mm_per_unit))
     return _frame(rows)
+
+
+def _period_us(anim, recording) -> float:
+    """The animated recording's period: from the recording's times, else the animation's (a
+    test's stand-ins may carry neither: then XRMB's)."""
+    for source in (recording, anim):
+        times = getattr(source, "time_us", None)
+        if times is not None:
+            return recording_period_us(times)
+    return recording_period_us(())
 
 
 def criterion_rows(diagnostics, ids: dict, mm_per_unit: float) -> list[dict]:
@@ -171,7 +183,8 @@ def _fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no,
         rows.extend(_measured_rows(leave, LeaveOutContext(withheld, recording), ids, wanted,
                                    frame_no))
     if ids["task"] in TRACE_TASKS and wanted is None:
-        rows.extend(dict(ids, negatives=0, **r) for r in traces(ctx, step=TRACE_STEP))
+        step = rows_spanning(TRACE_STEP_MS * 1000, _period_us(anim, recording))
+        rows.extend(dict(ids, negatives=0, **r) for r in traces(ctx, step=step))
     return rows
 
 

@@ -118,7 +118,7 @@ def _frame(gltf, binary, k: int, m_per_unit: float) -> np.ndarray:
 
 @pytest.mark.parametrize("positions", ["int16", "float32"])
 def test_frame_k_is_task_frame_k(corpus, task, animated, tmp_path, positions, m_per_unit):
-    face, frames, pos = animated
+    face, frames, pos, _ = animated
     stride = 7
     out = tmp_path / "face.glb"
     assert _export(corpus, task, out, "--stride", str(stride), "--positions", positions) == 0
@@ -151,7 +151,7 @@ def test_frame_k_is_task_frame_k(corpus, task, animated, tmp_path, positions, m_
 
 
 def test_animation_time_base_and_weights(corpus, task, animated, tmp_path):
-    face, frames, pos = animated
+    face, frames, pos, _ = animated
     stride = 5
     out = tmp_path / "face.glb"
     assert _export(corpus, task, out, "--stride", str(stride)) == 0
@@ -173,7 +173,7 @@ def test_animation_time_base_and_weights(corpus, task, animated, tmp_path):
 
 
 def test_glb_loads_in_trimesh_with_parts_and_materials(corpus, task, animated, tmp_path, m_per_unit):
-    face, frames, pos = animated
+    face, frames, pos, _ = animated
     out = tmp_path / "face.glb"
     assert _export(corpus, task, out, "--stride", "50") == 0
     scene = trimesh.load(out, force="scene")

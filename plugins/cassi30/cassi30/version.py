@@ -13,6 +13,7 @@ import numpy as np
 from cassi.data.face import numbering as N
 from cassi.common.errors import CassiInputError
 from cassi.data.face.model import FaceModel
+from cassi.data.xrmb.files import NOMINAL_PERIOD_US, recording_period_us, rows_spanning
 from cassi.versions import constants as cassi10_constants
 from cassi.versions.cassi10 import NoseClearanceStage, parameters_frame, place_tongue_tip
 from cassi.versions.cassi21 import Cassi21
@@ -33,8 +34,10 @@ _PELLETS = ("T1", "T2", "T3", "T4")
 BLOCK_FRAMES = 1024
 #: How far ahead the tongue looks for the jaw's gap shutting: 24 frames at XRMB's 146 Hz
 #: (164 ms) is longer than its way out takes to withdraw at TONGUE_SPEED_MM_S (the 24 mm turn
-#: and ~20 mm in front of the teeth in task 118: 110 ms).
-LOOKAHEAD_FRAMES = 24
+#: and ~20 mm in front of the teeth in task 118: 110 ms). A time, so a recording at another
+#: rate looks as far ahead in its own rows (LOOKAHEAD_FRAMES at XRMB's).
+LOOKAHEAD_US = 24 * NOMINAL_PERIOD_US
+LOOKAHEAD_FRAMES = rows_spanning(LOOKAHEAD_US, NOMINAL_PERIOD_US)
 
 
 def _pharynx(ctx: TaskContext) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -104,26 +107,28 @@ def _gap(teeth: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
             teeth[:, N.UPPER_INCISOR_TIP - 1, 2] - margin)
 
 
-def _jaw_heights(ctx: TaskContext) -> tuple[np.ndarray, np.ndarray]:
-    """The lower incisor pellet's (MNI) Parke z and time (s) on every row of the recording,
-    held where invalid: what the frames after a chunk will do to the jaw's gap, read from the
-    data (so every chunk sees the same future, and chunks equal the whole task)."""
+def _jaw_heights(ctx: TaskContext) -> tuple[np.ndarray, np.ndarray, int]:
+    """The lower incisor pellet's (MNI) Parke z and time (s) on every row of the recording, held
+    where invalid, and the look-ahead in the recording's rows: what the frames after a chunk
+    will do to the jaw's gap, read from the data (so every chunk sees the same future, and
+    chunks equal the whole task)."""
     rec = ctx.rec
     first = int(ctx.rows[0]) if len(ctx.rows) else 0
     xy, _ = held_pellets(rec.xy_mm, rec.valid, first)
     z = ctx.mapping.to_parke(xy[:, PELLET_INDEX["MNI"]])[:, 1]
     t = np.asarray(rec.time_us, np.float64)[first:first + len(z)] * 1e-6
     return np.concatenate([np.full(first, z[0] if len(z) else 0.0), z]), \
-        np.concatenate([np.full(first, t[0] if len(t) else 0.0), t])
+        np.concatenate([np.full(first, t[0] if len(t) else 0.0), t]), \
+        rows_spanning(LOOKAHEAD_US, recording_period_us(rec.time_us))
 
 
-def _time_to_shut(jaw: tuple[np.ndarray, np.ndarray], rows: np.ndarray, gap: np.ndarray,
+def _time_to_shut(jaw: tuple[np.ndarray, np.ndarray, int], rows: np.ndarray, gap: np.ndarray,
                   time_s: np.ndarray) -> np.ndarray:
     """Seconds until the jaw's gap (F,) next shuts within the look-ahead, predicted from the
     lower incisor pellet's rise (the lower teeth move with it; the upper ones are fixed): +inf
     where it stays open that long, 0 where it is shut."""
-    z, t = jaw
-    k = np.arange(LOOKAHEAD_FRAMES + 1)
+    z, t, lookahead = jaw
+    k = np.arange(lookahead + 1)
     idx = np.minimum(rows[:, None] + k, len(z) - 1)
     shut = gap[:, None] - (z[idx] - z[rows][:, None]) <= 0.0          # (F, K+1)
     dt = t[idx] - time_s[:, None]

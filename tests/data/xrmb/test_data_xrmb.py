@@ -7,10 +7,10 @@ from data_helpers import FIXTURES, JW45_EXCERPT, recording
 
 from cassi.common.errors import CassiInputError
 from cassi.data.xrmb.headmeasures import HeadMeasures
-from cassi.data.xrmb.files import (BAD_VALUE, PELLETS, TaskRecording, format_txy, parse_mis,
+from cassi.data.xrmb.files import (BAD_VALUE, NOMINAL_PERIOD_US, PELLETS, TaskRecording, format_txy, parse_mis,
                              parse_outline, parse_task_name, parse_txy, read_head_measures,
                              read_mis, read_pal, read_pha, read_txy, write_head_measures,
-                             write_mis, write_pal, write_txy)
+                             write_mis, write_pal, write_txy, recording_period_us, rows_spanning)
 
 JW99 = FIXTURES / "xrmb" / "JW99"
 ROW = "6866\t" + "\t".join(["100"] * 16)
@@ -117,11 +117,23 @@ def test_half_bad_pair_masks_the_pellet_and_warns():
 
 def test_irregular_period_and_header_and_inner_blank_lines_are_warnings():
     header = "Time ULx ULy LLx LLy T1x T1y T2x T2y T3x T3y T4x T4y MNIx MNIy MNMx MNMy\n"
-    body = "0 " + " ".join(["2"] * 16) + "\n\n7000 " + " ".join(["2"] * 16) + "\n"
+    row = " " + " ".join(["2"] * 16) + "\n"
+    body = "0" + row + "\n" + "".join(f"{t}{row}" for t in (6866, 13732, 20732))
     rec = parse_txy(header + body, path="tp004.txy")
-    assert rec.n_frames == 2
+    assert rec.n_frames == 4 and rec.period_us == 6866
     joined = "\n".join(rec.warnings)
     assert "header" in joined and "blank line" in joined and "nominal 6866" in joined
+
+
+def test_a_recording_keeps_its_own_period():
+    """A 500 Hz recording (EMA) reads without a warning; its period is its median interval."""
+    row = " " + " ".join(["2"] * 16) + "\n"
+    rec = parse_txy("".join(f"{2000 * i}{row}" for i in range(5)), path="tp004.txy")
+    assert rec.period_us == 2000 and rec.warnings == ()
+    late = parse_txy("".join(f"{t}{row}" for t in (0, 2000, 4000, 6500, 8500)), path="tp004.txy")
+    assert late.period_us == 2000 and "nominal 2000" in "\n".join(late.warnings)
+    assert recording_period_us([5]) == NOMINAL_PERIOD_US
+    assert rows_spanning(62_000, 6866, odd=True) == 9 and rows_spanning(62_000, 2000, odd=True) == 31
 
 
 def test_write_read_roundtrip_keeps_mask_and_rounds_to_micrometres(tmp_path):

@@ -33,7 +33,7 @@ def test_viewer_frames_keep_the_grid_the_last_row_and_every_evidence_frame():
 
 @pytest.fixture(scope="module")
 def jw11_106():
-    face, frames, positions = task_positions(None, "JW11", 106, 1, "cassi-1.0")
+    face, frames, positions, _ = task_positions(None, "JW11", 106, 1, "cassi-1.0")
     corpus = get_corpus(None)
     rec = corpus.subject("JW11").load(106, 1)
     return face, frames, positions, rec, get_profile(corpus, "JW11")
