@@ -9,7 +9,9 @@ Layout::
         tp001.txy ... tp118.txy, tp015_2.txy    task files (any case; JW12_001.TXY also read)
         PAL.DAT  PHA.DAT  Mis.dat               subject files (any case)
         Headmeasures.txt                        optional, this subject (overrides the root one)
-        tp001.TextGrid ...                      optional alignments (phone and word tiers)
+        tp001.TextGrid ...                      optional labels (phone and word tiers; or
+                                                tp001.lab xwaves/ESPS or HTK, .rec, *.mlf)
+        tp001.wav ...                           optional sound, any sample rate
 
 Two files of one task (``tp003.txy`` and ``JW12_003.txy``, or names equal up to case) are read
 only when their bytes are equal; otherwise every reader refuses, naming both.
@@ -31,12 +33,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from cassi.data.corpus.beside import alignment_path_for_stem, audio_for_stem
 from cassi.data.xrmb.alignment import Alignment, read_alignment  # noqa: F401 (re-exported)
+from cassi.data.xrmb.labels import read_labels
 from cassi.common.errors import CassiInputError
 from cassi.data.xrmb.headmeasures import HEAD_MEASURES_FILE, HeadMeasures, read_head_measures
 from cassi.data.xrmb.mis import MistrackEntry, read_mis
 from cassi.data.xrmb.textlines import read_bytes
-from cassi.data.xrmb.files import PELLETS, TaskRecording, parse_task_name, read_pha, read_pal, read_txy
+from cassi.data.xrmb.files import (PELLETS, TaskRecording, parse_task_name, read_pha, read_pal,
+                                   read_txy, task_stem)
 from cassi.data.subject_name import SUBJECT_NAME_RE
 
 METADATA_FILE = "corpus.json"
@@ -132,6 +137,10 @@ class SubjectData:
             if required:
                 raise CassiInputError(f"missing subject file {name}", path=self.directory)
             return None
+        return self._checked(path)
+
+    def _checked(self, path: Path) -> Path:
+        """``path``, a regular file inside the corpus (else CassiInputError naming it)."""
         ensure_inside(self.corpus.root, path)
         if not path.is_file():
             raise CassiInputError("is not a regular file", path=path)
@@ -197,18 +206,23 @@ class SubjectData:
                                   path=self.directory) from None
 
     def alignment_path(self, task: int, rep: int = 1) -> Path | None:
-        stem = f"tp{task:03d}" if rep == 1 else f"tp{task:03d}_{rep}"
-        return self._file(stem + ".TextGrid", required=False)
+        """The file of the task's labels beside it (``tpNNN.TextGrid``, ``.lab``, ``.rec`` or a
+        master label file naming it: :func:`~cassi.data.corpus.beside.alignment_path_for_stem`)
+        or None."""
+        path = alignment_path_for_stem(self.directory, task_stem(task, rep))
+        return None if path is None else self._checked(path)
 
     def audio_path(self, task: int, rep: int = 1) -> Path | None:
-        """The task's audio recording (``tpNNN.wav`` as XRMB distributes it, any case) or None."""
-        stem = f"tp{task:03d}" if rep == 1 else f"tp{task:03d}_{rep}"
-        return self._file(stem + ".wav", required=False)
+        """The task's audio recording (``tpNNN.wav`` as XRMB distributes it, any case, any
+        sample rate) or None."""
+        path = audio_for_stem(self.directory, task_stem(task, rep))
+        return None if path is None else self._checked(path)
 
     def alignment(self, task: int, rep: int = 1) -> Alignment | None:
-        """The task's phone/word TextGrid if the subject directory has one."""
+        """The task's phone/word labels if the subject directory has them (a TextGrid, an
+        xwaves/ESPS or HTK label file: :func:`~cassi.data.xrmb.labels.read_labels`)."""
         path = self.alignment_path(task, rep)
-        return None if path is None else read_alignment(path)
+        return None if path is None else read_labels(path, stem=task_stem(task, rep))
 
     # ------------------------------------------------------------------ subject files
     @cached_property

@@ -42,7 +42,8 @@ class Alignment:
     path: Path | None = None
 
 
-def _decode(data: bytes, path) -> str:
+def decode_text(data: bytes, path) -> str:
+    """Label text as UTF-16 (with its byte-order mark) or UTF-8; a bad byte names its line."""
     if data.startswith((b"\xff\xfe", b"\xfe\xff")):
         try:
             return data.decode("utf-16")
@@ -217,7 +218,7 @@ def parse_alignment(data: bytes | str, *, path: str | os.PathLike | None = None)
     """
     from praatio.utilities import textgrid_io  # praatio's own parser (long/short/JSON forms)
 
-    text = data if isinstance(data, str) else _decode(data, path)
+    text = data if isinstance(data, str) else decode_text(data, path)
     if not text.strip():
         raise CassiInputError("empty file", path=path)
     # quoted labels blanked (lines kept): a label's own "-5 dB" is not a time
