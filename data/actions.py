@@ -18,6 +18,7 @@ from cassi.data.corpus import profile
 from cassi.data.corpus.disk import Corpus, check_corpus, check_task_file
 from cassi.data.corpus.profile import preprocess, write_lipthick, write_maxprotru
 from cassi.data.corpus.stats import PELLET_COLUMNS, SCALARS, UNITS, compare, corpus_stats
+from cassi.data.ema.convert import convert
 from cassi.data.synth.corpus import make_corpus
 from cassi.data.xrmb import alignment, headmeasures, mis
 from cassi.data.xrmb import files as xrmb
@@ -206,3 +207,12 @@ def cmd_stats(args) -> int:
     return EXIT_OK
 
 
+
+
+def cmd_convert(args) -> int:
+    """``cassi corpus convert EMA_DIR --out XRMB_DIR``: every problem on stderr, exit 2 if any."""
+    written, problems = convert(args.ema_dir, args.out)
+    print(f"{written} task file(s) written to {args.out}")
+    for p in problems:
+        print(p, file=sys.stderr)
+    return EXIT_BAD_INPUT if problems else EXIT_OK
