@@ -29,13 +29,12 @@ from pathlib import Path
 import numpy as np
 
 from cassi.common.errors import CassiInputError
-from cassi.data.ema.track import CoilTrack, check_times
+from cassi.data.ema.track import CoilTrack, check_times, sample
 
 MAGIC = b"EST_File Track"
 _END = b"EST_Header_End"
 #: The most header bytes read to find its end (a header of a thousand channels fits).
 _MAX_HEADER = 1 << 16
-_MISSING = {"nan", "-nan", "+nan", "na", ""}
 
 
 def _header(path: Path) -> tuple[dict[str, tuple[str, int]], int, int, list[str]]:
@@ -154,7 +153,7 @@ def _ascii_frames(path: Path, offset: int, first_line: int, frames: int, n: int,
         if len(toks) not in widths:
             raise CassiInputError(f"expected {n + 2} columns (time, break flag, {n} channels), "
                                   f"found {len(toks)}", path=path, line=i)
-        row = [_number(t, k, path, i) for k, t in enumerate(toks)]
+        row = [sample(t, what=f"column {k + 1}", path=path, line=i) for k, t in enumerate(toks)]
         if not widths[len(toks)]:
             row.insert(1, 1.0)
         rows.append(row)
@@ -169,12 +168,3 @@ def _ascii_frames(path: Path, offset: int, first_line: int, frames: int, n: int,
         table = np.delete(table, 1, axis=1)
     return table, np.asarray(line_numbers)
 
-
-def _number(tok: str, k: int, path, line: int) -> float:
-    if tok.lower() in _MISSING:
-        return float("nan")
-    try:
-        return float(tok)
-    except ValueError:
-        raise CassiInputError(f"column {k + 1}: {tok[:40]!r} is not a number", path=path,
-                              line=line) from None

@@ -54,9 +54,9 @@ def coil_positions(track: CoilTrack, cmap: CoilMap, coil: str) -> np.ndarray:
     unknown = [n for n in names if n not in track.channels]
     if unknown or len(names) < 2:
         what = unknown[0] if unknown else f"{coil}_x, {coil}_y"
+        more = ", ..." if len(track.channels) > 16 else ""
         raise cmap.error(f"coil {coil!r}: no channel {what} in {track.path} (channels: "
-                         f"{', '.join(track.channels[:16])}{', ...' if len(track.channels) > 16 else ''})",
-                         *_where(cmap, coil))
+                         f"{', '.join(track.channels[:16])}{more})", *_where(cmap, coil))
     xyz = np.stack([track.column(n) for n in names], axis=1) * cmap.unit_mm
     xyz[~track.valid] = np.nan
     return xyz

@@ -14,11 +14,10 @@ from pathlib import Path
 import numpy as np
 
 from cassi.common.errors import CassiInputError
-from cassi.data.ema.track import CoilTrack, check_times
+from cassi.data.ema.track import CoilTrack, check_times, sample
 from cassi.data.xrmb.textlines import read_bytes
 
 TIME_UNITS = {"s": 1.0, "ms": 1e-3}
-_MISSING = {"", "nan", "-nan", "na", "n/a"}
 
 
 def read_table(path: str | os.PathLike, *, delimiter: str | None = None, time_column: str = "time",
@@ -53,7 +52,7 @@ def read_table(path: str | os.PathLike, *, delimiter: str | None = None, time_co
             raise CassiInputError(f"expected {len(names)} columns, found {len(row)}", path=path,
                                   line=line)
         for j, cell in enumerate(row):
-            table[k, j] = _cell(cell, names[j], path, line)
+            table[k, j] = sample(cell, what=f"column {names[j]!r}", path=path, line=line)
     t = names.index(time_column)
     time_s = table[:, t] * TIME_UNITS[time_unit]
     check_times(time_s, path=path, line_of=lambda k: rows[k + 1][0])
@@ -61,13 +60,3 @@ def read_table(path: str | os.PathLike, *, delimiter: str | None = None, time_co
     return CoilTrack(path=path, channels=tuple(names[j] for j in keep), values=table[:, keep],
                      time_s=time_s, valid=np.ones(len(time_s), dtype=bool), rate_hz=None)
 
-
-def _cell(cell: str, name: str, path, line: int) -> float:
-    c = cell.strip()
-    if c.lower() in _MISSING:
-        return float("nan")
-    try:
-        return float(c)
-    except ValueError:
-        raise CassiInputError(f"column {name!r}: {c[:40]!r} is not a number", path=path,
-                              line=line) from None

@@ -8,6 +8,9 @@ import numpy as np
 
 from cassi.common.errors import CassiInputError
 
+#: How exports write a missing sample (an empty cell, NaN, NA): it stays missing.
+MISSING = {"", "nan", "-nan", "+nan", "na", "n/a"}
+
 
 @dataclass(frozen=True, eq=False)
 class CoilTrack:
@@ -61,3 +64,17 @@ def check_times(time_s: np.ndarray, *, path, line_of=None) -> None:
     if time_s.size and time_s[0] < 0:
         raise CassiInputError(f"sample 1: negative time {time_s[0]:.6g} s", path=path,
                               line=line_of(0) if line_of else None)
+
+
+def sample(tok: str, *, what: str, path, line: int) -> float:
+    """One number of a text recording; NaN for a missing sample (:data:`MISSING`)."""
+    tok = tok.strip()
+    if tok.lower() in MISSING:
+        return float("nan")
+    try:
+        value = float(tok)
+    except ValueError:
+        value = float("inf")
+    if not np.isfinite(value):
+        raise CassiInputError(f"{what}: {tok[:40]!r} is not a number", path=path, line=line)
+    return value

@@ -49,6 +49,17 @@ def test_check_and_convert(tmp_path, capsys):
     assert "not an empty directory" in capsys.readouterr().err
 
 
+def test_check_one_recording(tmp_path, capsys):
+    root = _mocha_corpus(tmp_path / "ema")
+    assert main(["check", str(root / "msak0" / "msak0_002.ema"), "--json"]) == 0
+    (record,) = json.loads(capsys.readouterr().out)
+    assert (record["subject"], record["task"], record["frames"]) == ("msak0", 1002, 200)
+    data = (root / "msak0" / "msak0_002.ema").read_bytes()
+    (root / "msak0" / "msak0_002.ema").write_bytes(data[:-6])
+    assert main(["check", str(root / "msak0" / "msak0_002.ema")]) == 2
+    assert "msak0_002.ema: truncated" in capsys.readouterr().err
+
+
 def test_check_refuses_a_bad_map(tmp_path, capsys):
     root = _mocha_corpus(tmp_path / "ema")
     (root / "ema.yaml").write_text("preset: mocha-timit\nreferences: {}\n")
