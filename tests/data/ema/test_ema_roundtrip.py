@@ -9,7 +9,7 @@ from ema_writers import (PELLET_COILS, coil_table, head_motion_2d, head_motion_3
                          write_pos, write_table)
 from cassi.data.corpus.disk import Corpus
 from cassi.data.synth.corpus import generate_task
-from cassi.data.synth.subjects import SUBJECTS
+from cassi.data.synth.subjects import SUBJECTS, palate_y
 from cassi.data.xrmb.files import PELLETS
 
 N = 240
@@ -99,3 +99,45 @@ def test_round_trip_mocha_preset(tmp_path, task):
     mnm = rec.pellet("MNM")
     jaw = np.hypot(*(mnm - rec.pellet("MNI")).T)
     np.testing.assert_allclose(jaw, 42.6, atol=1e-6)  # the one JW11 jaw length
+
+
+def test_palate_trace_in_the_head_frame(tmp_path, task):
+    """``palate: {file, coil}``: a coil run along JW11's palate, with the head moving, comes
+    back as the outline (front to back) within 0.1 mm."""
+    time_s, xy = task
+    fig = SUBJECTS["JW11"]
+    xs = np.linspace(fig.palate_outline()[0, 0], fig.palate_outline()[-1, 0], 600)
+    trace = xy[:1].repeat(600, axis=0)
+    trace[:, 0] = np.column_stack([xs, palate_y(fig.palate, xs)])  # UL's coil traces it
+    d = tmp_path / "ema01"
+    d.mkdir()
+    for name, pellets, t in (("ema01_001.ema", xy, time_s),
+                             ("palate.ema", trace, np.arange(600) / 200.0)):
+        coils = head_motion_3d(pellets)
+        names, values = coil_table(coils, ORDER)
+        write_est(d / name, names, t, values, binary=True)
+    (d / "ema.yaml").write_text(MAP_3D.format(fmt="est", extra="", bite="")
+                                + "palate: {file: palate.ema, coil: ul}\n")
+    subj = Corpus(tmp_path).subject("ema01")
+    assert [p.name for p in subj.task_files().values()] == ["ema01_001.ema"]
+    outline = subj.palate_mm
+    assert outline[0, 0] > outline[-1, 0]  # front to back
+    np.testing.assert_allclose(outline[:, 1], palate_y(fig.palate, outline[:, 0]), atol=0.1)
+    assert any(p.name == "palate.ema" for p in subj.subject_files())  # digested with the map
+
+
+def test_mngu0_preset_reads_head_corrected_channels(tmp_path, task):
+    time_s, xy = task
+    coils = {"upperlip": "UL", "lowerlip": "LL", "T1": "T1", "T2": "T2", "T3": "T3",
+             "jaw": "MNI"}
+    names = [f"{c}_{a}" for c in coils for a in ("px", "py", "pz")]
+    values = np.column_stack([col for c, p in coils.items() for col in (
+        np.zeros(len(xy)), xy[:, PELLETS.index(p), 0], xy[:, PELLETS.index(p), 1])])
+    d = tmp_path / "mngu0"
+    d.mkdir()
+    write_est(d / "mngu0_s1_0042.ema", names, np.arange(len(xy)) / 200.0, values)
+    (d / "ema.yaml").write_text("preset: mngu0\n")
+    rec = Corpus(tmp_path).subject("mngu0").load(1042)
+    measured = [PELLETS.index(p) for p in coils.values()]
+    np.testing.assert_allclose(rec.xy_mm[:, measured], xy[:, measured], atol=1e-4)
+    assert rec.derived == ("T4", "MNM") and rec.time_us[1] == 5000
