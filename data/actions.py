@@ -18,6 +18,8 @@ from cassi.data.corpus import profile
 from cassi.data.corpus.disk import Corpus, check_corpus, check_task_file
 from cassi.data.corpus.profile import preprocess, write_lipthick, write_maxprotru
 from cassi.data.corpus.stats import PELLET_COLUMNS, SCALARS, UNITS, compare, corpus_stats
+from cassi.data.ema.coilmap import MAP_FILE
+from cassi.data.ema.convert import convert
 from cassi.data.synth.corpus import make_corpus
 from cassi.data.xrmb import alignment, headmeasures, mis
 from cassi.data.xrmb import files as xrmb
@@ -34,6 +36,21 @@ def cmd_make(args) -> int:
 
 
 # ----------------------------------------------------------------------------- check
+def _ema_subject_of(path: Path):
+    """The speaker whose coil map reads ``path`` as an EMA recording (the map in its directory or
+    the one above), else None."""
+    for root in (path.parent, path.parent.parent):
+        if not (root / MAP_FILE).is_file() and not (path.parent / MAP_FILE).is_file():
+            continue
+        corpus = Corpus(root)
+        name = path.parent.name if root != path.parent else next(iter(corpus.subjects), None)
+        if name in corpus.subjects:
+            subject = corpus.subject(name)
+            if subject.ema is not None and subject.ema.is_recording(path.name):
+                return subject
+    return None
+
+
 def _check_single_file(path: Path) -> tuple[list[dict], list[str]]:
     """Check one file by its kind (task file, PAL/PHA.DAT, Mis.dat, head measures, tables)."""
     name = path.name.lower()
@@ -42,6 +59,10 @@ def _check_single_file(path: Path) -> tuple[list[dict], list[str]]:
     readers = {"pal.dat": xrmb.read_pal, "pha.dat": xrmb.read_pha, "mis.dat": mis.read_mis,
                headmeasures.HEAD_MEASURES_FILE.lower(): headmeasures.read_head_measures,
                "maxprotru.txt": profile.read_maxprotru, "lipthick.txt": profile.read_lipthick}
+    ema_subject = _ema_subject_of(path)
+    if ema_subject is not None:
+        rep = check_task_file(path, subject=ema_subject)
+        return [rep.as_dict()], list(rep.problems) if rep.error else []
     if name.endswith(".txy"):
         subject = None
         try:
@@ -61,7 +82,8 @@ def _check_single_file(path: Path) -> tuple[list[dict], list[str]]:
         reader = readers[name]
     else:
         raise CassiInputError("unknown file kind (expected *.txy, PAL.DAT, PHA.DAT, Mis.dat, "
-                              "Headmeasures.txt, maxprotru.txt, lipthick.txt or *.TextGrid)",
+                              "Headmeasures.txt, maxprotru.txt, lipthick.txt, *.TextGrid or "
+                              "an EMA recording beside its ema.yaml)",
                               path=path)
     try:
         reader(path)
@@ -206,3 +228,12 @@ def cmd_stats(args) -> int:
     return EXIT_OK
 
 
+
+
+def cmd_convert(args) -> int:
+    """``cassi corpus convert EMA_DIR --out XRMB_DIR``: every problem on stderr, exit 2 if any."""
+    written, problems = convert(args.ema_dir, args.out)
+    print(f"{written} task file(s) written to {args.out}")
+    for p in problems:
+        print(p, file=sys.stderr)
+    return EXIT_BAD_INPUT if problems else EXIT_OK

@@ -1,4 +1,4 @@
-"""The ``cassi corpus`` command group: ``make``, ``check``, ``preprocess``, ``stats``.
+"""The ``cassi corpus`` command group: ``make``, ``check``, ``preprocess``, ``stats``, ``convert``.
 
 Exit codes follow the CLI: 0 success, 2 bad input (a malformed file: ``file:line: reason`` on
 stderr), 1 other failures.
@@ -76,6 +76,18 @@ def register(subparsers) -> None:
                     help="only these tasks, e.g. 105 or 102-105,13")
     st.add_argument("--json", action="store_true", help="print JSON")
     st.set_defaults(func="cassi.data.actions:cmd_stats")
+
+    cv = sub.add_parser("convert", help="write an EMA corpus as XRMB task files",
+                        description="Read an EMA corpus (speaker directories of EST .ema, "
+                                    "Carstens .pos or TSV/CSV recordings under a coil map, "
+                                    "ema.yaml; see docs/formats.md) and write it as an XRMB "
+                                    "corpus: tpNNNN.txy per recording, PAL.DAT, and the map "
+                                    "used (ema_map.json) beside them. Exit 2 if a recording or "
+                                    "the map is malformed (file:line: reason).")
+    cv.add_argument("ema_dir", type=Path, help="the EMA corpus (or one speaker directory)")
+    cv.add_argument("--out", required=True, type=Path,
+                    help="the XRMB corpus to write (must not exist, or be empty)")
+    cv.set_defaults(func="cassi.data.actions:cmd_convert")
 
 
 def _subject_list(text: str) -> list[str]:

@@ -13,6 +13,9 @@ Layout::
                                                 tp001.lab xwaves/ESPS or HTK, .rec, *.mlf)
         tp001.wav ...                           optional sound, any sample rate
 
+A directory with a coil map (``ema.yaml``, in it or in the corpus root) holds EMA recordings
+instead: :mod:`cassi.data.ema.subject` says how they become task recordings.
+
 Two files of one task (``tp003.txy`` and ``JW12_003.txy``, or names equal up to case) are read
 only when their bytes are equal; otherwise every reader refuses, naming both.
 
@@ -40,9 +43,10 @@ from cassi.common.errors import CassiInputError
 from cassi.data.xrmb.headmeasures import HEAD_MEASURES_FILE, HeadMeasures, read_head_measures
 from cassi.data.xrmb.mis import MistrackEntry, read_mis
 from cassi.data.xrmb.textlines import read_bytes
-from cassi.data.xrmb.files import (PELLETS, TaskRecording, parse_task_name, read_pha, read_pal,
-                                   read_txy, task_stem)
+from cassi.data.xrmb.files import (PELLETS, TaskRecording, parse_task_name, parse_txy, read_pha,
+                                   read_pal, read_txy, task_stem)
 from cassi.data.subject_name import SUBJECT_NAME_RE
+from cassi.data.ema.subject import EmaSubject, map_path
 
 METADATA_FILE = "corpus.json"
 SUBJECT_FILES = {"pal": "PAL.DAT", "pha": "PHA.DAT", "mis": "Mis.dat"}
@@ -102,6 +106,9 @@ class SubjectData:
         self.warnings: list[str] = []
         self.problems: list[str] = []
         self._task_paths: list[Path] = []  # every *.txy, case twins included
+        ema_map = map_path(corpus.root, directory)
+        #: The EMA side (coil map, readers) where a coil map applies, else None.
+        self.ema = None if ema_map is None else EmaSubject(ema_map, directory)
         self._files = self._scan()
 
     def __repr__(self) -> str:
@@ -121,7 +128,10 @@ class SubjectData:
                     self.warnings.append(f"{self.directory / e.name}: hidden file ignored")
                 continue
             key = e.name.lower()
-            if key.endswith(".txy"):  # twins up to case are two files of one task: the index's
+            if self.ema is not None:
+                if self.ema.is_recording(e.name):
+                    self._task_paths.append(self.directory / e.name)
+            elif key.endswith(".txy"):  # twins up to case are two files of one task: the index's
                 self._task_paths.append(self.directory / e.name)
             if key in files:
                 if not key.endswith(".txy"):
@@ -163,7 +173,10 @@ class SubjectData:
         ambiguous: dict[tuple[int, int], str] = {}
         for path in sorted(self._task_paths, key=lambda p: natural_key(p.name)):
             try:
-                subj, task, rep = parse_task_name(path.name)
+                if self.ema is not None:
+                    subj, (task, rep) = None, self.ema.task_key(path.name)
+                else:
+                    subj, task, rep = parse_task_name(path.name)
             except CassiInputError as err:
                 self.warnings.append(f"{path}: {err.reason}; ignored")
                 continue
@@ -205,39 +218,56 @@ class SubjectData:
                                   + (f" repetition {rep}" if rep != 1 else ""),
                                   path=self.directory) from None
 
+    def _stem(self, task: int, rep: int) -> str:
+        """The name its side files share: ``tpNNN[_R]``, an EMA recording's own stem."""
+        if self.ema is not None:
+            return self.task_path(task, rep).stem
+        return task_stem(task, rep)
+
     def alignment_path(self, task: int, rep: int = 1) -> Path | None:
         """The file of the task's labels beside it (``tpNNN.TextGrid``, ``.lab``, ``.rec`` or a
         master label file naming it: :func:`~cassi.data.corpus.beside.alignment_path_for_stem`)
         or None."""
-        path = alignment_path_for_stem(self.directory, task_stem(task, rep))
+        path = alignment_path_for_stem(self.directory, self._stem(task, rep))
         return None if path is None else self._checked(path)
 
     def audio_path(self, task: int, rep: int = 1) -> Path | None:
         """The task's audio recording (``tpNNN.wav`` as XRMB distributes it, any case, any
         sample rate) or None."""
-        path = audio_for_stem(self.directory, task_stem(task, rep))
+        path = audio_for_stem(self.directory, self._stem(task, rep))
         return None if path is None else self._checked(path)
 
     def alignment(self, task: int, rep: int = 1) -> Alignment | None:
         """The task's phone/word labels if the subject directory has them (a TextGrid, an
         xwaves/ESPS or HTK label file: :func:`~cassi.data.xrmb.labels.read_labels`)."""
         path = self.alignment_path(task, rep)
-        return None if path is None else read_labels(path, stem=task_stem(task, rep))
+        return None if path is None else read_labels(path, stem=self._stem(task, rep))
 
     # ------------------------------------------------------------------ subject files
     @cached_property
     def palate_mm(self) -> np.ndarray:
-        """float64 (P, 2) mm: PAL.DAT, front to back."""
+        """float64 (P, 2) mm: PAL.DAT, front to back (EMA: the palate the coil map names first)."""
+        named = None if self.ema is None else self.ema.palate_mm()
+        if named is not None:
+            return named
+        if self.ema is not None and self._file(SUBJECT_FILES["pal"], required=False) is None:
+            raise CassiInputError(f"no palate: the coil map {self.ema.map_file} names none "
+                                  f"('palate: ...') and there is no PAL.DAT", path=self.directory)
         return read_pal(self._file(SUBJECT_FILES["pal"]))
 
     @cached_property
     def pharynx_mm(self) -> np.ndarray:
-        """float64 (P, 2) mm: PHA.DAT."""
+        """float64 (P, 2) mm: PHA.DAT (EMA speakers: None without one)."""
+        if self.ema is not None and self._file(SUBJECT_FILES["pha"], required=False) is None:
+            return None
         return read_pha(self._file(SUBJECT_FILES["pha"]))
 
     @cached_property
     def mistracking(self) -> list[MistrackEntry]:
-        """Entries of Mis.dat (an error if the file is missing: usability needs it)."""
+        """Entries of Mis.dat (an error if the file is missing: usability needs it; EMA speakers
+        have none: their missing samples are NaN in the files)."""
+        if self.ema is not None and self._file(SUBJECT_FILES["mis"], required=False) is None:
+            return []
         return read_mis(self._file(SUBJECT_FILES["mis"]))
 
     @cached_property
@@ -265,13 +295,29 @@ class SubjectData:
         files = [self._file(name, required=False) for name in SUBJECT_FILES.values()]
         own = self._file(HEAD_MEASURES_FILE, required=False)
         files.append(own if own is not None else self.corpus.head_measures_path())
+        if self.ema is not None:
+            files.extend(self.ema.files())
         return [f for f in files if f is not None]
 
     # ------------------------------------------------------------------ tasks
     def load(self, task: int, rep: int = 1, *, require_valid: bool = True) -> TaskRecording:
         """Read one task file (see :func:`cassi.data.xrmb.files.read_txy`)."""
-        return read_txy(self.task_path(task, rep), subject=self.name, task=task, rep=rep,
-                        require_valid=require_valid)
+        return self.read_task(self.task_path(task, rep), task=task, rep=rep,
+                              require_valid=require_valid)
+
+    def read_task(self, path: Path, *, data: bytes | None = None, task: int | None = None,
+                  rep: int | None = None, require_valid: bool = True) -> TaskRecording:
+        """One of this subject's task files (``data``: its bytes as already read, XRMB files
+        only; an EMA recording is read through its coil map, from ``path``)."""
+        if self.ema is not None:
+            if task is None:
+                task, rep = self.ema.task_key(path.name)
+            return self.ema.read(path, subject=self.name, task=task, rep=rep or 1,
+                                 require_valid=require_valid)
+        if data is not None:
+            return parse_txy(data, path=path, subject=self.name, task=task, rep=rep,
+                             require_valid=require_valid)
+        return read_txy(path, subject=self.name, task=task, rep=rep, require_valid=require_valid)
 
     def usability(self, task: int, rep: int = 1, *,
                   recording: TaskRecording | None = None) -> Usability:
@@ -333,7 +379,7 @@ class Corpus:
         except OSError as err:
             raise CassiInputError(f"cannot list corpus directory: {err.strerror or err}",
                                   path=self.root) from None
-        if any(e.name.lower().endswith(".txy") for e in entries):
+        if any(e.name.lower().endswith(".txy") for e in entries) or self._ema_subject(self.root):
             # A single subject directory given directly.
             return {self.root.resolve().name: self.root}
         for e in sorted(entries, key=lambda e: natural_key(e.name)):
@@ -356,7 +402,8 @@ class Corpus:
                 self.warnings.append(f"{path}: not a subject name; skipped")
                 continue
             try:
-                has_task = any(n.lower().endswith(".txy") for n in os.listdir(path))
+                has_task = any(n.lower().endswith(".txy") for n in os.listdir(path)) or \
+                    self._ema_subject(path)
             except OSError as err:
                 self.problems.append(str(CassiInputError(
                     f"cannot list subject directory: {err.strerror or err}", path=path)))
@@ -369,6 +416,18 @@ class Corpus:
                 continue
             found[e.name] = path
         return found
+
+    def _ema_subject(self, directory: Path) -> bool:
+        """Whether ``directory`` holds EMA recordings under a coil map (the map is read)."""
+        found = map_path(self.root, directory)
+        if found is None:
+            return False
+        try:
+            ema = EmaSubject(found, directory)
+        except CassiInputError as err:
+            self.problems.append(str(err))
+            return False
+        return any(ema.is_recording(n) for n in os.listdir(directory))
 
     @cached_property
     def metadata(self) -> dict:
@@ -489,7 +548,8 @@ def check_task_file(path: Path, *, subject: SubjectData | None = None) -> FileRe
     name = subject.name if subject is not None else subj
     rep_obj = FileReport(path=str(path), subject=name, task=task, rep=rep)
     try:
-        rec = read_txy(path, subject=name, require_valid=False)
+        rec = subject.read_task(path, require_valid=False) if subject is not None else \
+            read_txy(path, subject=name, require_valid=False)
     except CassiInputError as err:
         rep_obj.problems.append(str(err))
         rep_obj.error = True

@@ -156,6 +156,9 @@ class TaskRecording:
         False where the file had the bad value 1000000.
     warnings : tuple of str
         Problems found that did not stop reading (``file:line: reason``).
+    derived : tuple of str
+        Pellets not measured but derived by a rule the EMA coil map declares
+        (:mod:`cassi.data.ema.derive`); empty for XRMB files.
     """
 
     path: Path | None
@@ -166,6 +169,7 @@ class TaskRecording:
     xy_mm: np.ndarray
     valid: np.ndarray
     warnings: tuple[str, ...] = field(default=())
+    derived: tuple[str, ...] = field(default=())
 
     @property
     def n_frames(self) -> int:

@@ -38,7 +38,7 @@ from cassi.harness.rubric.image import depth_read
 from cassi.harness.rubric.measures import CRITERION_DIAGNOSTICS, DIAGNOSTICS_READ
 from cassi.renderer.images import png_bytes
 from cassi.renderer.views import PRESET_NAMES, VIEW_NAMES
-from cassi.data.xrmb.files import parse_txy, recording_period_us
+from cassi.data.xrmb.files import recording_period_us
 from cassi.versions.registry import available_versions, get_version
 
 #: A geometry job's temporary directory: ``cassi-geometry-<pid>-<host>-<random>``, so the next
@@ -97,9 +97,8 @@ def load_usable(subject_data, job: Job, data: bytes | None = None):
         if data is None:
             rec = subject_data.load(job.task, job.rep, require_valid=False)
         else:
-            rec = parse_txy(data, path=subject_data.task_path(job.task, job.rep),
-                            subject=subject_data.name, task=job.task, rep=job.rep,
-                            require_valid=False)
+            rec = subject_data.read_task(subject_data.task_path(job.task, job.rep), data=data,
+                                         task=job.task, rep=job.rep, require_valid=False)
         u = subject_data.usability(job.task, job.rep, recording=rec)
     except CassiInputError as err:
         raise SkipJob(str(err)) from err

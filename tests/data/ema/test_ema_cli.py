@@ -1,0 +1,67 @@
+"""``cassi corpus check`` and ``cassi corpus convert`` on a small EMA corpus (real CLI)."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from ema_writers import coil_table, head_motion_2d, write_est
+from cassi.data.commands import main
+from cassi.data.corpus.disk import Corpus
+from cassi.data.synth.corpus import generate_task
+from cassi.data.synth.subjects import SUBJECTS
+from cassi.data.xrmb.files import write_pal
+
+
+def _mocha_corpus(root):
+    d = root / "msak0"
+    d.mkdir(parents=True)
+    for k, task in enumerate((5, 7), start=1):
+        _, xy = generate_task(SUBJECTS["JW11"], task)
+        coils = head_motion_2d(xy[:200])
+        ren = {"ul": "ul", "ll": "ll", "t1": "tt", "t2": "tb", "t3": "td", "mni": "li",
+               "ui": "ui", "nb": "bn"}
+        names, values = coil_table({ren[c]: v / 0.01 for c, v in coils.items() if c in ren},
+                                   list(ren[c] for c in ren))
+        write_est(d / f"msak0_{k:03d}.ema", names, np.arange(200) / 500.0, values, binary=True)
+    write_pal(d / "PAL.DAT", SUBJECTS["JW11"].palate_outline())
+    (root / "ema.yaml").write_text("preset: mocha-timit\n")
+    return root
+
+
+def test_check_and_convert(tmp_path, capsys):
+    root = _mocha_corpus(tmp_path / "ema")
+    assert main(["check", str(root), "--json"]) == 0
+    records = json.loads(capsys.readouterr().out)
+    assert [(r["subject"], r["task"], r["frames"], r["error_free"]) for r in records] == [
+        ("msak0", 1001, 200, True), ("msak0", 1002, 200, True)]
+    out = tmp_path / "xrmb"
+    assert main(["convert", str(root), "--out", str(out)]) == 0
+    assert sorted(p.name for p in (out / "msak0").iterdir()) == [
+        "PAL.DAT", "ema_map.json", "tp1001.txy", "tp1002.txy"]
+    resolved = json.loads((out / "msak0" / "ema_map.json").read_text())
+    assert resolved["preset"] == "mocha-timit" and resolved["derived_pellets"] == ["T4", "MNM"]
+    assert resolved["tasks"] == {"tp1001.txy": "msak0_001.ema", "tp1002.txy": "msak0_002.ema"}
+    back = Corpus(out).subject("msak0").load(1001)
+    ema = Corpus(root).subject("msak0").load(1001)
+    assert np.abs(back.xy_mm - ema.xy_mm).max() <= 0.0005  # whole micrometres
+    assert main(["convert", str(root), "--out", str(out)]) == 2  # never over a corpus
+    assert "not an empty directory" in capsys.readouterr().err
+
+
+def test_check_one_recording(tmp_path, capsys):
+    root = _mocha_corpus(tmp_path / "ema")
+    assert main(["check", str(root / "msak0" / "msak0_002.ema"), "--json"]) == 0
+    (record,) = json.loads(capsys.readouterr().out)
+    assert (record["subject"], record["task"], record["frames"]) == ("msak0", 1002, 200)
+    data = (root / "msak0" / "msak0_002.ema").read_bytes()
+    (root / "msak0" / "msak0_002.ema").write_bytes(data[:-6])
+    assert main(["check", str(root / "msak0" / "msak0_002.ema")]) == 2
+    assert "msak0_002.ema: truncated" in capsys.readouterr().err
+
+
+def test_check_refuses_a_bad_map(tmp_path, capsys):
+    root = _mocha_corpus(tmp_path / "ema")
+    (root / "ema.yaml").write_text("preset: mocha-timit\nreferences: {}\n")
+    assert main(["check", str(root)]) == 2
+    assert "ema.yaml:2: no reference coils" in capsys.readouterr().err
