@@ -132,8 +132,10 @@ NEAR_C_REST: float = 5.0 * C_SCALE
 #: "near" is a lip the recording cannot tell from rest, and XRMB pellet positions are good to
 #: about 0.5 mm (the figure the rubric's Table F uses). The band is the same in both versions:
 #: the thesis changes nothing of 4.2's algorithm in 2.1 but its tuning. On the synthetic jaw
-#: wagging (task 106) the upper lip stays within 0.34 mm of rest (13 subjects), inside the band,
-#: so rho never acts there and neither version's switch jitters on it (docs/versions.md).
+#: wagging (task 106) the opening jaw draws the upper lip about 1 mm back (generator 7, from the
+#: real JW11 frames), out of the band on the way to the switch: 3(c) then takes over, 2.0 snaps
+#: the width in one row and 2.1 eases it (docs/versions.md). Generator 6's upper lip stayed within
+#: 0.34 mm of rest there, inside the band, and neither version jittered.
 NEAR_REST_MM: float = 0.5
 
 #: "c' is small (for round lips)" in step 3(c)ii: c' < SMALL_C_PRIME.
@@ -178,7 +180,9 @@ CORNER_STRETCH_AT_REST: float = 8.0
 #: its shape (lip_shape_triangular 0.729 both, lip_outline_angular within 0.8 deg) and the corner's
 #: step at the switch doubles (corner_jump_switch 0.05-0.13 -> 0.11-0.26 mm, threshold 1): no Table
 #: E verdict changes, so the default follows the judges (no diamond in 2.0). Both readings give a
-#: at c = 0, the switch itself.
+#: at c = 0, the switch itself. (Measured on generator 5's corpus; from generator 7 on, task 106's
+#: upper lip leaves the band near c_rest before the mouth turns taller than wide, and its 2.x
+#: ellipses stay horizontal: the reading acts there only where the upper lip stays near rest.)
 CORNER_READING: str = "results"
 
 #: Middle outline (section 4.2.1): the lower-lip pairs 55/52, 56/53, 57/54 sit at equal

@@ -34,7 +34,10 @@ Whole-recording figures (:data:`SCALARS`):
   it);
 - ``ul_ll_first``, ``ul_ll_median``, ``ul_ll_p01``, ``ul_ll_p001`` (mm): the UL-LL distance at
   the first valid row (mean over files; thesis Figure 4.25 divides it by the jaw length), and its
-  median, 1st and 0.1th percentile over all rows (the lips pressed together).
+  median, 1st and 0.1th percentile over all rows (the lips pressed together);
+- ``ul_back_wide_jaw`` (mm): how far the upper lip sits back when the jaw is open wide: the UL
+  x median over all rows minus its median over the rows where the jaw is open wider than in 99 %
+  of them (MNI y below its 1st percentile); > 0: the lip is drawn back.
 
 A frame set (:mod:`cassi.data.xrmb.frames`: frames without times, not necessarily consecutive)
 gives the distributions only (:func:`frame_set_stats`): the figures that need consecutive rows
@@ -60,7 +63,8 @@ __all__ = ["PELLET_COLUMNS", "SCALARS", "KinematicStats", "compare", "corpus_sta
 PELLET_COLUMNS = ("speed_p50", "speed_p90", "speed_p99", "x_range", "y_range", "d2_rms_um")
 SCALARS = ("jaw_distance_mean", "jaw_distance_median", "jaw_distance_sd", "mni_y_p95",
            "mni_y_median", "mni_y_p05", "lip_mid_first", "lip_mid_mean", "lip_mid_median",
-           "lip_mid_p05", "ul_ll_first", "ul_ll_median", "ul_ll_p01", "ul_ll_p001")
+           "lip_mid_p05", "ul_ll_first", "ul_ll_median", "ul_ll_p01", "ul_ll_p001",
+           "ul_back_wide_jaw")
 #: Units of every figure, for tables and JSON.
 UNITS = {"speed_p50": "mm/s", "speed_p90": "mm/s", "speed_p99": "mm/s", "x_range": "mm",
          "y_range": "mm", "d2_rms_um": "um", **{k: "mm" for k in SCALARS}}
@@ -80,6 +84,7 @@ class _Samples:
     mni_y: list[np.ndarray] = field(default_factory=list)
     lip_mid: list[np.ndarray] = field(default_factory=list)
     ul_ll: list[np.ndarray] = field(default_factory=list)
+    ul_x_mni_y: list[np.ndarray] = field(default_factory=list)  # (n, 2) where both are valid
     lip_mid_first: list[float] = field(default_factory=list)
     ul_ll_first: list[float] = field(default_factory=list)
     files: list[str] = field(default_factory=list)
@@ -162,7 +167,18 @@ def _add_distributions(s: _Samples, xy: np.ndarray, ok: np.ndarray) -> np.ndarra
     lips_ok = ok[:, _UL] & ok[:, _LL]
     s.lip_mid.append(0.5 * (xy[lips_ok, _UL, 1] + xy[lips_ok, _LL, 1]))
     s.ul_ll.append(np.hypot(*(xy[lips_ok, _UL] - xy[lips_ok, _LL]).T))
+    both = ok[:, _UL] & ok[:, _MNI]
+    s.ul_x_mni_y.append(np.stack([xy[both, _UL, 0], xy[both, _MNI, 1]], axis=1))
     return d
+
+
+def _ul_back_wide_jaw(ul_x_mni_y: np.ndarray) -> float:
+    """UL x median over all rows minus over the rows with MNI y below its 1st percentile."""
+    if ul_x_mni_y.shape[0] < 100:  # a 1st percentile needs rows
+        return float("nan")
+    ul_x, mni_y = ul_x_mni_y[:, 0], ul_x_mni_y[:, 1]
+    wide = mni_y < np.percentile(mni_y, 1)
+    return float(np.median(ul_x) - np.median(ul_x[wide]))
 
 
 def _figures(s: _Samples, label: str, n_frames: int = 0) -> KinematicStats:
@@ -200,6 +216,7 @@ def _figures(s: _Samples, label: str, n_frames: int = 0) -> KinematicStats:
         "ul_ll_median": stat(np.median, dist),
         "ul_ll_p01": stat(np.percentile, dist, 1),
         "ul_ll_p001": stat(np.percentile, dist, 0.1),
+        "ul_back_wide_jaw": _ul_back_wide_jaw(cat(s.ul_x_mni_y)),
     }
     return KinematicStats(table, scalars, len(s.files), label, n_frames)
 

@@ -49,7 +49,8 @@ from cassi.data.xrmb.files import (JAW_WAGGING_TASK, MAX_PROTRUSION_TASK, NOMINA
 #: per task type, per-pellet tracking noise, lower lip to the incisors in /f v/, lip heights).
 #: 5: issue 23 (resting lips from real recordings and published norms, the upper lip rising with
 #: the jaw, mistracked stretches mostly 1000000 and a stuck pellet's report smooth).
-GENERATOR_VERSION = "6"
+#: 7: the upper lip drawn back by the opening jaw (motion.UL_BACK_MM_PER_DEG, real JW11 frames).
+GENERATOR_VERSION = "7"
 DEFAULT_SEED = 0
 #: Tasks every subject keeps free of artifacts (section 5.3 uses 106 and 118; 13 is the
 #: thesis's Figure 3.9 example), unless the subject's story says otherwise (JW32, JW12).

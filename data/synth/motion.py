@@ -122,8 +122,9 @@ REAL_RECORDING_TARGETS: tuple[tuple, ...] = (
 #: only), measured with ``cassi corpus stats``. The generated JW11, all its tasks measured the
 #: same way, must lie within REAL_FRAMES_TOLERANCE (relative) of each: the lips pressed together
 #: (CLOSURE_PRESS), the jaw length and the jaw's resting height (JW11's row of
-#: :mod:`cassi.data.synth.subjects`), and the jaw's opening (the phones' jaw angles, unchanged:
-#: MNI's 5th-95th percentile spread is 9.1 mm real, 9.7 mm generated).
+#: :mod:`cassi.data.synth.subjects`), the jaw's opening (the phones' jaw angles, unchanged:
+#: MNI's 5th-95th percentile spread is 9.1 mm real, 9.7 mm generated), and the upper lip drawn
+#: back by the open jaw (UL_BACK_MM_PER_DEG).
 REAL_FRAME_TARGETS: tuple[tuple[str, float], ...] = (
     ("ul_ll_p001", 22.0),
     ("ul_ll_p01", 25.5),
@@ -131,6 +132,7 @@ REAL_FRAME_TARGETS: tuple[tuple[str, float], ...] = (
     ("mni_y_p95", -4.8),
     ("mni_y_median", -8.2),
     ("mni_y_p05", -13.9),
+    ("ul_back_wide_jaw", 1.06),
 )
 REAL_FRAMES_TOLERANCE = 0.10
 #: Upper-lip rise (mm) per degree of jaw opening: the upper lip elevates in opening gestures
@@ -140,6 +142,15 @@ REAL_FRAMES_TOLERANCE = 0.10
 #: with the synthetic jaw's 117 deg/s; a 14 deg opening raises the lip 1.7 mm, inside the 1-3 mm
 #: speech extent of KINEMATIC_TARGETS.
 UL_RISE_MM_PER_DEG = 0.12
+#: Upper-lip retraction (mm) per degree of jaw opening: the opening jaw draws the upper lip back
+#: as well as down over the incisors. Set on the real JW11 frames (REAL_FRAME_TARGETS,
+#: ``ul_back_wide_jaw``): where the jaw is open wider than in 99 % of them, the upper lip pellet's
+#: median x lies 1.06 mm behind its median over all frames. Without this gain the generated JW11
+#: put it 0.07 mm behind (its upper lip moved fore and aft only with the phones' rounding); the
+#: figure grows linearly with the gain (0.83 mm at 0.08 mm/deg), 0.10 gives 1.00 mm. Jaw wagging
+#: (task 106, 10-14 degrees) then carries the upper lip 1.0-1.4 mm back at its widest, where the
+#: generator held it within 0.1 mm of rest; in speech JW11's upper lip x range stays 2.0 mm.
+UL_BACK_MM_PER_DEG = 0.10
 PERIOD_S = 6866e-6
 #: Jaw slide forward (mm) per degree of opening, along the articular eminence.
 JAW_SLIDE_MM_PER_DEG = 0.12
@@ -436,7 +447,7 @@ def pellets(anat: Anatomy, ch: np.ndarray) -> np.ndarray:
     own[:, 5] = 0.85 * body
     carried = jaw_transform(anat, theta, rest[None, 1:8] + own[:, 1:8])  # LL, T1-4, MNI, MNM
     out = np.empty((n, 8, 2))
-    out[:, 0, 0] = rest[0, 0] + ch[:, 1]
+    out[:, 0, 0] = rest[0, 0] + ch[:, 1] - UL_BACK_MM_PER_DEG * np.maximum(theta, 0.0)
     out[:, 0, 1] = rest[0, 1] - ch[:, 2] + UL_RISE_MM_PER_DEG * np.maximum(theta, 0.0)
     out[:, 1:] = carried
     out[:, 1, 0] += ch[:, 3]

@@ -182,6 +182,20 @@ def test_frame_sets_give_distributions_only(tmp_path):
     assert -18.0 < s["mni_y_p05"] and s["mni_y_p95"] < -8.0
 
 
+def test_the_upper_lip_drawn_back_by_a_wide_jaw():
+    """ul_back_wide_jaw: the UL x median over all frames minus its median over the frames with
+    the jaw open wider than in 99 % of them (MNI y below its 1st percentile)."""
+    n = 1000
+    frames = np.zeros((n, 8, 2))
+    frames[:, 0, 0] = 15.0
+    frames[:, 6, 1] = -8.0 - 0.01 * np.arange(n)    # the jaw opens a little further each frame
+    frames[-10:, 0, 0] = 13.8                        # the widest 1 %: the lip 1.2 mm back
+    assert frame_set_stats(frames).scalars["ul_back_wide_jaw"] == pytest.approx(1.2)
+    frames[:, 0, 0] = 15.0                           # a lip that ignores the jaw
+    assert frame_set_stats(frames).scalars["ul_back_wide_jaw"] == pytest.approx(0.0)
+    assert math.isnan(frame_set_stats(frames[:50]).scalars["ul_back_wide_jaw"])  # too few
+
+
 def test_bad_frame_sets_are_input_errors(tmp_path, capsys):
     import scipy.io
     good = _frame_set(200)
