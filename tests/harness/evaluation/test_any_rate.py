@@ -34,6 +34,12 @@ TONE_AT_S = 2.0        # a tone starts here, where a label ends
 #: moves a peak between rows by at most the motion in half an XRMB row, and the windows in ms
 #: round to whole rows differently (20 ms: 3 rows against 10).
 VALUE_RTOL, VALUE_ATOL = 0.10, 0.15
+#: Checks whose value depends on the rate, with the reason; their negatives must still agree.
+#: OUTER_ABC_CALC picks its branch from one row to the next (height increasing, decreasing or,
+#: at the pellets' 1 um resolution, equal: thesis Figure 4.18), so how often cassi-2.x's lip
+#: corners leave the band near rest, and their jitter, depends on how many rows there are
+#: (JW11 task 106, cassi-2.1: 0.73 mm at 145.6 Hz, 0.49 mm at 500 Hz; the threshold is 1 mm).
+RATE_DEPENDENT = {"corner_jump_switch"}
 
 
 def resample(rec: TaskRecording, period_us: int) -> TaskRecording:
@@ -56,10 +62,14 @@ def _corpus(root, *, period_us=None):
     shutil.copy(src / "Headmeasures.txt", root)
     for name in ("Mis.dat", "PAL.DAT", "PHA.DAT"):
         shutil.copy(src / "JW11" / name, root / "JW11")
-    rec = read_txy(src / "JW11" / "tp106.txy")
-    if period_us is not None:
-        rec = resample(rec, period_us)
-    write_txy(root / "JW11" / "tp106.txy", rec)
+    # every task file of the subject, so its profile (thesis 4.2.1: rest, protrusion) is the
+    # subject's, as a real corpus's would be, not task 106's alone
+    for path in sorted((src / "JW11").glob("tp*.txy")):
+        rec = read_txy(path)
+        if period_us is not None:
+            rec = resample(rec, period_us)
+        write_txy(root / "JW11" / path.name, rec)
+    rec = read_txy(root / "JW11" / "tp106.txy")
     seconds = (rec.time_us[-1] - rec.time_us[0]) / 1e6
     t = np.arange(int(seconds * AUDIO_RATE)) / AUDIO_RATE
     tone = np.where(t >= TONE_AT_S, 0.5 * np.sin(2 * np.pi * 440 * t), 0.0)
@@ -108,11 +118,14 @@ def test_a_500_hz_recording_gives_the_results_of_its_145_hz_original(tmp_path):
     # the checks: the same rows, values within the tolerance
     x = pd.read_parquet(xrun / "results.parquet")
     e = pd.read_parquet(erun / "results.parquet")
-    x, e = (d[(d["view"] == "geometry") & (d["frame"] >= -1)] for d in (x, e))
+    # the whole-file rows (frame -1), which carry the verdicts; a check's evidence-frame value
+    # is its worst single row, which rows of another length sample differently
+    x, e = (d[(d["view"] == "geometry") & (d["frame"] == -1)] for d in (x, e))
     both = x.groupby("check")["value"].max().to_frame("x").join(
         e.groupby("check")["value"].max().to_frame("e"), how="inner").dropna()
     assert len(both) >= 15 and set(x["check"]) == set(e["check"])
     off = both[~np.isclose(both["e"], both["x"], rtol=VALUE_RTOL, atol=VALUE_ATOL)]
+    off = off.drop(index=list(RATE_DEPENDENT & set(off.index)))
     assert off.empty, off
     negatives = [d.groupby("check")["negatives"].sum() for d in (x, e)]
     assert negatives[0].equals(negatives[1])
