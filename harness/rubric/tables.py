@@ -86,11 +86,17 @@ def verdicts(results: pd.DataFrame) -> pd.DataFrame:
     out["negatives"] = g["negatives"].max()
     out["raw_negatives"] = g["raw_negatives"].max()
     out["files"] = g["file"].nunique()
-    out["fired_files"] = g["raw_negatives"].apply(lambda s: int((s > 0).sum()))
-    out["tasks"] = g.apply(lambda d: ", ".join(sorted(set(d.loc[d["raw_negatives"] > 0, "file"]),
-                                                      key=lambda x: (len(x), x))),
-                           include_groups=False)
-    out["note"] = g["note"].apply(lambda s: next((x for x in s if x), ""))
+    fired = fv[fv["raw_negatives"] > 0]
+    out["fired_files"] = fired.groupby(keys, sort=True).size().reindex(out.index, fill_value=0)
+    # the files where it fired, once each, shortest name first ("2" before "10")
+    named = fired.drop_duplicates(keys + ["file"])
+    named = named.assign(_len=named["file"].str.len()).sort_values(["_len", "file"],
+                                                                    kind="mergesort")
+    out["tasks"] = named.groupby(keys, sort=True)["file"].agg(", ".join).reindex(
+        out.index, fill_value="")
+    # the first note in the order above (files that earned the most first)
+    noted = fv[fv["note"].astype(bool)]
+    out["note"] = noted.groupby(keys, sort=True)["note"].first().reindex(out.index, fill_value="")
     out = _charge_once(out.reset_index())
     for c in ("negatives", "raw_negatives", "files", "fired_files"):
         out[c] = out[c].astype(int)
@@ -129,8 +135,7 @@ def table_c_rule(results: pd.DataFrame, *, fv: pd.DataFrame | None = None,
         for prev, cur in zip(present, present[1:]):
             a, b = gs[gs["version"] == prev], gs[gs["version"] == cur]
             shared = set(a["file"]) & set(b["file"])
-            fa = a[a["file"].isin(shared)].groupby("check")["negatives"].apply(lambda s: int((s > 0).sum()))
-            fb = b[b["file"].isin(shared)].groupby("check")["negatives"].apply(lambda s: int((s > 0).sum()))
+            fa, fb = (_files_fired(x[x["file"].isin(shared)]) for x in (a, b))
             checks = sorted(set(fa.index) & set(fb.index))
             worse = [f"{k} in {fb[k]} of {len(shared)} shared files against {fa[k]}"
                      for k in checks if fb[k] > fa[k]]
@@ -157,6 +162,11 @@ def table_c_rule(results: pd.DataFrame, *, fv: pd.DataFrame | None = None,
                            else s, kind="mergesort").reset_index(drop=True)
 
 
+def _files_fired(rows: pd.DataFrame) -> pd.Series:
+    """check -> in how many of ``rows``' files it earned negatives."""
+    return (rows["negatives"] > 0).astype(int).groupby(rows["check"]).sum()
+
+
 #: How the comparison sentences name the good ratings ("VERY GOOD/EXCELLENT").
 _GOOD = "/".join(reversed(GOOD_RATINGS))
 
@@ -167,11 +177,11 @@ def _charge_once(out: pd.DataFrame,
     default the version, table and subject: across the subject's files) earns nothing (``note``
     says why when the column exists)."""
     hit = out[out["negatives"] > 0]
-    charged = set(zip(*(hit[k] for k in within), hit["check"]))
-    for i, r in hit.iterrows():
-        c = CHECKS.get(r["check"])
-        if c is not None and c.charged_with and (*(r[k] for k in within),
-                                                 c.charged_with) in charged:
+    groups = list(zip(*(hit[k] for k in within)))
+    charged = {(*g, check) for g, check in zip(groups, hit["check"])}
+    for i, g, check in zip(hit.index, groups, hit["check"]):
+        c = CHECKS.get(check)
+        if c is not None and c.charged_with and (*g, c.charged_with) in charged:
             out.at[i, "negatives"] = 0
             if "note" in out:
                 out.at[i, "note"] = f"not charged again: {c.charged_with} charges the same fault"
