@@ -105,9 +105,29 @@ def _read_index(root: Path, name: str, columns) -> pd.DataFrame:
     if missing:
         raise CassiInputError(f"{name} index lacks columns {missing}", path=path)
     df = df[list(columns)].copy()
-    real = root.resolve()  # once: a night's index holds 20,000-30,000 paths
-    df["path"] = [str(_inside(root, p, real)) for p in df["path"]]
+    df["path"] = [str(p) for p in _all_inside(root, df["path"])]
     return df.reset_index(drop=True)
+
+
+def _all_inside(root: Path, rels) -> list[Path]:
+    """:func:`_inside` for many paths: a night's index holds 20,000-30,000, in a few hundred
+    folders, so each folder is resolved once and each file only checked for being a link."""
+    real = root.resolve()
+    folders: dict[Path, Path] = {}
+    out = []
+    for rel in rels:
+        full = root / rel
+        if full.name in ("", ".", "..") or os.path.islink(full):
+            out.append(_inside(root, rel, real))
+            continue
+        folder = folders.get(full.parent)
+        if folder is None:
+            folder = folders[full.parent] = full.parent.resolve()
+        path = folder / full.name
+        if os.path.commonpath([path, real]) != str(real):
+            raise CassiInputError(f"indexed path {rel!r} escapes the run directory", path=root)
+        out.append(path)
+    return out
 
 
 def _inside(root: Path, rel: str, real: Path | None = None) -> Path:
