@@ -24,6 +24,10 @@ def add_run_options(p: argparse.ArgumentParser, defaults: C.RunConfig) -> None:
     p.add_argument("--tasks", nargs="+", metavar="N",
                    help="task numbers or ranges, e.g. 19 21 or 1-118 (default: the thesis's "
                         "evaluation set, Table 5.1 + 106, 118)")
+    p.add_argument("--set", choices=C.EVAL_SETS,
+                   help="the task files when --tasks is not given: 'thesis' (Table 5.1 + 106, "
+                        "118) or 'full' (every task file of every subject; default "
+                        f"{d.set})")
     p.add_argument("--versions", nargs="+", metavar="NAME", help="default: every version")
     p.add_argument("--views", nargs="+", metavar="NAME",
                    help="front side half top (default: all four); 'geometry' alone: no renders")

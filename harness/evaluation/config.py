@@ -43,6 +43,11 @@ from cassi.common.errors import CassiInputError
 from cassi.harness.farm.jobs import GEOMETRY_VIEW
 
 EXECUTORS = ("local", "ray")
+#: The named evaluation sets (``set`` in a run file, ``--set``): "thesis", the thesis's task
+#: files (Table 5.1 and tasks 106, 118: :func:`~cassi.harness.evaluation.evalset.default_tasks`);
+#: "full", every task file of every subject (:func:`~.evalset.full_tasks`). Explicit ``tasks``
+#: take the place of either.
+EVAL_SETS = ("thesis", "full")
 
 
 #: At most this many "extreme" frames per task file and version (the worst frame of the checks
@@ -79,6 +84,8 @@ class RunConfig:
     cache: Path | None = None
     subjects: tuple[str, ...] | None = None
     tasks: tuple[int, ...] | None = None
+    #: Which task files when ``tasks`` is not given (:data:`EVAL_SETS`).
+    set: str = "thesis"
     versions: tuple[str, ...] | None = None
     views: tuple[str, ...] | None = None
     # The default render budget: about 35 frames per task file, version and view, which keeps
@@ -126,7 +133,7 @@ def settings(cfg: RunConfig) -> dict[str, Any]:
     return {k: getattr(cfg, k) for k in FIELDS}
 _LISTS = {"subjects": str, "tasks": int, "versions": str, "views": str, "video_versions": str}
 _INTS = {"stride": 0, "extremes": 0, "animate_stride": 0, "chunk": 1, "workers": 1, "threads": 1, "retries": 0}   # name -> minimum
-_STRS = ("preset", "variant", "executor", "address")
+_STRS = ("preset", "variant", "executor", "address", "set")
 
 
 def _line_of(text: str | None, key: str) -> int | None:
@@ -265,6 +272,10 @@ def validate(raw: Mapping[str, Any], *, source: str | Path | None = None,
     if cfg.address and cfg.executor != "ray":
         raise CassiInputError("address is only used with executor 'ray'", path=source,
                               line=_line_of(text, "address"))
+    if cfg.set not in EVAL_SETS:
+        raise CassiInputError(f"unknown evaluation set {cfg.set!r}; valid: {', '.join(EVAL_SETS)}"
+                              + _did_you_mean(cfg.set, EVAL_SETS), path=source,
+                              line=_line_of(text, "set"))
     return cfg
 
 

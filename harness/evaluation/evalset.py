@@ -129,3 +129,14 @@ def explicit_tasks(corpus, subjects: Iterable[str], tasks: Iterable[int]) -> lis
                 specs.append(TaskSpec(subject, task, rep, usable,
                                       "" if usable else (why or "task file not usable")))
     return specs
+
+
+def full_tasks(corpus, subjects: Iterable[str] | None = None) -> list[TaskSpec]:
+    """Every task file (every repetition) of every subject: the whole corpus; unusable files
+    stay in the set as skipped jobs with the reason, as in :func:`explicit_tasks`."""
+    subjects = list(subjects) if subjects is not None else corpus.subjects
+    specs = []
+    for subject in subjects:
+        tasks = sorted({t for t, _ in _task_numbers(corpus.subject(subject))})
+        specs += explicit_tasks(corpus, [subject], tasks)
+    return specs

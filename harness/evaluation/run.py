@@ -14,7 +14,7 @@ from cassi.common.cores import usable_cores
 from cassi.common.errors import CassiInputError, first_few
 
 from cassi.harness.evaluation import config as C
-from cassi.harness.evaluation.evalset import default_tasks, explicit_tasks
+from cassi.harness.evaluation.evalset import default_tasks, explicit_tasks, full_tasks
 from cassi.harness.farm.executors import make_executor, require_ray
 from cassi.harness.evaluation.inputs import check_inputs
 from cassi.harness.farm.jobs import GEOMETRY_VIEW, StageContext
@@ -58,6 +58,8 @@ def plan(cfg: C.RunConfig):
     subjects = list(cfg.subjects) if cfg.subjects else list(cat.subjects)
     if cfg.tasks:
         tasks = explicit_tasks(corpus, subjects, cfg.tasks)
+    elif cfg.set == "full":
+        tasks = full_tasks(corpus, subjects)
     else:
         tasks = default_tasks(corpus, subjects)
     versions = list(cfg.versions) if cfg.versions else list(cat.versions)

@@ -43,6 +43,7 @@ def test_toml_and_yaml_give_the_same_config(tmp_path):
     ('subjects = []\n', "subjects: the list is empty", 1),
     ('executor = "slurm"\n', "unknown executor 'slurm'; valid: local, ray", 1),
     ('address = "x:1"\n', "address is only used with executor 'ray'", 1),
+    ('out = "o"\nset = "ful"\n', "unknown evaluation set 'ful'; valid: thesis, full .did you mean 'full'", 2),
     ('out = "o"\nworkers = [\n', "not valid TOML", None),
     ('out = "o"\nstride = 99999999999\n', r"stride: out of range \(at most", 2),
     ('stride = ' + "9" * 5000 + "\n", "not valid TOML: .*4300 digits", None),
@@ -237,3 +238,13 @@ def test_task_ranges_work_wherever_tasks_are_taken(tmp_path):
         config_from_args(_parser().parse_args(["run", "--out", "o", "--tasks", "5-2"]))
     with pytest.raises(CassiInputError, match="tasks: expected an integer"):
         config_from_args(_parser().parse_args(["run", "--out", "o", "--tasks", "1-x"]))
+
+
+def test_the_evaluation_set_from_a_run_file_and_the_flag(tmp_path):
+    (tmp_path / "run.yaml").write_text("out: o\nset: full\n")
+    assert C.load_config(tmp_path / "run.yaml").set == "full"
+    assert C.RunConfig().set == C.NIGHTLY.set == "thesis"
+    args = _parser().parse_args(["nightly", "--out", "n", "--config", str(tmp_path / "run.yaml")])
+    assert config_from_args(args, C.NIGHTLY).set == "full"
+    args = _parser().parse_args(["run", "--out", "o", "--set", "full"])
+    assert config_from_args(args).set == "full"

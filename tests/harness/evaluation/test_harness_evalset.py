@@ -8,7 +8,8 @@ import pytest
 
 from cassi.data.corpus.disk import Corpus
 from cassi.data.synth.corpus import make_corpus
-from cassi.harness.evaluation.evalset import EXTRA_TASKS, TABLE_5_1, default_tasks, explicit_tasks, task_catalog
+from cassi.harness.evaluation.evalset import (EXTRA_TASKS, TABLE_5_1, default_tasks, explicit_tasks,
+                                             full_tasks, task_catalog)
 
 
 @pytest.fixture(scope="module")
@@ -62,3 +63,14 @@ def test_default_corpus_follows_table_5_1():
         for s in specs:
             if s.subject == subject and s.task in EXTRA_TASKS:
                 assert corpus.subject(subject).usability(s.task).usable
+
+
+def test_the_full_set_is_every_task_file_of_every_subject(small_corpus):
+    specs = full_tasks(small_corpus)
+    files = {(s.subject, s.task, s.rep) for s in specs}
+    on_disk = {(name, t, r) for name in small_corpus.subjects
+               for (t, r) in small_corpus.subject(name).task_files()}
+    assert files == on_disk and len(specs) == len(files)
+    bad = {(s.subject, s.task): s for s in specs}[("JW12", 2)]   # kept, with its reason
+    assert not bad.usable and bad.reason
+    assert len(specs) > len(default_tasks(small_corpus))
