@@ -441,7 +441,8 @@ def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
         versions.append({"version": version, "id": slug(version), "tables": tables})
     page = out / "subjects" / f"{slug(subject)}.html"
     atomic_write_text(page, env.get_template("subject.html.j2").render(
-        subject=subject, versions=versions, synthetic=run.synthetic))
+        subject=subject, versions=versions, synthetic=run.synthetic,
+        derived={k: v for k, v in run.derived.items() if k == subject}))
     return page.relative_to(out).as_posix()
 
 
@@ -691,6 +692,7 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
     diff = cmp.compare_components(previous.results, run.results) if previous is not None else None
     return env.get_template("index.html.j2").render(
         run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
+        derived=run.derived,
         overview=_overview(run, previous, cr, diff, gate),
         summaries=_summaries(run), paired=_paired(run, out), agreement=agree,
         comparison=_comparison(run, previous, out, diff),

@@ -69,6 +69,12 @@ class Run:
         return bool(len(self.results)) and bool(self.results["synthetic"].any())
 
     @property
+    def derived(self) -> dict[str, list[str]]:
+        """Subject -> its derived pellets' rules (EMA coil maps), as the run recorded them."""
+        return {str(k): [str(x) for x in v]
+                for k, v in (self.meta.get("derived_pellets") or {}).items()}
+
+    @property
     def name(self) -> str:
         return self.root.name
 

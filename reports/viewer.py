@@ -265,6 +265,7 @@ def viewer_payload(run: Run, subject: str, task: int, rep: int, versions: dict, 
     (``audio_href``), whose waveform the timeline draws."""
     return {
         "subject": str(subject), "task": task, "rep": rep, "synthetic": run.synthetic,
+        "derived": run.derived.get(str(subject), []),
         "versions": list(versions), "version_data": versions,
         "measured": _array(first.measured, stream=first.deflated["measured"]),
         "measured_frames": _array(first.frames.astype(np.int32)),
@@ -285,6 +286,7 @@ def write_viewer_page(dest: Path, payload: dict, env, *, static: str, index: str
     atomic_write_text(dest, env.get_template("viewer.html.j2").render(
         subject=payload["subject"], task=payload["task"], rep=payload["rep"],
         synthetic=payload["synthetic"], versions=payload["versions"], data=f"{dest.stem}.js",
+        derived={payload["subject"]: payload["derived"]} if payload.get("derived") else {},
         static=static, index=index, subject_page=payload["subject_page"], blind=blind,
         legend=table_legend(), stride=payload["stride"]))
 

@@ -6,7 +6,9 @@ from pathlib import Path
 
 import numpy as np
 
-from cassi.data.xrmb.files import PELLETS
+from cassi.data.synth.corpus import generate_task
+from cassi.data.synth.subjects import SUBJECTS
+from cassi.data.xrmb.files import PELLETS, write_pal
 
 #: Coil names of the round trip: the eight pellets, then references and bite-plane coils.
 PELLET_COILS = ("ul", "ll", "t1", "t2", "t3", "t4", "mni", "mnm")
@@ -122,6 +124,44 @@ def coil_table(coils: dict[str, np.ndarray], order) -> tuple[list[str], np.ndarr
             names.append(f"{c}_{'xyz'[k]}")
             cols.append(coils[c][:, k])
     return names, np.column_stack(cols)
+
+
+#: MOCHA-TIMIT's names of the coils :func:`head_motion_2d` moves (it has no T4, MNM coil).
+MOCHA_COILS = {"ul": "ul", "ll": "ll", "t1": "tt", "t2": "tb", "t3": "td", "mni": "li",
+               "ui": "ui", "nb": "bn"}
+#: A TSV speaker's coil map: MOCHA's coils under their own names, T4 and MNM derived.
+TSV_MAP = """format: tsv
+rate_hz: 500
+pellets: {UL: ul, LL: ll, T1: t1, T2: t2, T3: t3, MNI: mni}
+derive: {T4: {rule: extrapolate, from: [T2, T3]}, MNM: {rule: jaw-rotation}}
+references: {upper_incisor: ui, nose_bridge: nb}
+head_frame: {forward: x, up: y}
+"""
+
+
+def write_ema_speaker(root: Path, name: str, tasks=(5, 7), *, frames: int = 200,
+                      fmt: str = "est") -> Path:
+    """A speaker directory of JW11's synthetic tasks moved by :func:`head_motion_2d`, at 500 Hz
+    (utterances ``<name>_001`` ...), and JW11's PAL.DAT: ``fmt`` "est" (MOCHA-TIMIT's binary
+    files in 0.01 mm, for ``preset: mocha-timit``) or "tsv" (mm, with :data:`TSV_MAP` as the
+    speaker's ``ema.yaml``)."""
+    d = root / name
+    d.mkdir(parents=True)
+    time_s = np.arange(frames) / 500.0
+    for k, task in enumerate(tasks, start=1):
+        _, xy = generate_task(SUBJECTS["JW11"], task)
+        coils = head_motion_2d(xy[:frames])
+        if fmt == "est":
+            names, values = coil_table({MOCHA_COILS[c]: v / 0.01 for c, v in coils.items()
+                                        if c in MOCHA_COILS}, list(MOCHA_COILS.values()))
+            write_est(d / f"{name}_{k:03d}.ema", names, time_s, values, binary=True)
+        else:
+            write_table(d / f"{name}_{k:03d}.tsv",
+                        {c: v for c, v in coils.items() if c in MOCHA_COILS}, time_s)
+    if fmt == "tsv":
+        (d / "ema.yaml").write_text(TSV_MAP)
+    write_pal(d / "PAL.DAT", SUBJECTS["JW11"].palate_outline())
+    return d
 
 
 assert len(PELLET_COILS) == len(PELLETS)

@@ -18,7 +18,6 @@ from pathlib import Path
 from cassi.common.atomic import atomic_write_text
 from cassi.common.errors import CassiInputError
 from cassi.data.corpus.disk import Corpus
-from cassi.data.ema.derive import describe
 from cassi.data.xrmb.files import task_file_name, write_pal, write_txy
 
 RESOLVED_MAP = "ema_map.json"
@@ -79,7 +78,7 @@ def _convert_subject(subj, dest: Path, problems: list[str]) -> int:
     except CassiInputError as err:
         problems.append(f"{err} (no PAL.DAT written)")
     resolved = subj.ema.map.resolved()
-    resolved["derived_rules"] = [describe(p, r) for p, r in subj.ema.map.derive.items()]
+    resolved["derived_rules"] = subj.ema.derived_rules()
     resolved["tasks"] = sources
     atomic_write_text(dest / RESOLVED_MAP, json.dumps(resolved, indent=1, default=str) + "\n")
     return len(sources)

@@ -21,9 +21,10 @@ import numpy as np
 
 from cassi.common.errors import CassiInputError
 from cassi.data.ema.coilmap import MAP_FILE, CoilMap, read_coil_map
+from cassi.data.ema.derive import describe
 from cassi.data.ema.recording import in_head_frame, read_track, to_recording
 from cassi.data.ema.track import CoilTrack
-from cassi.data.xrmb.files import TaskRecording, check_palate_length, read_pal
+from cassi.data.xrmb.files import PELLETS, TaskRecording, check_palate_length, read_pal
 
 _DIGITS = re.compile(r"([0-9]+)(?!.*[0-9])")
 
@@ -73,6 +74,10 @@ class EmaSubject:
         """The bite-plane recording the map names, read once."""
         name = (self.map.head_frame.get("occlusal") or {}).get("file")
         return None if name is None else read_track(self._extra(name), self.map)
+
+    def derived_rules(self) -> list[str]:
+        """One line per pellet the map derives (XRMB's pellet order), for the reports."""
+        return [describe(p, self.map.derive[p]) for p in sorted(self.map.derive, key=PELLETS.index)]
 
     def files(self) -> list[Path]:
         """The map and the files it names: what a recording read here depends on."""

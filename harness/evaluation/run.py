@@ -148,6 +148,17 @@ def run_options(cfg: C.RunConfig) -> tuple[tuple[str, object], ...]:
             ("video_versions", cfg.video_versions), ("masks_format", MASKS_FORMAT))
 
 
+def derived_pellets(corpus, subjects) -> dict[str, list[str]]:
+    """Subject -> the pellets its EMA coil map derives, one line each (none for XRMB subjects):
+    ``run.json`` records them so that every report flags them."""
+    out = {}
+    for name in subjects:
+        ema = corpus.subject(name).ema
+        if ema is not None and ema.derived_rules():
+            out[name] = ema.derived_rules()
+    return out
+
+
 def _run(cfg, executor, corpus, tasks, versions, views, variant, synthetic, pipeline, provenance,
          workers, progress) -> RunResult:
     """The part of :func:`run` that writes ``cfg.out``, once the executor is up."""
@@ -168,6 +179,9 @@ def _run(cfg, executor, corpus, tasks, versions, views, variant, synthetic, pipe
                                       for t in tasks],
                       provenance=provenance,
                       started=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
+    derived = derived_pellets(corpus, dict.fromkeys(t.subject for t in tasks))
+    if derived:
+        meta["derived_pellets"] = derived
     if synthetic:
         meta["note"] = ("results on the synthetic corpus describe the software, not real "
                         "speakers")

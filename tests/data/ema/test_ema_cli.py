@@ -5,26 +5,13 @@ import json
 
 import numpy as np
 
-from ema_writers import coil_table, head_motion_2d, write_est
+from ema_writers import write_ema_speaker
 from cassi.data.commands import main
 from cassi.data.corpus.disk import Corpus
-from cassi.data.synth.corpus import generate_task
-from cassi.data.synth.subjects import SUBJECTS
-from cassi.data.xrmb.files import write_pal
 
 
 def _mocha_corpus(root):
-    d = root / "msak0"
-    d.mkdir(parents=True)
-    for k, task in enumerate((5, 7), start=1):
-        _, xy = generate_task(SUBJECTS["JW11"], task)
-        coils = head_motion_2d(xy[:200])
-        ren = {"ul": "ul", "ll": "ll", "t1": "tt", "t2": "tb", "t3": "td", "mni": "li",
-               "ui": "ui", "nb": "bn"}
-        names, values = coil_table({ren[c]: v / 0.01 for c, v in coils.items() if c in ren},
-                                   list(ren[c] for c in ren))
-        write_est(d / f"msak0_{k:03d}.ema", names, np.arange(200) / 500.0, values, binary=True)
-    write_pal(d / "PAL.DAT", SUBJECTS["JW11"].palate_outline())
+    write_ema_speaker(root, "msak0")
     (root / "ema.yaml").write_text("preset: mocha-timit\n")
     return root
 
