@@ -139,27 +139,33 @@ head_frame: {forward: x, up: y}
 """
 
 
+def speaker_map(fmt: str) -> str:
+    """The ``ema.yaml`` of a speaker :func:`write_ema_speaker` writes in ``fmt`` "tsv" or
+    "csv"."""
+    return TSV_MAP.replace("format: tsv", f"format: {fmt}")
+
+
 def write_ema_speaker(root: Path, name: str, tasks=(5, 7), *, frames: int = 200,
                       fmt: str = "est") -> Path:
     """A speaker directory of JW11's synthetic tasks moved by :func:`head_motion_2d`, at 500 Hz
-    (utterances ``<name>_001`` ...), and JW11's PAL.DAT: ``fmt`` "est" (MOCHA-TIMIT's binary
-    files in 0.01 mm, for ``preset: mocha-timit``) or "tsv" (mm, with :data:`TSV_MAP` as the
-    speaker's ``ema.yaml``)."""
+    (utterances ``<name>_001`` ...), and JW11's PAL.DAT: ``fmt`` "est" or "est-ascii"
+    (MOCHA-TIMIT's files, binary or ASCII, in 0.01 mm, for ``preset: mocha-timit``), or "tsv",
+    "csv" (mm, with :func:`speaker_map` as the speaker's ``ema.yaml``)."""
     d = root / name
     d.mkdir(parents=True)
     time_s = np.arange(frames) / 500.0
     for k, task in enumerate(tasks, start=1):
         _, xy = generate_task(SUBJECTS["JW11"], task)
-        coils = head_motion_2d(xy[:frames])
-        if fmt == "est":
-            names, values = coil_table({MOCHA_COILS[c]: v / 0.01 for c, v in coils.items()
-                                        if c in MOCHA_COILS}, list(MOCHA_COILS.values()))
-            write_est(d / f"{name}_{k:03d}.ema", names, time_s, values, binary=True)
+        coils = {c: v for c, v in head_motion_2d(xy[:frames]).items() if c in MOCHA_COILS}
+        if fmt.startswith("est"):
+            names, values = coil_table({MOCHA_COILS[c]: v / 0.01 for c, v in coils.items()},
+                                       list(MOCHA_COILS.values()))
+            write_est(d / f"{name}_{k:03d}.ema", names, time_s, values, binary=fmt == "est")
         else:
-            write_table(d / f"{name}_{k:03d}.tsv",
-                        {c: v for c, v in coils.items() if c in MOCHA_COILS}, time_s)
-    if fmt == "tsv":
-        (d / "ema.yaml").write_text(TSV_MAP)
+            write_table(d / f"{name}_{k:03d}.{fmt}", coils, time_s,
+                        sep="\t" if fmt == "tsv" else ",")
+    if not fmt.startswith("est"):
+        (d / "ema.yaml").write_text(speaker_map(fmt))
     write_pal(d / "PAL.DAT", SUBJECTS["JW11"].palate_outline())
     return d
 

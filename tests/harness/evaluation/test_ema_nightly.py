@@ -1,5 +1,5 @@
-"""Issue 42's "done when": an EMA corpus in each of two formats (MOCHA-TIMIT's binary EST track
-under ``preset: mocha-timit``, and a TSV export with its own coil map) runs through
+"""Issue 42's "done when": an EMA corpus in four formats (MOCHA-TIMIT's EST tracks, binary and
+ASCII, under ``preset: mocha-timit``; TSV and CSV exports with their own coil maps) runs through
 ``cassi nightly --config`` with 2 workers, and the viewer of an utterance has its sound and its
 xwaves labels. The recordings are JW11's synthetic tasks: they describe the software, not real
 speakers."""
@@ -25,6 +25,8 @@ def _corpus(root):
     est = write_ema_speaker(root, "fsew0", tasks=(5,))
     (root / "ema.yaml").write_text("preset: mocha-timit\n")
     write_ema_speaker(root, "nwave0", tasks=(7,), fmt="tsv")
+    for name, fmt in (("fascii0", "est-ascii"), ("ncsv0", "csv")):
+        write_ema_speaker(root, name, tasks=(9,), fmt=fmt)
     seconds = 199 / 500  # 200 rows at 500 Hz
     tone = 0.3 * np.sin(2 * np.pi * 440 * np.arange(int(seconds * AUDIO_RATE)) / AUDIO_RATE)
     wavfile.write(est / "fsew0_001.wav", AUDIO_RATE, (tone * 32767).astype(np.int16))
@@ -32,7 +34,7 @@ def _corpus(root):
         f"signal fsew0_001\nnfields 1\n#\n {LABEL_END_S:.4f} 26 sil\n {seconds:.4f} 26 aa\n")
 
 
-def test_an_ema_corpus_in_two_formats_runs_nightly(tmp_path, capsys):
+def test_an_ema_corpus_in_four_formats_runs_nightly(tmp_path, capsys):
     corpus = tmp_path / "ema"
     _corpus(corpus)
     config = tmp_path / "night.yaml"
@@ -46,9 +48,10 @@ def test_an_ema_corpus_in_two_formats_runs_nightly(tmp_path, capsys):
     # both formats judged, on the geometry and on the front view's renders
     views = results.groupby("subject")["view"].unique().map(frozenset)
     assert all({"geometry", "front"} <= v for v in views)
-    assert sorted(results["subject"].unique()) == ["fsew0", "nwave0"]
+    speakers = ["fascii0", "fsew0", "ncsv0", "nwave0"]
+    assert sorted(results["subject"].unique()) == speakers
     meta = json.loads((run / "run.json").read_text())
-    assert sorted(meta["derived_pellets"]) == ["fsew0", "nwave0"]
+    assert sorted(meta["derived_pellets"]) == speakers
     (report,) = (night / "reports").iterdir()
     assert "EMA speakers were not measured" in (report / "index.html").read_text()
     text = (report / "viewer" / "fsew0" / "1001_1.js").read_text()
