@@ -8,6 +8,7 @@ import numpy as np
 from ema_writers import write_ema_speaker
 from cassi.data.commands import main
 from cassi.data.corpus.disk import Corpus
+from cassi.harness.evaluation.caches import corpus_root
 
 
 def _mocha_corpus(root):
@@ -52,3 +53,15 @@ def test_check_refuses_a_bad_map(tmp_path, capsys):
     (root / "ema.yaml").write_text("preset: mocha-timit\nreferences: {}\n")
     assert main(["check", str(root)]) == 2
     assert "ema.yaml:2: no reference coils" in capsys.readouterr().err
+
+
+def test_stats_put_an_ema_speaker_beside_an_xrmb_one(tmp_path, capsys):
+    """`cassi corpus stats EMA --compare XRMB`: the same figures, side by side, each speaker at
+    its own rate (500 Hz against 145.6 Hz)."""
+    speaker = write_ema_speaker(tmp_path / "ema", "ncsv0", tasks=(9,), fmt="csv")
+    xrmb = corpus_root(None) / "JW11"
+    assert main(["stats", str(speaker), "--compare", str(xrmb)]) == 0
+    out = capsys.readouterr().out
+    assert f"# A: {speaker}" in out and f"# B: {xrmb}" in out
+    jaw = next(line for line in out.splitlines() if line.startswith("jaw_distance_median"))
+    assert jaw.split("\t")[1].startswith("42.6 | ")   # MNM derived by JW11's rigid jaw
