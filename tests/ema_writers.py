@@ -139,9 +139,24 @@ head_frame: {forward: x, up: y}
 """
 
 
+#: A 3-D recording's coil map: every pellet measured, four reference coils, the occlusal plane
+#: from two coils (``{bite}``: ", file: ..." for a bite-plane recording of its own).
+MAP_3D = """\
+format: {fmt}
+{extra}pellets: {{UL: ul, LL: ll, T1: t1, T2: t2, T3: t3, T4: t4, MNI: mni, MNM: mnm}}
+references: {{upper_incisor: ui, nose_bridge: nb, mastoid_left: ml, mastoid_right: mr}}
+head_frame: {{occlusal: {{front: bf, back: bb{bite}}}}}
+"""
+ORDER = PELLET_COILS + ("ui", "nb", "ml", "mr", "bf", "bb")
+
+
 def speaker_map(fmt: str) -> str:
-    """The ``ema.yaml`` of a speaker :func:`write_ema_speaker` writes in ``fmt`` "tsv" or
-    "csv"."""
+    """The ``ema.yaml`` of a speaker :func:`write_ema_speaker` writes in ``fmt`` "tsv", "csv"
+    or "pos" (3-D: :data:`MAP_3D`, the coils by channel number in :data:`ORDER`)."""
+    if fmt == "pos":
+        coils = "coils: {" + ", ".join(f"{c}: {k + 1}" for k, c in enumerate(ORDER)) + "}\n"
+        return MAP_3D.format(fmt="pos", extra=f"channels: {len(ORDER)}\nrate_hz: 500\n{coils}",
+                             bite="")
     return TSV_MAP.replace("format: tsv", f"format: {fmt}")
 
 
@@ -150,14 +165,17 @@ def write_ema_speaker(root: Path, name: str, tasks=(5, 7), *, frames: int = 200,
     """A speaker directory of JW11's synthetic tasks moved by :func:`head_motion_2d`, at 500 Hz
     (utterances ``<name>_001`` ...), and JW11's PAL.DAT: ``fmt`` "est" or "est-ascii"
     (MOCHA-TIMIT's files, binary or ASCII, in 0.01 mm, for ``preset: mocha-timit``), or "tsv",
-    "csv" (mm, with :func:`speaker_map` as the speaker's ``ema.yaml``)."""
+    "csv", "pos" (mm, with :func:`speaker_map` as the speaker's ``ema.yaml``)."""
     d = root / name
     d.mkdir(parents=True)
     time_s = np.arange(frames) / 500.0
     for k, task in enumerate(tasks, start=1):
         _, xy = generate_task(SUBJECTS["JW11"], task)
         coils = {c: v for c, v in head_motion_2d(xy[:frames]).items() if c in MOCHA_COILS}
-        if fmt.startswith("est"):
+        if fmt == "pos":   # Carstens AG50x: 3-D, the head moving and turning
+            moved = head_motion_3d(xy[:frames])
+            write_pos(d / f"{name}_{k:03d}.pos", np.stack([moved[c] for c in ORDER], axis=1))
+        elif fmt.startswith("est"):
             names, values = coil_table({MOCHA_COILS[c]: v / 0.01 for c, v in coils.items()},
                                        list(MOCHA_COILS.values()))
             write_est(d / f"{name}_{k:03d}.ema", names, time_s, values, binary=fmt == "est")

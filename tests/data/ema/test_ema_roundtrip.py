@@ -5,21 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ema_writers import (PELLET_COILS, coil_table, head_motion_2d, head_motion_3d, write_est,
-                         write_pos, write_table)
+from ema_writers import (MAP_3D, ORDER, PELLET_COILS, coil_table, head_motion_2d, head_motion_3d,
+                         write_est, write_pos, write_table)
 from cassi.data.corpus.disk import Corpus
 from cassi.data.synth.corpus import generate_task
 from cassi.data.synth.subjects import SUBJECTS, palate_y
 from cassi.data.xrmb.files import PELLETS
 
 N = 240
-MAP_3D = """\
-format: {fmt}
-{extra}pellets: {{UL: ul, LL: ll, T1: t1, T2: t2, T3: t3, T4: t4, MNI: mni, MNM: mnm}}
-references: {{upper_incisor: ui, nose_bridge: nb, mastoid_left: ml, mastoid_right: mr}}
-head_frame: {{occlusal: {{front: bf, back: bb{bite}}}}}
-"""
-ORDER = PELLET_COILS + ("ui", "nb", "ml", "mr", "bf", "bb")
 
 
 @pytest.fixture(scope="module")

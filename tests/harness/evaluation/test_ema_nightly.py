@@ -1,5 +1,6 @@
-"""Issue 42's "done when": an EMA corpus in four formats (MOCHA-TIMIT's EST tracks, binary and
-ASCII, under ``preset: mocha-timit``; TSV and CSV exports with their own coil maps) runs through
+"""Issue 42's "done when": an EMA corpus in every format (MOCHA-TIMIT's EST tracks, binary and
+ASCII, under ``preset: mocha-timit``; TSV and CSV exports with their own coil maps; a 3-D
+Carstens .pos with four reference coils and the occlusal plane) runs through
 ``cassi nightly --config`` with 2 workers, and the viewer of an utterance has its sound and its
 xwaves labels. The recordings are JW11's synthetic tasks: they describe the software, not real
 speakers."""
@@ -25,7 +26,7 @@ def _corpus(root):
     est = write_ema_speaker(root, "fsew0", tasks=(5,))
     (root / "ema.yaml").write_text("preset: mocha-timit\n")
     write_ema_speaker(root, "nwave0", tasks=(7,), fmt="tsv")
-    for name, fmt in (("fascii0", "est-ascii"), ("ncsv0", "csv")):
+    for name, fmt in (("fascii0", "est-ascii"), ("ncsv0", "csv"), ("ag501", "pos")):
         write_ema_speaker(root, name, tasks=(9,), fmt=fmt)
     seconds = 199 / 500  # 200 rows at 500 Hz
     tone = 0.3 * np.sin(2 * np.pi * 440 * np.arange(int(seconds * AUDIO_RATE)) / AUDIO_RATE)
@@ -34,7 +35,7 @@ def _corpus(root):
         f"signal fsew0_001\nnfields 1\n#\n {LABEL_END_S:.4f} 26 sil\n {seconds:.4f} 26 aa\n")
 
 
-def test_an_ema_corpus_in_four_formats_runs_nightly(tmp_path, capsys):
+def test_an_ema_corpus_in_every_format_runs_nightly(tmp_path, capsys):
     corpus = tmp_path / "ema"
     _corpus(corpus)
     config = tmp_path / "night.yaml"
@@ -48,10 +49,10 @@ def test_an_ema_corpus_in_four_formats_runs_nightly(tmp_path, capsys):
     # both formats judged, on the geometry and on the front view's renders
     views = results.groupby("subject")["view"].unique().map(frozenset)
     assert all({"geometry", "front"} <= v for v in views)
-    speakers = ["fascii0", "fsew0", "ncsv0", "nwave0"]
-    assert sorted(results["subject"].unique()) == speakers
+    assert sorted(results["subject"].unique()) == ["ag501", "fascii0", "fsew0", "ncsv0", "nwave0"]
     meta = json.loads((run / "run.json").read_text())
-    assert sorted(meta["derived_pellets"]) == speakers
+    # the Carstens speaker measured every pellet: nothing derived, nothing flagged
+    assert sorted(meta["derived_pellets"]) == ["fascii0", "fsew0", "ncsv0", "nwave0"]
     (report,) = (night / "reports").iterdir()
     assert "EMA speakers were not measured" in (report / "index.html").read_text()
     text = (report / "viewer" / "fsew0" / "1001_1.js").read_text()
