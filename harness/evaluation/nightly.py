@@ -16,8 +16,8 @@ from typing import Callable
 
 from cassi.common.atomic import atomic_write_text
 from cassi.harness.evaluation.config import NIGHTLY, RunConfig
-from cassi.harness.evaluation.nights import (LATEST, NIGHT_DONE, STORE_DIR, Night, StageTimer,
-                                             night_name, previous_night)
+from cassi.harness.evaluation.nights import (LATEST, NIGHT_DONE, SENSITIVITY_MEMO, STORE_DIR,
+                                             Night, StageTimer, night_name, previous_night)
 from cassi.harness.evaluation.run import run as run_farm
 from cassi.harness.evaluation.sensitivity import sensitivity
 
@@ -48,7 +48,8 @@ def nightly(out_dir: str | os.PathLike, *, review: Callable[[Night], tuple[bool,
         # each finding's robustness to the rubric's own thresholds (seconds: no re-render);
         # the versions' constants cost a geometry stage each: `cassi sensitivity RUN`
         with timer("robustness (thresholds)"):
-            sensitivity(run_dir, only="thresholds", log=timer.say)
+            sensitivity(run_dir, only="thresholds", log=timer.say,
+                        memo=root / STORE_DIR / SENSITIVITY_MEMO)
     passed, index = review(Night(root, name, run_dir, reports_dir / name, result,
                                  previous_night(runs_dir, name), timer))
     passed = passed and result.ok

@@ -36,6 +36,9 @@ if TYPE_CHECKING:  # the farm's result, only named here: reading nights starts n
 
 #: The store all nights of a nightly directory share (:class:`cassi.harness.farm.store.OutputStore`).
 STORE_DIR = "store"
+#: Robustness analyses in the store, by what they depend on (the results table's bytes, the code
+#: and rubric): a night with the results of an earlier one takes its analysis from there.
+SENSITIVITY_MEMO = "derived/sensitivity"
 #: Written into a night's run directory once the whole night (run, gates, history, report) is
 #: done; a night of today's date without it was interrupted and is resumed.
 NIGHT_DONE = "night.json"

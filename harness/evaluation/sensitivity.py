@@ -12,6 +12,7 @@ Writes ``sensitivity.json`` and ``sensitivity.md``.
 """
 from __future__ import annotations
 
+import hashlib
 import json
 import tempfile
 import time
@@ -86,14 +87,47 @@ def _with_geometry(results: pd.DataFrame, rows: list[pd.DataFrame], synthetic: b
     return pd.concat([kept, new], ignore_index=True)
 
 
+def _memo_key(run: Path, meta: dict, only: str | None) -> str:
+    """What an analysis depends on: the results table's bytes, the code and rubric that graded
+    them and that re-grade them (the run's provenance digests), the packages, ``only``."""
+    prov = meta.get("provenance") or {}
+    doc = {k: prov.get(k) for k in ("code_digest", "versions_code_digest", "rubric_digest",
+                                     "packages")}
+    if None in doc.values():
+        return ""   # a run without provenance: nothing to recognise it by, always computed
+    h = hashlib.sha256((run / "results.parquet").read_bytes())
+    h.update(json.dumps({**doc, "only": only, "format": 1}, sort_keys=True).encode())
+    return h.hexdigest()
+
+
+def _write(doc: dict, out: Path) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(out / JSON_NAME, json.dumps(doc, indent=1) + "\n")
+    atomic_write_text(out / MD_NAME, sensitivity_markdown(doc))
+
+
 def sensitivity(run: str | Path, out: str | Path | None = None, *, only: str | None = None,
-                workers: int | None = None, log=print) -> dict:
+                workers: int | None = None, log=print, memo: str | Path | None = None) -> dict:
     """Evaluate every setting on the run in ``run``; write :data:`JSON_NAME` and
-    :data:`MD_NAME` into ``out`` (default ``run``) and return what the JSON holds."""
+    :data:`MD_NAME` into ``out`` (default ``run``) and return what the JSON holds.
+
+    With ``memo`` (a folder kept across runs: a nightly store's), an analysis of the same
+    results table by the same code and rubric is taken from there, saying so
+    (``reused_from``), instead of computed again.
+    """
     run, out = Path(run), Path(out) if out is not None else Path(run)
     if only is not None and only not in ONLY:
         raise CassiInputError(f"--only takes {' or '.join(ONLY)}, not {only!r}")
     results, meta = _read_run(run)
+    key = _memo_key(run, meta, only) if memo is not None else ""
+    kept = Path(memo) / f"{key}.json" if key else None
+    if kept is not None and kept.is_file():
+        earlier = json.loads(kept.read_text())
+        doc = {**earlier, "run": str(run.resolve()),
+               "reused_from": earlier.get("reused_from") or earlier["run"]}
+        _write(doc, out)
+        log(f"robustness: the same results table and code as {doc['reused_from']}: reused")
+        return doc
     S.verify_grades(results, str(run / "results.parquet"))
     t0 = time.perf_counter()
     base = S.findings(results)
@@ -119,9 +153,10 @@ def sensitivity(run: str | Path, out: str | Path | None = None, *, only: str | N
                findings=S.robustness(base, evaluated),
                note="the generator's calibration is not among the constants; under a version "
                     "setting the image checks keep the run's values (a render would be needed)")
-    out.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out / JSON_NAME, json.dumps(doc, indent=1) + "\n")
-    atomic_write_text(out / MD_NAME, sensitivity_markdown(doc))
+    _write(doc, out)
+    if kept is not None:
+        kept.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(kept, json.dumps(doc, indent=1) + "\n")
     return doc
 
 
@@ -193,4 +228,7 @@ def sensitivity_markdown(doc: dict) -> str:
               f"| {_md_cell(c['reason'])} |" for c in doc["constants"]]
     tm = doc["timing"]
     lines += ["", "## Cost", "", "; ".join(f"{k}: {v}" for k, v in tm.items()), ""]
+    if doc.get("reused_from"):
+        lines += [f"Reused from `{doc['reused_from']}`: the same results table (by its bytes), "
+                  "code and rubric; the cost above is that analysis's.", ""]
     return "\n".join(lines)
