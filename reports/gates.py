@@ -140,7 +140,7 @@ def image_gates(run: Run, reference_dir: Path, *,
     """
     out = []
     images_dir = Path(images_dir or run.root)
-    for _, row in run.renders.iterrows():
+    for row in run.renders.to_dict("records"):
         if not str(row["path"]).endswith(".png"):
             continue
         item = f"{row['view']} task {int(row['task'])} frame {int(row['frame'])}"
@@ -588,7 +588,7 @@ def _renders_as_golden(run: Run, scratch: Path) -> Path:
     """A baseline run's renders laid out like a golden directory: links in ``scratch`` (inside
     the run being gated, so the baseline run is never written to), made anew each time."""
     shutil.rmtree(scratch, ignore_errors=True)
-    for _, row in run.renders.iterrows():
+    for row in run.renders.to_dict("records"):
         dest = scratch / golden_key(row)
         if not dest.exists():
             dest.parent.mkdir(parents=True, exist_ok=True)
