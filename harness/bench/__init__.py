@@ -7,6 +7,8 @@
   (:mod:`.memory`, ``geometry_peak_rss_mb``, ``image_peak_rss_mb``);
 - ``farm_preview`` and ``farm``: preview frames per second end to end in the farm, and jobs per
   second with 1 and 2 local workers and with Ray (:mod:`.farm`);
+- ``job_cost``: a geometry job's seconds split into the version's own computation, the
+  rubric's work and the rest (:mod:`.jobcost`, ``job_overhead_share``);
 - ``incremental_night``: a second night with nothing changed over the first, side by side in
   one run (:mod:`.night`, ``incremental_night_fraction``).
 
@@ -36,6 +38,7 @@ BENCHMARKS = {"geometry": "cassi.harness.bench.geometry:bench_geometry",
               "image_memory": "cassi.harness.bench.memory:bench_image_memory",
               "farm_preview": "cassi.harness.bench.farm:bench_farm_preview",
               "farm": "cassi.harness.bench.farm:bench_farm",
+              "job_cost": "cassi.harness.bench.jobcost:bench_job_cost",
               "incremental_night": "cassi.harness.bench.night:bench_incremental_night"}
 
 
@@ -54,6 +57,7 @@ HEADLINE = {"geometry": _same("geometry_frames_per_s"),
             "farm_preview": _same("farm_preview_frames_per_s", "farm_preview_cpu_frames_per_s"),
             "farm": {"speedup_2_workers": "farm_speedup_2_workers",
                      **_same("ray_overhead_vs_local")},
+            "job_cost": _same("job_overhead_share"),
             "incremental_night": _same("incremental_night_fraction")}
 
 

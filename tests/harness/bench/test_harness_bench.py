@@ -13,12 +13,13 @@ import cassi.harness.bench as bench
 from cassi.common.lazy import resolve
 from cassi.harness.bench import BENCHMARKS, headline
 from cassi.harness.bench.farm import bench_farm, cpu_stage
+from cassi.harness.bench.jobcost import PARTS, bench_job_cost
 from cassi.harness.bench.measure import guarded
 from cassi.harness.farm.jobs import Job, StageContext, State, execute_job
 
 #: The names `cassi bench --only` takes, as docs/benchmarks.md and `cassi bench --help` list them.
 NAMES = ["geometry", "render", "geometry_memory", "image_memory", "farm_preview", "farm",
-         "incremental_night"]
+         "job_cost", "incremental_night"]
 
 
 def test_every_registered_benchmark_is_a_function_of_quick():
@@ -95,3 +96,14 @@ def test_bench_headline_keys_come_from_the_entries_that_have_them():
     # The farm's speed-up is copied to the top under the name docs/benchmarks.md gives it.
     out = headline({"farm": {"speedup_2_workers": 1.8, "ray_overhead_vs_local": 0.1}})
     assert out == {"farm_speedup_2_workers": 1.8, "ray_overhead_vs_local": 0.1}
+
+
+def test_a_geometry_jobs_cost_is_split_into_its_parts():
+    entry = bench_job_cost(True)
+    assert "error" not in entry, entry
+    assert len(entry["by_version"]) == 2
+    for version, v in entry["by_version"].items():
+        assert v["job_s"] > 0 and all(v[k] > 0 for k in PARTS), version
+        assert abs(v["job_s"] - sum(v[k] for k in (*PARTS, "rest_s"))) < 0.01, version
+    assert entry["job_overhead_share"] == round(entry["total"]["rest_s"]
+                                                / entry["total"]["job_s"], 3)
