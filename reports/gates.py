@@ -130,24 +130,33 @@ def _write_gate_images(out: Path, stem: Path, rendered: np.ndarray, reference: n
     return written
 
 
-def image_gates(run: Run, reference_dir: Path, *,
-                images_dir: Path | None = None) -> list[GateResult]:
-    """Compare every render of ``run`` with its golden counterpart under ``reference_dir``.
+def _pngs(renders: pd.DataFrame) -> list[dict]:
+    return [r for r in renders.to_dict("records") if str(r["path"]).endswith(".png")]
 
-    A render without a golden image is a skipped gate that says so; never a pass. A failed
+
+def image_gates(run: Run, reference_dir: Path | None = None, *, baseline: Run | None = None,
+                images_dir: Path | None = None) -> list[GateResult]:
+    """Compare every render of ``run`` with its counterpart: the golden image under
+    ``reference_dir``, or the ``baseline`` run's render of the same view, task file, version
+    and frame (read where the baseline's index puts it).
+
+    A render without a counterpart is a skipped gate that says so; never a pass. A failed
     render gets its rendered, reference, difference and FLIP images under
     ``images_dir/gate-images`` (default: the run directory).
     """
     out = []
     images_dir = Path(images_dir or run.root)
-    for row in run.renders.to_dict("records"):
-        if not str(row["path"]).endswith(".png"):
-            continue
+    theirs = None if baseline is None else {golden_key(r): Path(r["path"])
+                                            for r in _pngs(baseline.renders)}
+    for row in _pngs(run.renders):
         item = f"{row['view']} task {int(row['task'])} frame {int(row['frame'])}"
-        ref = reference_dir / golden_key(row)
-        if not ref.is_file():
+        key = golden_key(row)
+        ref = reference_dir / key if theirs is None else theirs.get(key)
+        if ref is None or not ref.is_file():
+            missing = (f"no golden image {ref}" if theirs is None else
+                       f"no render of the baseline {baseline.root} at {key.as_posix()}")
             out.append(GateResult("image", row["subject"], row["version"], item, "skip",
-                                  f"no golden image {ref}"))
+                                  missing))
             continue
         corrupt = _not_its_name(Path(row["path"])) or _not_its_name(ref)
         if corrupt:
@@ -533,9 +542,8 @@ def _compare(run: Run, base: _Baseline, what: _Comparison) -> list[GateResult]:
     """The metric gates (where the baseline has results) and the image gates; a gate that
     compared nothing refuses."""
     results = [] if what.base_results is None else metric_gates(what.results, what.base_results)
-    reference = base.golden or _renders_as_golden(base.run, run.root / ".gate-baseline")
     images = image_gates(Run(run.root, what.results, run.ratings, run.meta, what.renders),
-                         reference)
+                         base.golden, baseline=None if base.golden else base.run)
     if not any(r.status != "skip" for r in results + images):
         where = " on what both share (--common-only)" if what.differences else ""
         raise NothingCompared(
@@ -582,18 +590,6 @@ def gate(run_dir: str | os.PathLike, baseline: str | os.PathLike, *,
     write_gate_report(Path(out_dir or run.root), passed, results, baseline=str(base.path),
                       notes=what.notes)
     return passed, results
-
-
-def _renders_as_golden(run: Run, scratch: Path) -> Path:
-    """A baseline run's renders laid out like a golden directory: links in ``scratch`` (inside
-    the run being gated, so the baseline run is never written to), made anew each time."""
-    shutil.rmtree(scratch, ignore_errors=True)
-    for row in run.renders.to_dict("records"):
-        dest = scratch / golden_key(row)
-        if not dest.exists():
-            dest.parent.mkdir(parents=True, exist_ok=True)
-            os.symlink(row["path"], dest)
-    return scratch
 
 
 def write_gate_report(out_dir: Path, passed: bool, results: list[GateResult], *, baseline: str,
