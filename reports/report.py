@@ -346,9 +346,12 @@ def _viewer_images(run: Run, out: Path, place):
                                              pointed.get((subject, int(task), int(rep), version), ())}
         return g[g["frame"].isin(frames)].sort_values(["frame", "view"])
 
-    # Encode every picture the viewers show first, on every core (libwebp releases the GIL):
-    # a night's 6,400 take 85 s of one core; the subject pages' are nearly all among them.
-    wanted = [str(p) for k in groups for p in (shown(*k)["path"])]
+    # Encode every picture the viewers will show first, on every core (libwebp releases the
+    # GIL): a night's 6,400 take 85 s of one core; the subject pages' are nearly all among them.
+    viewers = {(a.subject, int(a.task), int(a.rep), a.version)
+               for a in att[att["name"] == "viewer"].itertuples(index=False)} if len(att) else set()
+    wanted = [str(p) for k in groups if (k[0], int(k[1]), int(k[2]), k[3]) in viewers
+              for p in shown(*k)["path"]]
     with ThreadPoolExecutor(usable_cores()) as pool:
         list(pool.map(place, dict.fromkeys(wanted)))
 
