@@ -302,7 +302,7 @@ def _cell_faults(v: pd.DataFrame, text: str, links: dict, key: tuple) -> list[di
     what the cell's text says beyond them (Table C's comparison), unlinked."""
     faults, said = [], []
     for r in v.itertuples(index=False):
-        piece = negatives_text(pd.DataFrame({"check": [r.check], "negatives": [r.negatives]}))
+        piece = negatives_text({"check": [r.check], "negatives": [r.negatives]})
         if piece:
             said.append(piece)
             faults.append({"text": piece, "href": links.get((*key, r.check))})

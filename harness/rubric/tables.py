@@ -189,7 +189,8 @@ def _charge_once(out: pd.DataFrame,
 
 
 def negatives_text(rows: pd.DataFrame) -> str:
-    """The negatives of verdict rows as the thesis lists them: ``- text`` (``--`` for two)."""
+    """The negatives of verdict rows (a frame, or any mapping of ``check`` and ``negatives``
+    columns) as the thesis lists them: ``- text`` (``--`` for two)."""
     out = []
     for check, n in zip(rows["check"], rows["negatives"]):
         if int(n) <= 0:
