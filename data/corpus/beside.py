@@ -31,9 +31,11 @@ def _listing(directory: Path) -> dict[str, Path]:
         return {}
 
 
-def file_for_stem(directory: str | Path, stem: str, suffixes) -> Path | None:
-    """The first of ``stem`` + each of ``suffixes`` in ``directory``, names in any case."""
-    files = _listing(Path(directory))
+def file_for_stem(directory: str | Path, stem: str, suffixes, *,
+                  files: dict[str, Path] | None = None) -> Path | None:
+    """The first of ``stem`` + each of ``suffixes`` in ``directory``, names in any case
+    (``files``: the directory's files by lower-case name, when the caller has listed it)."""
+    files = _listing(Path(directory)) if files is None else files
     for suffix in suffixes:
         path = files.get((stem + suffix).lower())
         if path is not None:
@@ -41,20 +43,22 @@ def file_for_stem(directory: str | Path, stem: str, suffixes) -> Path | None:
     return None
 
 
-def _mlf_with(directory: Path, stem: str) -> Path | None:
+def _mlf_with(directory: Path, stem: str, files: dict[str, Path] | None) -> Path | None:
     """The master label file in ``directory`` that labels ``stem``, if one does."""
-    for name, path in _listing(directory).items():
+    for name, path in (_listing(directory) if files is None else files).items():
         if name.endswith(".mlf") and stem in parse_mlf(read_bytes(path), path=path):
             return path
     return None
 
 
-def alignment_path_for_stem(directory: str | Path, stem: str) -> Path | None:
+def alignment_path_for_stem(directory: str | Path, stem: str, *,
+                            files: dict[str, Path] | None = None) -> Path | None:
     """The file that holds ``stem``'s labels: ``stem.TextGrid``, ``stem.lab``, ``stem.rec``
     (:data:`~cassi.data.xrmb.labels.LABEL_SUFFIXES`, in that order), else a master label file
-    of the directory that names it; None when there is none."""
-    return (file_for_stem(directory, stem, LABEL_SUFFIXES)
-            or _mlf_with(Path(directory), stem))
+    of the directory that names it; None when there is none (``files``: as
+    :func:`file_for_stem`)."""
+    return (file_for_stem(directory, stem, LABEL_SUFFIXES, files=files)
+            or _mlf_with(Path(directory), stem, files))
 
 
 def alignment_for_stem(directory: str | Path, stem: str) -> Alignment | None:
@@ -64,9 +68,11 @@ def alignment_for_stem(directory: str | Path, stem: str) -> Alignment | None:
     return None if path is None else read_labels(path, stem=stem)
 
 
-def audio_for_stem(directory: str | Path, stem: str) -> Path | None:
-    """``stem.wav`` (any case, any sample rate) in ``directory``, or None."""
-    path = file_for_stem(directory, stem, (".wav",))
+def audio_for_stem(directory: str | Path, stem: str, *,
+                   files: dict[str, Path] | None = None) -> Path | None:
+    """``stem.wav`` (any case, any sample rate) in ``directory``, or None (``files``: as
+    :func:`file_for_stem`)."""
+    path = file_for_stem(directory, stem, (".wav",), files=files)
     if path is not None and not path.is_file():
         raise CassiInputError("is not a regular file", path=path)
     return path

@@ -228,13 +228,13 @@ class SubjectData:
         """The file of the task's labels beside it (``tpNNN.TextGrid``, ``.lab``, ``.rec`` or a
         master label file naming it: :func:`~cassi.data.corpus.beside.alignment_path_for_stem`)
         or None."""
-        path = alignment_path_for_stem(self.directory, self._stem(task, rep))
+        path = alignment_path_for_stem(self.directory, self._stem(task, rep), files=self._files)
         return None if path is None else self._checked(path)
 
     def audio_path(self, task: int, rep: int = 1) -> Path | None:
         """The task's audio recording (``tpNNN.wav`` as XRMB distributes it, any case, any
         sample rate) or None."""
-        path = audio_for_stem(self.directory, self._stem(task, rep))
+        path = audio_for_stem(self.directory, self._stem(task, rep), files=self._files)
         return None if path is None else self._checked(path)
 
     def alignment(self, task: int, rep: int = 1) -> Alignment | None:

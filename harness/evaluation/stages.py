@@ -38,7 +38,6 @@ from cassi.harness.rubric.image import depth_read
 from cassi.harness.rubric.measures import CRITERION_DIAGNOSTICS, DIAGNOSTICS_READ
 from cassi.renderer.images import png_bytes
 from cassi.renderer.views import PRESET_NAMES, VIEW_NAMES
-from cassi.data.xrmb.files import recording_period_us
 from cassi.versions.registry import available_versions, get_version
 
 #: A geometry job's temporary directory: ``cassi-geometry-<pid>-<host>-<random>``, so the next
@@ -229,7 +228,7 @@ def _geometry_output(job: Job, ctx: StageContext, rec, anim: StreamedAnimation,
 
 def _viewer_output(rec, anim: StreamedAnimation, face, profile, rows: pd.DataFrame) -> bytes:
     """The report's task viewer data (:mod:`.viewerdata`) at :func:`viewer_frames`."""
-    stride = viewer_stride(recording_period_us(rec.time_us))
+    stride = viewer_stride(rec.period_us)
     keep = viewer_frames(anim.frames, rows, stride=stride)
     idx = np.searchsorted(anim.frames, keep)
     xy = np.asarray(rec.xy_mm)[keep]
