@@ -338,10 +338,9 @@ def _viewer_images(run: Run, out: Path, place):
             .itertuples(index=False):
         pointed.setdefault((r.subject, int(r.task), int(r.rep), r.version), set()).add(int(r.frame))
 
-    def shown(subject, task, rep, version) -> pd.DataFrame | None:
-        g = groups.get((subject, task, rep, version))
-        if g is None:
-            return None
+    def shown(key, g: pd.DataFrame) -> pd.DataFrame:
+        """The renders of a task file and version the viewer shows (see above)."""
+        subject, task, rep, version = key
         frames = {int(g["frame"].min())} | {_nearest_rendered(g, f) for f in
                                              pointed.get((subject, int(task), int(rep), version), ())}
         return g[g["frame"].isin(frames)].sort_values(["frame", "view"])
@@ -350,13 +349,14 @@ def _viewer_images(run: Run, out: Path, place):
     # GIL): a night's 6,400 take 85 s of one core; the subject pages' are nearly all among them.
     viewers = {(a.subject, int(a.task), int(a.rep), a.version)
                for a in att[att["name"] == "viewer"].itertuples(index=False)} if len(att) else set()
-    wanted = [str(p) for k in groups if (k[0], int(k[1]), int(k[2]), k[3]) in viewers
-              for p in shown(*k)["path"]]
+    chosen = {k: shown(k, g) for k, g in groups.items()}
+    wanted = [str(p) for k, g in chosen.items() if (k[0], int(k[1]), int(k[2]), k[3]) in viewers
+              for p in g["path"]]
     with ThreadPoolExecutor(usable_cores()) as pool:
         list(pool.map(place, dict.fromkeys(wanted)))
 
     def images(subject, task, rep, version) -> list[dict]:
-        g = shown(subject, task, rep, version)
+        g = chosen.get((subject, task, rep, version))
         if g is None:
             return []
         found = []
