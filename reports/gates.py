@@ -189,13 +189,19 @@ def image_gates(run: Run, reference_dir: Path | None = None, *, baseline: Run | 
 
 
 def _content_name(path: Path) -> str | None:
-    """The SHA-256 a content-addressed blob is named by (``objects/ab/<sha256>.png``, through
-    the links a baseline run's renders are laid out with), or None for another file."""
-    try:
-        stem = path.resolve().stem
-    except OSError:
-        return None
-    return stem if len(stem) == 64 and all(c in "0123456789abcdef" for c in stem) else None
+    """The SHA-256 a content-addressed blob is named by (``objects/ab/<sha256>.png``, or a
+    link to one), or None for another file."""
+    stem = os.path.basename(path).split(".", 1)[0]
+    if not _is_digest(stem):
+        try:
+            stem = os.path.basename(os.path.realpath(path)).split(".", 1)[0]
+        except OSError:
+            return None
+    return stem if _is_digest(stem) else None
+
+
+def _is_digest(name: str) -> bool:
+    return len(name) == 64 and all(c in "0123456789abcdef" for c in name)
 
 
 def _not_its_name(path: Path) -> str | None:
@@ -554,12 +560,12 @@ def _compare(run: Run, base: _Baseline, what: _Comparison) -> list[GateResult]:
     return results + images
 
 
-def gate(run_dir: str | os.PathLike, baseline: str | os.PathLike, *,
+def gate(run_dir: str | os.PathLike | Run, baseline: str | os.PathLike, *,
          out_dir: str | os.PathLike | None = None,
          common_only: bool = False, jobs: bool = True) -> tuple[bool, list[GateResult]]:
-    """Apply the gates of run ``run_dir`` against ``baseline`` (a run directory or a golden
-    directory), write ``gate.json`` and ``gate.md`` into ``out_dir`` (default: the run), and
-    return (passed, results).
+    """Apply the gates of run ``run_dir`` (or the run already loaded) against ``baseline`` (a
+    run directory or a golden directory), write ``gate.json`` and ``gate.md`` into ``out_dir``
+    (default: the run), and return (passed, results).
 
     A baseline run gives metric gates and, through its renders, image gates; a golden
     directory gives image gates (and metric gates from the results snapshot that
@@ -580,7 +586,7 @@ def gate(run_dir: str | os.PathLike, baseline: str | os.PathLike, *,
     NothingCompared
         When no metric or image gate could be applied.
     """
-    run = load_run(run_dir)
+    run = run_dir if isinstance(run_dir, Run) else load_run(run_dir)  # a caller's loaded run
     base = _load_baseline(Path(baseline))
     what = _like_with_like(run, base, common_only)
     _require_complete(run, base, what.keys)

@@ -42,7 +42,7 @@ def review_night(night: Night, *, common_only: bool = False) -> tuple[bool, Path
     gate_results = job_gates(run)
     for baseline in baselines:
         try:
-            gate_results += gate(run_dir, baseline, common_only=common_only, jobs=False)[1]
+            gate_results += gate(run, baseline, common_only=common_only, jobs=False)[1]
         except (MismatchedBaseline, IncompleteRun, NothingCompared) as err:
             gate_results.append(GateResult("baseline", "all", "all", str(baseline), "fail",
                                            err.reason))

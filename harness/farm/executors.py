@@ -113,7 +113,8 @@ class LocalExecutor:
         self.crashes = 0
 
     def __enter__(self):
-        self.start()
+        # workers start with the first job (start): a night whose every job is reused from
+        # the store spawns none
         return self
 
     def __exit__(self, exc_type, *exc):
@@ -144,6 +145,7 @@ class LocalExecutor:
             self._procs = [self._spawn() for _ in range(self.workers)]
 
     def submit(self, key: str, fn: Callable, *args) -> None:
+        self.start()
         self._queue.append(_Item(key, fn, args))
         self._dispatch()
 
@@ -308,6 +310,8 @@ class RayExecutor:
         self._remote = ray.remote(max_retries=self.retries, retry_exceptions=False)(_ray_call)
 
     def submit(self, key: str, fn: Callable, *args) -> None:
+        if self._remote is None:
+            self.start()
         item = _Item(key, fn, args, attempts=1)
         self._refs[self._remote.remote(*self._init, fn, args)] = item
 

@@ -20,7 +20,7 @@ from cassi.harness.farm.results import ATTACHMENT_COLUMNS, RENDER_COLUMNS
 from cassi.harness.farm.jobs import Job, Outcome, StageContext, StageFn, State, call_job, parent_inputs, store_outputs
 from cassi.harness.farm.plan import BatchPlan, TaskSpec
 from cassi.harness.farm.progress import JobRecord, Progress, Summary, write_job_log
-from cassi.harness.farm.store import OutputStore
+from cassi.harness.farm.store import BlobRef, OutputStore, sha256_bytes
 from cassi.harness.farm.tableset import write_table_set
 
 __all__ = ["Pipeline", "RunResult", "Scheduler", "TaskSpec", "OutputWriteError", "run_batch",
@@ -90,12 +90,13 @@ class Scheduler:
         self.digests: dict[str, str] = {}
         self.records: dict[str, JobRecord] = {}
         self.chunks: dict[str, tuple[Job, ...]] = {}
+        #: key -> the manifest that verified when the job finished (DONE or CACHED)
+        self.verified: dict[str, dict] = {}
         self.bars = Progress(STAGES, enabled=progress)
 
     # -- the loop ----------------------------------------------------------------------------
     def run(self) -> dict[str, JobRecord]:
         try:
-            self.executor.start()
             for job, reason in self.plan.skipped:
                 self._skip(job, reason)
             for job in self.plan.geometry:
@@ -112,7 +113,7 @@ class Scheduler:
         rec = self.records.get(key)
         if rec is None or rec.state not in (State.DONE, State.CACHED):
             return None
-        return self.store.verified(key, self.digests[key])
+        return self.verified.get(key) or self.store.verified(key, self.digests[key])
 
     # -- transitions ---------------------------------------------------------------------------
     def _record(self, job: Job, state: State, reason: str = "", **kw) -> JobRecord:
@@ -129,6 +130,7 @@ class Scheduler:
         self.bars.planned(job.stage)
         manifest = self.store.verified(job.key, digest)
         if manifest is not None:
+            self.verified[job.key] = manifest
             self._record(job, State.CACHED)
             self.bars.finished(job.stage, State.CACHED)
             self._unlock(job, manifest)
@@ -166,6 +168,8 @@ class Scheduler:
             manifest = self.store.verified(key, self.digests[key])
             if manifest is None:
                 self._record(job, State.FAILED, "outputs missing or corrupt after the job finished")
+            else:
+                self.verified[key] = manifest
         write_job_log(self.store, rec)
         self.bars.finished(job.stage, rec.state)
         self._unlock(job, manifest)
@@ -201,18 +205,35 @@ def _attached(name: str, attachments) -> bool:
     return any(name == a or (a.endswith("*") and name.startswith(a[:-1])) for a in attachments)
 
 
-def collect(scheduler: Scheduler, attachments=()) -> tuple[list[pd.DataFrame], list[dict],
+#: The store's memo of combined results tables (:meth:`OutputStore.memo`), by their jobs' rows.
+COMBINED_MEMO = "combined-results"
+
+
+def _combined(store: OutputStore, rows: list[tuple[str, BlobRef]]) -> pd.DataFrame:
+    """:func:`results.combine` of the jobs' stored rows (``(job key, rows blob)``, sorted by
+    key); a table combined before from the very same blobs is read from the store's memo
+    instead of 1,400 small tables (a night whose jobs are all reused)."""
+    key = sha256_bytes("".join(f"{k}\0{ref.sha256}\n" for k, ref in rows).encode())
+    data = store.memo(COMBINED_MEMO, key)
+    if data is not None:
+        return R.from_parquet_bytes(data)
+    table = R.combine(R.from_parquet_bytes(store.get(ref)) for _, ref in rows)
+    store.remember(COMBINED_MEMO, key, R.to_parquet_bytes(table), ".parquet")
+    return table
+
+
+def collect(scheduler: Scheduler, attachments=()) -> tuple[pd.DataFrame, list[dict],
                                                          list[dict]]:
-    """The stored rows of every finished job, the render index and the attachment index
-    entries (the outputs named in ``attachments``)."""
-    frames, renders, attached = [], [], []
+    """The combined stored rows of every finished job, the render index and the attachment
+    index entries (the outputs named in ``attachments``)."""
+    rows, renders, attached = [], [], []
     for key in sorted(scheduler.records):
         manifest = scheduler.manifest(key)
         if manifest is None:
             continue
         outputs = manifest["outputs"]
         if "rows" in outputs:
-            frames.append(R.from_parquet_bytes(scheduler.store.get(outputs["rows"])))
+            rows.append((key, outputs["rows"]))
         job = scheduler.jobs[key]
         for name, ref in outputs.items():
             if name.startswith(RENDER_PREFIX) and name[len(RENDER_PREFIX):].isdigit():
@@ -223,7 +244,7 @@ def collect(scheduler: Scheduler, attachments=()) -> tuple[list[pd.DataFrame], l
                 attached.append({"subject": job.subject, "task": job.task, "rep": job.rep,
                                  "version": job.version, "view": job.view, "name": name,
                                  "path": ref.relpath})
-    return frames, renders, attached
+    return _combined(scheduler.store, rows), renders, attached
 
 
 def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterable[str],
@@ -242,8 +263,8 @@ def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterabl
                            images=pipeline.image is not None)
     scheduler = Scheduler(plan, pipeline, ctx, executor, progress=progress)
     records = scheduler.run()
-    frames, renders, attached = collect(scheduler, pipeline.attachments)
-    table = R.combine(frames)
+    table, renders, attached = collect(scheduler, pipeline.attachments)
+    scheduler.store.save_stamps()
     rated = pipeline.ratings(table) if pipeline.ratings is not None else R.empty_ratings()
     summary = Summary(records, time.perf_counter() - t0,
                       worker_crashes=getattr(executor, "crashes", 0),

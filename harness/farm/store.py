@@ -13,6 +13,8 @@ A store may share a cache with other runs (``cache``: the nightly directory's ``
 
     CACHE/objects/ab/abcdef...ext    the blobs, once for every run that made them
     CACHE/manifests/ab/<digest>.json a job's manifest by its digest (inputs, settings, code)
+    CACHE/memo/<name>/<key>.json     a blob derived from others (a night's combined results)
+    CACHE/stamps.json                what the blobs hashed to, and their stat then (Stamps)
 
 Then a blob is written into the cache and hard-linked into ``OUT/objects`` (copied where the
 two are on different file systems), so a run directory stays whole by itself and costs no
@@ -46,6 +48,8 @@ from cassi.common.errors import CassiInputError
 LOCK_NAME = ".cassi-run.lock"
 #: In a shared store: media a report made from content-addressed inputs, by their key.
 MEDIA_DIR = "media"
+#: In a shared store: memos of derived results (:meth:`OutputStore.memo`), by name and key.
+MEMO_DIR = "memo"
 #: In a shared store: held shared by every run using it, exclusively by the garbage collector.
 STORE_LOCK_NAME = ".cassi-store.lock"
 
@@ -98,7 +102,8 @@ def _identity(st: os.stat_result) -> tuple[int, ...]:
 def sha256_file_once(path: str | os.PathLike) -> str:
     """:func:`sha256_file`, hashed once per process while the file stays the same (its
     device, inode, size, modification and change times: any write changes the change time),
-    so a blob linked under several names (a store and the runs linking it) is read once."""
+    so a blob linked under several names (a store and the runs linking it) is read once.
+    A store's stamps (:class:`Stamps`) carry what earlier processes hashed."""
     before = _identity(os.stat(path))
     digest = _HASHED.get(before)
     if digest is None:
@@ -106,6 +111,89 @@ def sha256_file_once(path: str | os.PathLike) -> str:
         if _identity(os.stat(path)) == before:  # not written to while it was read
             _HASHED[before] = digest
     return digest
+
+
+class Stamps:
+    """What a shared store's blobs hashed to, with the identity each file had then (inode,
+    size, modification and change times): ``CACHE/stamps.json``. A blob whose identity is
+    unchanged since it was hashed is not read again, the way make and git trust a file's stat:
+    any write into it changes its change time (and a link made or removed does too, so the
+    blobs this process linked are stamped again once linked, if their size and modification
+    time are still what was hashed). A missing, unreadable or foreign file only costs hashing.
+    """
+
+    NAME = "stamps.json"
+
+    def __init__(self, cache: Path):
+        self.path = cache / self.NAME
+        self.cache = cache
+        #: relpath -> identity at which it hashed to its name, for this process's linking
+        self.seen: dict[str, tuple[int, ...]] = {}
+
+    def load(self) -> None:
+        """Teach :func:`sha256_file_once` the stamped blobs."""
+        try:
+            doc = json.loads(self.path.read_text(encoding="utf-8"))
+            dev = os.stat(self.cache).st_dev
+            if doc.get("dev") != dev:
+                return  # another file system (a copied store): inode numbers mean nothing
+            for rel, (ino, size, mtime, ctime) in doc["blobs"].items():
+                _HASHED[(dev, int(ino), int(size), int(mtime), int(ctime))] = _name_digest(rel)
+        except (OSError, ValueError, KeyError, TypeError, AttributeError):
+            return
+
+    def verified(self, rel: str, path: str) -> bool:
+        """Whether the store's blob ``rel`` (at ``path``) hashes to its name; hashed only when
+        its identity is not one hashed before."""
+        try:
+            st = os.stat(path)
+            digest = _HASHED.get(_identity(st))
+            if digest is None:
+                digest = sha256_file_once(path)
+                st = os.stat(path)
+        except OSError:
+            return False
+        if digest != _name_digest(rel):
+            return False
+        self.seen[rel] = _identity(st)
+        return True
+
+    def wrote(self, rel: str, path: str) -> None:
+        """``rel`` was just written from bytes that hash to its name."""
+        with contextlib.suppress(OSError):
+            self.seen[rel] = _identity(os.stat(path))
+
+    def save(self) -> None:
+        """Stamp every blob verified or written here with its identity now (after this
+        process's links), merged with the stamps already there; best effort."""
+        try:
+            old = json.loads(self.path.read_text(encoding="utf-8"))
+            dev = os.stat(self.cache).st_dev
+            blobs = old["blobs"] if old.get("dev") == dev else {}
+        except (OSError, ValueError, KeyError, TypeError, AttributeError):
+            blobs, dev = {}, None
+        for rel, then in self.seen.items():
+            try:
+                st = os.stat(self.cache / rel)
+            except OSError:
+                blobs.pop(rel, None)
+                continue
+            now = _identity(st)
+            if now[:4] != then[:4]:  # written into since it was hashed: not stamped
+                blobs.pop(rel, None)
+                continue
+            dev = now[0]
+            _HASHED[now] = _name_digest(rel)
+            blobs[rel] = list(now[1:])
+        if dev is None:
+            return
+        with contextlib.suppress(OSError):
+            atomic_write_text(self.path, json.dumps({"dev": dev, "blobs": blobs}))
+
+
+def _name_digest(rel: str) -> str:
+    """The SHA-256 a blob's store path names (``objects/ab/<sha256>.ext``)."""
+    return os.path.basename(rel).split(".", 1)[0]
 
 
 def _safe_key(key: str) -> str:
@@ -132,10 +220,11 @@ class BlobRef:
 def _hashes_to_its_name(base: Path, ref: BlobRef, good: set[str]) -> bool:
     """Whether the blob under ``base`` exists and hashes to its name; hashed once, then
     remembered in ``good``."""
+    path = os.path.join(base, ref.relpath)
     if ref.relpath in good:
-        return (base / ref.relpath).is_file()
+        return os.path.isfile(path)
     try:
-        ok = sha256_file(base / ref.relpath) == ref.sha256
+        ok = sha256_file_once(path) == ref.sha256
     except OSError:
         return False
     if ok:
@@ -143,10 +232,10 @@ def _hashes_to_its_name(base: Path, ref: BlobRef, good: set[str]) -> bool:
     return ok
 
 
-def _read_only(path: Path) -> None:
+def _read_only(path: str | os.PathLike) -> None:
     """Take the write permissions off a blob (where this user may: else it stays as it is)."""
     with contextlib.suppress(OSError):
-        mode = path.stat().st_mode
+        mode = os.stat(path).st_mode
         if mode & 0o222:
             os.chmod(path, mode & ~0o222)
 
@@ -161,6 +250,7 @@ class OutputStore:
         # Blobs this object has written or hashed: each is hashed at most once per run.
         self._good: set[str] = set()
         self._cache_good: set[str] = set()
+        self.stamps = None if self.cache is None else Stamps(self.cache)
         #: Keys of the jobs reused from the cache (not from this run directory).
         self.reused: set[str] = set()
 
@@ -170,6 +260,7 @@ class OutputStore:
         writable_dir(self.root, subdirs=("objects", "jobs", "logs"))
         if self.cache is not None:
             writable_dir(self.cache, "cache directory", subdirs=("objects", "manifests"))
+            self.stamps.load()
 
     @contextlib.contextmanager
     def lock(self) -> Iterator[None]:
@@ -227,6 +318,7 @@ class OutputStore:
             if not self._cache_blob_ok(ref):
                 atomic_write_bytes(self.cache / ref.relpath, data, durable=False, read_only=True)
                 self._cache_good.add(ref.relpath)
+                self.stamps.wrote(ref.relpath, os.path.join(self.cache, ref.relpath))
             if not self._blob_ok(ref):
                 self._link_from_cache(ref)
             return ref
@@ -236,18 +328,75 @@ class OutputStore:
         return ref
 
     def _cache_blob_ok(self, ref: BlobRef) -> bool:
-        return _hashes_to_its_name(self.cache, ref, self._cache_good)
+        if ref.relpath in self._cache_good:
+            return os.path.isfile(os.path.join(self.cache, ref.relpath))
+        if not self.stamps.verified(ref.relpath, os.path.join(self.cache, ref.relpath)):
+            return False
+        self._cache_good.add(ref.relpath)
+        return True
+
+    # -- memos: results derived from blobs, by a key the caller makes of its inputs ---------
+    def _memo_path(self, name: str, key: str) -> Path:
+        if not all(c in "0123456789abcdef" for c in key) or len(key) != 64:
+            raise ValueError(f"not a SHA-256 digest: {key!r}")
+        return self.cache / MEMO_DIR / _safe_key(name) / f"{key}.json"
+
+    def memo(self, name: str, key: str) -> bytes | None:
+        """The bytes :meth:`remember` kept under ``name``/``key`` in the shared store, if its
+        blob still verifies (linked into this run, which keeps it from the garbage
+        collector); None without a store or a memo."""
+        if self.cache is None:
+            return None
+        try:
+            doc = json.loads(self._memo_path(name, key).read_text(encoding="utf-8"))
+            ref = BlobRef(doc["sha256"], doc["suffix"])
+        except (OSError, ValueError, KeyError, TypeError):
+            return None
+        if not self._cache_blob_ok(ref):
+            return None
+        if not self._blob_ok(ref):
+            self._link_from_cache(ref)
+        try:
+            return (self.root / ref.relpath).read_bytes()
+        except OSError:
+            return None
+
+    def remember(self, name: str, key: str, data: bytes, suffix: str) -> None:
+        """Keep ``data`` as a blob of this run and the shared store, found by :meth:`memo`."""
+        if self.cache is None:
+            return
+        ref = self.put(data, suffix)
+        atomic_write_text(self._memo_path(name, key),
+                          json.dumps({"sha256": ref.sha256, "suffix": ref.suffix}))
+
+    def save_stamps(self) -> None:
+        """Keep what this store's blobs hashed to for the next run (:class:`Stamps`)."""
+        if self.stamps is not None:
+            self.stamps.save()
 
     def _link_from_cache(self, ref: BlobRef) -> None:
         """Put the cache's (verified) blob into this run directory: a hard link, or a copy
         where the cache is on another file system; atomic either way, read-only (a blob a
         store from before read-only blobs holds is made so first)."""
-        _read_only(self.cache / ref.relpath)
-        link_or_copy(self.cache / ref.relpath, self.root / ref.relpath)
+        src, dest = os.path.join(self.cache, ref.relpath), os.path.join(self.root, ref.relpath)
+        _read_only(src)
+        try:
+            os.link(src, dest)  # the common case first: strings, not Paths (40,000 a night)
+        except OSError:
+            link_or_copy(src, dest)  # its folder missing, the name taken, another file system
         self._good.add(ref.relpath)
 
     def _blob_ok(self, ref: BlobRef) -> bool:
-        return _hashes_to_its_name(self.root, ref, self._good)
+        if self.stamps is None:
+            return _hashes_to_its_name(self.root, ref, self._good)
+        if ref.relpath in self._good:
+            return os.path.isfile(os.path.join(self.root, ref.relpath))
+        # a run's blob is a link to the store's (the same file: stamped as the store's) or,
+        # across file systems, a copy (another file: not stamped, Stamps.save)
+        if not self.stamps.verified(ref.relpath, os.path.join(self.root, ref.relpath)):
+            return False
+        self._good.add(ref.relpath)
+        return True
 
     def get(self, ref: BlobRef) -> bytes:
         data = (self.root / ref.relpath).read_bytes()
@@ -313,9 +462,14 @@ class OutputStore:
         for ref in outputs.values():
             if not self._blob_ok(ref):
                 self._link_from_cache(ref)
-        # Not fsynced: the store's own manifest is; one lost in a crash is linked again.
-        atomic_write_bytes(self.manifest_path(key), json.dumps(
-            {**doc, "key": key}, indent=1, sort_keys=True).encode(), durable=False)
+        if doc.get("key") == key:
+            # the store's own file, linked: the same bytes write_manifest wrote (read-only
+            # stores aside, nobody writes into a manifest; a rerun replaces it atomically)
+            link_or_copy(self._cache_manifest(digest), self.manifest_path(key))
+        else:
+            # Not fsynced: the store's own manifest is; one lost in a crash is linked again.
+            atomic_write_bytes(self.manifest_path(key), json.dumps(
+                {**doc, "key": key}, indent=1, sort_keys=True).encode(), durable=False)
         self.reused.add(key)
         return {**doc, "key": key, "outputs": outputs}
 
@@ -340,6 +494,8 @@ def collect_garbage(cache: str | os.PathLike) -> Collected:
     """
     root = Path(cache)
     removed, freed = set(), 0
+    # unlinking a run's copies changes its blobs' change times: their stamps would only miss
+    (root / Stamps.NAME).unlink(missing_ok=True)
     for path in sorted((root / "objects").glob("*/*")):
         try:
             st = path.stat()
@@ -364,5 +520,13 @@ def collect_garbage(cache: str | os.PathLike) -> Collected:
         if names is None or any(n in removed or not (root / n).is_file() for n in names):
             path.unlink(missing_ok=True)
             manifests += 1
+    for path in sorted((root / MEMO_DIR).glob("*/*.json")):
+        try:
+            doc = json.loads(path.read_text(encoding="utf-8"))
+            name = BlobRef(doc["sha256"], doc["suffix"]).relpath
+        except (OSError, ValueError, KeyError, TypeError):
+            name = None
+        if name is None or name in removed or not (root / name).is_file():
+            path.unlink(missing_ok=True)
     return Collected(len(removed), manifests, freed)
 

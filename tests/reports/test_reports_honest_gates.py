@@ -222,6 +222,9 @@ def test_renders_named_by_the_same_digest_pass_undecoded_and_each_hashed_once(co
     hashed, real = [], store.sha256_file
     monkeypatch.setattr(gates, "read_rgb8", no_decoding)
     monkeypatch.setattr(store, "sha256_file", lambda p: hashed.append(Path(p).resolve()) or real(p))
+    # the gate as a process of its own (`cassi gate`): the runs above verified these blobs in
+    # this process, which a night's gate trusts while each file's identity is unchanged
+    monkeypatch.setattr(store, "_HASHED", {})
     passed, results = gate(tmp_path / "a", tmp_path / "b")
     image_gates = [r for r in results if r.gate == "image"]
     assert passed and image_gates and {r.status for r in image_gates} == {"pass"}
