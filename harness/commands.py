@@ -95,7 +95,7 @@ def _add_bench(sub) -> None:
     p.add_argument("--quick", action="store_true", help="small sizes (CI smoke test)")
     p.add_argument("--only", default=None, metavar="NAME[,NAME]",
                    help="run only these benchmarks (geometry, render, geometry_memory, "
-                        "image_memory, farm_preview, farm, job_cost, incremental_night: "
+                        "image_memory, farm_preview, farm, job_cost, incremental_night, full_set: "
                         "cassi.harness.bench.BENCHMARKS); "
                         "e.g. --only render,farm_preview")
     p.set_defaults(func="cassi.harness.actions:cmd_bench")

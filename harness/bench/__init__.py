@@ -10,7 +10,9 @@
 - ``job_cost``: a geometry job's seconds split into the version's own computation, the
   rubric's work and the rest (:mod:`.jobcost`, ``job_overhead_share``);
 - ``incremental_night``: a second night with nothing changed over the first, side by side in
-  one run (:mod:`.night`, ``incremental_night_fraction``).
+  one run (:mod:`.night`, ``incremental_night_fraction``, ``second_night_s``);
+- ``full_set``: a first night of the whole corpus, estimated from one subject's full set
+  (:mod:`.fullset`, ``full_set_estimate_s``).
 
 Every figure is measured in-process or read from structured output (a job's timing fields, a
 fresh process's JSON line), never parsed from log text (:mod:`.measure`). A benchmark that fails
@@ -39,7 +41,8 @@ BENCHMARKS = {"geometry": "cassi.harness.bench.geometry:bench_geometry",
               "farm_preview": "cassi.harness.bench.farm:bench_farm_preview",
               "farm": "cassi.harness.bench.farm:bench_farm",
               "job_cost": "cassi.harness.bench.jobcost:bench_job_cost",
-              "incremental_night": "cassi.harness.bench.night:bench_incremental_night"}
+              "incremental_night": "cassi.harness.bench.night:bench_incremental_night",
+              "full_set": "cassi.harness.bench.fullset:bench_full_set"}
 
 
 def _same(*keys: str) -> dict[str, str]:
@@ -58,7 +61,8 @@ HEADLINE = {"geometry": _same("geometry_frames_per_s"),
             "farm": {"speedup_2_workers": "farm_speedup_2_workers",
                      **_same("ray_overhead_vs_local")},
             "job_cost": _same("job_overhead_share"),
-            "incremental_night": _same("incremental_night_fraction")}
+            "incremental_night": _same("incremental_night_fraction", "second_night_s"),
+            "full_set": _same("full_set_estimate_s")}
 
 
 def headline(benchmarks: dict) -> dict:

@@ -56,7 +56,8 @@ def nightly(out_dir: str | os.PathLike, *, review: Callable[[Night], tuple[bool,
     atomic_write_text(root / LATEST, name + "\n")
     atomic_write_text(run_dir / NIGHT_DONE, json.dumps(
         {"night": name, "passed": passed,
-         "finished": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")}) + "\n")
+         "finished": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
+         "stage_seconds": {k: round(v, 2) for k, v in timer.seconds.items()}}) + "\n")
     timer.say(timer.summary())
     return passed, index
 

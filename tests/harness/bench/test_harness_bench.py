@@ -19,7 +19,7 @@ from cassi.harness.farm.jobs import Job, StageContext, State, execute_job
 
 #: The names `cassi bench --only` takes, as docs/benchmarks.md and `cassi bench --help` list them.
 NAMES = ["geometry", "render", "geometry_memory", "image_memory", "farm_preview", "farm",
-         "job_cost", "incremental_night"]
+         "job_cost", "incremental_night", "full_set"]
 
 
 def test_every_registered_benchmark_is_a_function_of_quick():
@@ -107,3 +107,16 @@ def test_a_geometry_jobs_cost_is_split_into_its_parts():
         assert abs(v["job_s"] - sum(v[k] for k in (*PARTS, "rest_s"))) < 0.01, version
     assert entry["job_overhead_share"] == round(entry["total"]["rest_s"]
                                                 / entry["total"]["job_s"], 3)
+
+
+def test_the_full_set_estimate_scales_a_measured_night_by_usable_files():
+    """Quick: three task files of one subject, two versions, the front view; the estimate is
+    that night's seconds times the whole corpus's usable files over the night's, and says so."""
+    from cassi.harness.bench.fullset import bench_full_set
+    entry = bench_full_set(True, subject="JW45")
+    assert entry["usable_files_run"] == 3 and entry["usable_files_full_set"] > 1000
+    scale = entry["usable_files_full_set"] / 3
+    assert entry["full_set_estimate_s"] == round(entry["night_s"] * scale, 0) or \
+        abs(entry["full_set_estimate_s"] - entry["night_s"] * scale) <= 0.5 + 0.05 * scale
+    assert {"run", "gates", "report (tables, pages, videos)"} <= set(entry["stage_seconds"])
+    assert "x" in entry["full_set_estimate_basis"] and entry["gates_passed"]
