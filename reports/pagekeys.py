@@ -1,0 +1,73 @@
+"""What each reusable part of a report is made of: the documents :class:`~.memo.Memo` keys
+them by. One place for it: a page that reads something not named here must add it here.
+
+Every aggregation of the rubric is per subject (rule 1 counts over a subject's files, Table
+C's rule compares a subject's versions; :mod:`cassi.harness.rubric.tables`), and a task
+file's events are its own rows', so a subject page is keyed by its subject's rows and a viewer
+page by its task file's; the thesis tables, counted over every subject, by all rows.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+from cassi.reports.memo import by_content, content_ids, frame_digest, group_digests
+from cassi.reports.runio import Run
+from cassi.reports.sensitivity import SENSITIVITY_FILE
+
+_FILE = ["subject", "task", "rep"]
+
+
+class PageKeys:
+    """Key documents of one run's pages; ``audio_for(subject, task, rep)``: the task's WAV or
+    None, ``labels_for(subject, task, rep)``: its phone and word intervals or None (both as
+    the viewer pages read them)."""
+
+    def __init__(self, run: Run, *, audio_for=None, labels_for=None):
+        self.run = run
+        self._audio_for, self._labels_for = audio_for, labels_for
+        res = run.results
+        rend, att = by_content(run.renders), by_content(run.attachments)
+        self._results = frame_digest(res)
+        self._results_of = {"subject": group_digests(res, ["subject"]),
+                            "file": group_digests(res, _FILE)}
+        self._renders_of = {"subject": group_digests(rend, ["subject"]),
+                            "file": group_digests(rend, _FILE)}
+        self._attachments_of = {"file": group_digests(att, _FILE)}
+
+    def _common(self, subject: str) -> dict:
+        return {"synthetic": self.run.synthetic, "derived": self.run.derived.get(str(subject), [])}
+
+    def viewer(self, subject: str, task: int, rep: int) -> dict:
+        """A task file's viewer page (its data, sound, renders and mask overlays)."""
+        file = (subject, int(task), int(rep))
+        audio = self._audio_for(*file) if self._audio_for else None
+        audio = content_ids([audio])[0] if audio is not None and Path(audio).is_file() else None
+        return {"file": list(file), **self._common(subject),
+                "results": self._results_of["file"].get(file, ""),
+                "renders": self._renders_of["file"].get(file, ""),
+                "attachments": self._attachments_of["file"].get(file, ""),
+                "audio": audio,
+                "labels": self._labels_for(*file) if self._labels_for else None}
+
+    def subject(self, subject: str, viewers) -> dict:
+        """A subject's page; ``viewers``: the (subject, task, rep) with a viewer page."""
+        return {"subject": subject, **self._common(subject),
+                "results": self._results_of["subject"].get((subject,), ""),
+                "renders": self._renders_of["subject"].get((subject,), ""),
+                "viewers": sorted([int(t), int(r)] for s, t, r in viewers if s == subject)}
+
+    def tables(self, viewers) -> dict:
+        """The thesis tables, their plots and files, the paired comparisons, the criterion,
+        the judges' findings and the sensitivity section (all rows of the run; the viewers
+        the tables' faults open)."""
+        sens = self.run.root / SENSITIVITY_FILE
+        return {"results": self._results, "synthetic": self.run.synthetic,
+                "viewers": sorted([s, int(t), int(r)] for s, t, r in viewers),
+                "sensitivity": content_ids([sens])[0] if sens.is_file() else None}
+
+    @staticmethod
+    def trend(history: pd.DataFrame, synthetic: bool) -> dict:
+        """The nightly history's plot."""
+        return {"history": frame_digest(history), "synthetic": synthetic}
