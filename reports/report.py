@@ -24,7 +24,7 @@ from cassi.reports import compare as cmp
 from cassi.reports.agree import agreement, write_agreement
 from cassi.reports import media, plots
 from cassi.reports.runio import Run, load_run, order_versions
-from cassi.harness.evaluation.frames import COMPARISON_VIEW, VIDEO_VIEWS, linked_frames
+from cassi.harness.evaluation.frames import COMPARISON_VIEW, VIDEO_VIEWS, linked_frames, video_grid
 from cassi.harness.evaluation.provenance import rubric_digest
 from cassi.harness.evaluation.stages import MASKS_OUTPUT
 from cassi.harness.farm.executors import LocalExecutor
@@ -613,8 +613,9 @@ def _start_videos(run: Run, out: Path, media_cache: Path | None = None):
         # A (version, view) was rendered for a video when its grid frames run unbroken (a
         # first frame and a check frame that happen to fall on the grid are no video).
         on_grid = {}
-        for (version, view), p in g.groupby(["version", "view"]):
-            grid = media.video_frames(p, stride=stride)
+        for (version, view), frames in g.groupby(["version", "view"])["frame"]:
+            # media.video_frames of one panel, without its per-panel groupby (1,254 a night)
+            grid = video_grid(set(frames.tolist()), first=int(frames.min()), stride=stride)
             if len(grid) >= 3 and all(b - a == stride for a, b in zip(grid, grid[1:])):
                 on_grid.setdefault(version, set()).add(view)
         versions = order_versions(on_grid)
