@@ -42,6 +42,8 @@ _LIBRARIES = ("numpy", "pandas", "pyarrow", "jinja2", "markupsafe", "matplotlib"
               "imageio", "imageio-ffmpeg")
 #: A run's content-addressed object: ``objects/<ab>/<sha256>.<ext>`` (the farm's store).
 _OBJECT = re.compile(r"(?:^|/)objects/([0-9a-f]{2})/(\1[0-9a-f]{62})\.[A-Za-z0-9]+$")
+#: A report's picture, named by the SHA-256 of its bytes (:func:`.media.store_image`).
+_IMAGE = re.compile(r"^images/([0-9a-f]{2})/(\1[0-9a-f]{62})\.webp$")
 
 
 @functools.lru_cache(maxsize=None)
@@ -101,23 +103,37 @@ def _header(df: pd.DataFrame) -> bytes:
     return json.dumps([[str(c), str(df[c].dtype)] for c in df.columns]).encode()
 
 
+class RowDigests:
+    """Digests of a table's rows, in their order, every column (each row hashed once)."""
+
+    def __init__(self, df: pd.DataFrame):
+        self._df, self._rows, self._head = df, _row_hashes(df), _header(df)
+
+    def whole(self) -> str:
+        """SHA-256 of every row."""
+        return hashlib.sha256(self._head + self._rows.tobytes()).hexdigest()
+
+    def groups(self, by: list[str]) -> dict[tuple, str]:
+        """(values of ``by``) -> SHA-256 of that group's rows (rows with a missing ``by`` value
+        belong to no group)."""
+        if not len(self._df):
+            return {}
+        out = {}
+        for key, idx in self._df.groupby(by, sort=False).indices.items():
+            key = key if isinstance(key, tuple) else (key,)
+            out[tuple(k.item() if isinstance(k, np.generic) else k for k in key)] = \
+                hashlib.sha256(self._head + self._rows[np.sort(idx)].tobytes()).hexdigest()
+        return out
+
+
 def group_digests(df: pd.DataFrame, by: list[str]) -> dict[tuple, str]:
-    """(values of ``by``) -> SHA-256 of that group's rows, in their order, every column
-    (rows with a missing ``by`` value belong to no group)."""
-    if not len(df):
-        return {}
-    rows, head = _row_hashes(df), _header(df)
-    out = {}
-    for key, idx in df.groupby(by, sort=False).indices.items():
-        key = key if isinstance(key, tuple) else (key,)
-        out[tuple(k.item() if isinstance(k, np.generic) else k for k in key)] = \
-            hashlib.sha256(head + rows[np.sort(idx)].tobytes()).hexdigest()
-    return out
+    """:meth:`RowDigests.groups` of ``df``."""
+    return RowDigests(df).groups(by)
 
 
 def frame_digest(df: pd.DataFrame) -> str:
-    """SHA-256 of every row of ``df``, in order."""
-    return hashlib.sha256(_header(df) + _row_hashes(df).tobytes()).hexdigest()
+    """:meth:`RowDigests.whole` of ``df``."""
+    return RowDigests(df).whole()
 
 
 def by_content(index: pd.DataFrame) -> pd.DataFrame:
@@ -194,12 +210,14 @@ class Memo:
             return
         entries = []
         for f in dict.fromkeys(Path(f) for f in files):
-            digest = sha256_file_once(f)
+            rel = f.relative_to(root).as_posix()
+            named = _IMAGE.match(rel)
+            digest = named.group(2) if named else sha256_file_once(f)
             blob = self._blob(digest)
             if not blob.is_file():
                 blob.parent.mkdir(parents=True, exist_ok=True)
                 link_or_copy(f, blob)
-            entries.append([f.relative_to(root).as_posix(), digest])
+            entries.append([rel, digest])
         atomic_write_text(self.dir / f"{key}.json",
                           '{"files": ' + json.dumps(entries) + ', "value": ' + value_text + "}")
 

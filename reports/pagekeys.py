@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from cassi.reports.memo import by_content, content_ids, frame_digest, group_digests
+from cassi.reports.memo import RowDigests, by_content, content_ids, frame_digest
 from cassi.reports.runio import Run
 from cassi.reports.sensitivity import SENSITIVITY_FILE
 
@@ -21,20 +21,18 @@ _FILE = ["subject", "task", "rep"]
 
 class PageKeys:
     """Key documents of one run's pages; ``audio_for(subject, task, rep)``: the task's WAV or
-    None, ``labels_for(subject, task, rep)``: its phone and word intervals or None (both as
-    the viewer pages read them)."""
+    None, ``labels_for(subject, task, rep)``: the file of its phone and word labels or None
+    (both as the viewer pages find them; the labels are read from that file alone)."""
 
     def __init__(self, run: Run, *, audio_for=None, labels_for=None):
         self.run = run
         self._audio_for, self._labels_for = audio_for, labels_for
-        res = run.results
-        rend, att = by_content(run.renders), by_content(run.attachments)
-        self._results = frame_digest(res)
-        self._results_of = {"subject": group_digests(res, ["subject"]),
-                            "file": group_digests(res, _FILE)}
-        self._renders_of = {"subject": group_digests(rend, ["subject"]),
-                            "file": group_digests(rend, _FILE)}
-        self._attachments_of = {"file": group_digests(att, _FILE)}
+        res = RowDigests(run.results)
+        rend = RowDigests(by_content(run.renders))
+        self._results = res.whole()
+        self._results_of = {"subject": res.groups(["subject"]), "file": res.groups(_FILE)}
+        self._renders_of = {"subject": rend.groups(["subject"]), "file": rend.groups(_FILE)}
+        self._attachments_of = {"file": RowDigests(by_content(run.attachments)).groups(_FILE)}
 
     def _common(self, subject: str) -> dict:
         return {"synthetic": self.run.synthetic, "derived": self.run.derived.get(str(subject), [])}
@@ -42,14 +40,20 @@ class PageKeys:
     def viewer(self, subject: str, task: int, rep: int) -> dict:
         """A task file's viewer page (its data, sound, renders and mask overlays)."""
         file = (subject, int(task), int(rep))
-        audio = self._audio_for(*file) if self._audio_for else None
-        audio = content_ids([audio])[0] if audio is not None and Path(audio).is_file() else None
         return {"file": list(file), **self._common(subject),
                 "results": self._results_of["file"].get(file, ""),
                 "renders": self._renders_of["file"].get(file, ""),
                 "attachments": self._attachments_of["file"].get(file, ""),
-                "audio": audio,
-                "labels": self._labels_for(*file) if self._labels_for else None}
+                "audio": self._file(self._audio_for, file),
+                "labels": self._file(self._labels_for, file)}
+
+    @staticmethod
+    def _file(find, file: tuple):
+        """A corpus file found by ``find(*file)``: its path and content, or None."""
+        path = find(*file) if find else None
+        if path is None or not Path(path).is_file():
+            return None
+        return [str(path), content_ids([path])[0]]
 
     def subject(self, subject: str, viewers) -> dict:
         """A subject's page; ``viewers``: the (subject, task, rep) with a viewer page."""

@@ -41,7 +41,7 @@ from cassi.harness.rubric.thesis_findings import reproduced
 from cassi.reports.tables import markdown_table
 from cassi.reports.memo import Memo
 from cassi.reports.pagekeys import PageKeys
-from cassi.reports.viewer import stored_overlay, viewer_href, viewer_labels, write_viewers
+from cassi.reports.viewer import stored_overlay, viewer_href, write_viewers
 from cassi.data.corpus.disk import Corpus
 from cassi.data.xrmb.files import NOMINAL_PERIOD_US
 
@@ -490,13 +490,23 @@ def _run_corpus(run: Run) -> Corpus | None:
 def _audio_for(run: Run):
     """``(subject, task, rep) -> WAV path or None`` from the run's corpus (None when the corpus
     cannot be opened: the videos are then silent, and say so)."""
+    return _corpus_file(run, "audio_path")
+
+
+def _alignment_for(run: Run):
+    """``(subject, task, rep) -> the file of the task's labels or None`` from the run's corpus
+    (the viewer pages read them from it)."""
+    return _corpus_file(run, "alignment_path")
+
+
+def _corpus_file(run: Run, method: str):
     corpus = _run_corpus(run)
 
     def find(subject: str, task: int, rep: int):
         if corpus is None:
             return None
         try:
-            return corpus.subject(subject).audio_path(task, rep)
+            return getattr(corpus.subject(subject), method)(task, rep)
         except Exception:  # noqa: BLE001
             return None
     return find
@@ -719,8 +729,7 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
     subjects = sorted(fv["subject"].dropna().unique())
     place = _image_store(out, media_cache)
     audio_for = _audio_for(run)
-    keys = PageKeys(run, audio_for=audio_for,
-                    labels_for=lambda s, t, r: viewer_labels(run, s, t, r))
+    keys = PageKeys(run, audio_for=audio_for, labels_for=_alignment_for(run))
     viewers = write_viewers(run, out, env, slug=slug, audio_for=audio_for,
                             images=_viewer_images(run, out, place, media_cache), memo=memo,
                             key_of=keys.viewer)

@@ -45,8 +45,7 @@ from cassi.reports.runio import Run, order_versions
 
 __all__ = ["VIEWER_DIR", "STATIC_DIR", "viewer_page", "viewer_href", "write_viewers",
            "version_payload", "viewer_payload", "write_viewer_page", "copy_static",
-           "TABLE_COLOURS", "MASK_COLOURS", "mask_overlay", "stored_overlay", "table_legend",
-           "viewer_labels"]
+           "TABLE_COLOURS", "MASK_COLOURS", "mask_overlay", "stored_overlay", "table_legend"]
 
 VIEWER_DIR = "viewer"
 STATIC_DIR = "static"
@@ -318,8 +317,7 @@ def viewer_payload(run: Run, subject: str, task: int, rep: int, versions: dict, 
         "measured_frames": _array(first.frames.astype(np.int32)),
         "pellets": list(PELLETS), "views": _views(),
         "stride": viewer_stride(1e6 / _rate(first)),
-        "rate_hz": _rate(first), "audio": audio_href,
-        "labels": viewer_labels(run, subject, task, rep),
+        "rate_hz": _rate(first), "audio": audio_href, "labels": _labels(run, subject, task, rep),
         "waveform": _waveform(audio) if audio_href else None,
         "table_colours": TABLE_COLOURS, "subject_page": subject_page}
 
@@ -349,7 +347,7 @@ def _rate(data) -> float:
     return float((f[-1] - f[0]) / ((t[-1] - t[0]) / 1e6))
 
 
-def viewer_labels(run: Run, subject: str, task: int, rep: int) -> dict | None:
+def _labels(run: Run, subject: str, task: int, rep: int) -> dict | None:
     """The task's phone and word intervals (seconds) when the run's corpus has an alignment."""
     root = run.meta.get("corpus_resolved")
     try:
