@@ -37,11 +37,14 @@ class PageKeys:
     def _common(self, subject: str) -> dict:
         return {"synthetic": self.run.synthetic, "derived": self.run.derived.get(str(subject), [])}
 
-    def viewer(self, subject: str, task: int, rep: int) -> dict:
-        """A task file's viewer page (its data, sound, renders and mask overlays)."""
+    def viewer(self, subject: str, task: int, rep: int) -> dict | None:
+        """A task file's viewer page (its data, sound, renders and mask overlays); None (made
+        anew) when the file has no result row."""
         file = (subject, int(task), int(rep))
-        return {"file": list(file), **self._common(subject),
-                "results": self._results_of["file"].get(file, ""),
+        results = self._results_of["file"].get(file)
+        if results is None:
+            return None
+        return {"file": list(file), **self._common(subject), "results": results,
                 "renders": self._renders_of["file"].get(file, ""),
                 "attachments": self._attachments_of["file"].get(file, ""),
                 "audio": self._file(self._audio_for, file),
@@ -55,10 +58,13 @@ class PageKeys:
             return None
         return [str(path), content_ids([path])[0]]
 
-    def subject(self, subject: str, viewers) -> dict:
-        """A subject's page; ``viewers``: the (subject, task, rep) with a viewer page."""
-        return {"subject": subject, **self._common(subject),
-                "results": self._results_of["subject"].get((subject,), ""),
+    def subject(self, subject: str, viewers) -> dict | None:
+        """A subject's page; ``viewers``: the (subject, task, rep) with a viewer page. None
+        (made anew) for a name no result row has (a missing subject reads as "")."""
+        results = self._results_of["subject"].get((subject,))
+        if results is None:
+            return None
+        return {"subject": subject, **self._common(subject), "results": results,
                 "renders": self._renders_of["subject"].get((subject,), ""),
                 "viewers": sorted([int(t), int(r)] for s, t, r in viewers if s == subject)}
 

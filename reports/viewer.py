@@ -243,7 +243,8 @@ def write_viewers(run: Run, out: Path, env, *, slug, audio_for=None, images=None
     ``images.prefetch([(subject, task, rep, version), ...])`` that prepares those of the pages
     to be made; ``audio_for(subject, task, rep)``: the task's WAV (copied beside the page) or
     None. ``memo`` (:class:`~cassi.reports.memo.Memo`) with ``key_of(subject, task, rep)`` (its
-    key document): a page made before of the same inputs is linked, not made again.
+    key document, None: none): a page made before of the same inputs is linked, not made
+    again.
     """
     att = run.attachments
     att = att[att["name"] == "viewer"] if len(att) else att
@@ -255,7 +256,8 @@ def write_viewers(run: Run, out: Path, env, *, slug, audio_for=None, images=None
         task, rep = int(task), int(rep)
         page = viewer_page(slug(subject), task, rep)
         pages[(subject, task, rep)] = page
-        key = memo.key("viewer", key_of(subject, task, rep)) if memo is not None else None
+        doc = key_of(subject, task, rep) if memo is not None and key_of is not None else None
+        key = memo.key("viewer", doc) if doc is not None else None
         if memo is None or not memo.reuse(key)[0]:
             todo.append((subject, task, rep, g, key))
     if not todo:

@@ -165,3 +165,14 @@ def test_a_mask_overlay_is_drawn_once_per_blob_and_frame(tmp_path, monkeypatch):
     assert drawn == [7] and a.read_bytes() == b.read_bytes() and os.path.samefile(a, b)
     viewer.stored_overlay(blob, 8, tmp_path / "c" / "m.png", cache)
     assert drawn == [7, 8]  # another frame is another overlay
+
+
+def test_a_page_without_result_rows_has_no_key(tmp_path):
+    """A subject no row names (a missing subject reads as "" in the verdicts) is made anew,
+    never linked under a key that cannot tell its inputs apart."""
+    from cassi.reports.pagekeys import PageKeys
+    from cassi.reports.runio import load_run
+
+    keys = PageKeys(load_run(_run(tmp_path / "run")))
+    assert keys.subject("", []) is None and keys.viewer("JW11", 99, 1) is None
+    assert keys.subject("JW11", [])["results"] and keys.viewer("JW11", 19, 1)["results"]
