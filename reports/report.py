@@ -329,8 +329,8 @@ def _viewer_images(run: Run, out: Path, place, cache: Path | None = None):
     def prepared():
         """(masks, evidence, chosen): made once, and only when a page is made."""
         rend = run.renders
-        groups = {k: g for k, g in rend.groupby(["subject", "task", "rep", "version"])} if len(rend) \
-            else {}
+        groups = {k: g for k, g in rend.groupby(["subject", "task", "rep", "version"])} \
+            if len(rend) else {}
         att = run.attachments
         masks = {(a.subject, int(a.task), int(a.rep), a.version, a.view,
                   int(a.name[len(MASKS_OUTPUT):])): a.path
@@ -344,13 +344,15 @@ def _viewer_images(run: Run, out: Path, place, cache: Path | None = None):
         pointed: dict[tuple, set[int]] = {}
         for r in res[(res["frame"] >= 0) & res["table"].notna() & (res["view"] != "trace")] \
                 .itertuples(index=False):
-            pointed.setdefault((r.subject, int(r.task), int(r.rep), r.version), set()).add(int(r.frame))
+            pointed.setdefault((r.subject, int(r.task), int(r.rep), r.version),
+                               set()).add(int(r.frame))
 
         def shown(key, g: pd.DataFrame) -> pd.DataFrame:
             """The renders of a task file and version the viewer shows (see above)."""
             subject, task, rep, version = key
-            frames = {int(g["frame"].min())} | {_nearest_rendered(g, f) for f in
-                                                 pointed.get((subject, int(task), int(rep), version), ())}
+            frames = {int(g["frame"].min())} | {
+                _nearest_rendered(g, f)
+                for f in pointed.get((subject, int(task), int(rep), version), ())}
             return g[g["frame"].isin(frames)].sort_values(["frame", "view"])
 
         chosen = {k: shown(k, g) for k, g in groups.items()}
