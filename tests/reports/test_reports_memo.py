@@ -176,3 +176,15 @@ def test_a_page_without_result_rows_has_no_key(tmp_path):
     keys = PageKeys(load_run(_run(tmp_path / "run")))
     assert keys.subject("", []) is None and keys.viewer("JW11", 99, 1) is None
     assert keys.subject("JW11", [])["results"] and keys.viewer("JW11", 19, 1)["results"]
+
+
+def test_cassi_report_made_twice_with_a_media_cache_links_its_pages(tmp_path):
+    from cassi.harness.cli import main
+
+    run = _run(tmp_path / "run")
+    for out in ("one", "two"):
+        assert main(["report", str(run), "--out", str(tmp_path / out),
+                     "--media-cache", str(tmp_path / "media")]) == 0
+    assert os.path.samefile(tmp_path / "one" / "subjects" / "JW12.html",
+                            tmp_path / "two" / "subjects" / "JW12.html")
+    assert _folder(tmp_path / "one") == _folder(tmp_path / "two")
