@@ -3,14 +3,19 @@ unchanged is linked from the media cache, not made again; one whose inputs chang
 again; what reads the previous run or the history is made every time."""
 from __future__ import annotations
 
+import json
 import os
+import shutil
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from reports_fixtures import image, results_rows, rewrite_results, write_run
 from cassi.harness.evaluation.stages import masks_blob
+from cassi.harness.farm.tableset import write_table_set
+from cassi.harness.rubric import ratings_table
 from cassi.reports import memo as memo_mod
 from cassi.reports import report, viewer
 from cassi.reports.report import write_report
@@ -188,3 +193,59 @@ def test_cassi_report_made_twice_with_a_media_cache_links_its_pages(tmp_path):
     assert os.path.samefile(tmp_path / "one" / "subjects" / "JW12.html",
                             tmp_path / "two" / "subjects" / "JW12.html")
     assert _folder(tmp_path / "one") == _folder(tmp_path / "two")
+
+
+@pytest.fixture(scope="module")
+def real_run(tmp_path_factory) -> Path:
+    """A small real run with viewer data and masks: JW11 task 106, two versions, front view."""
+    from cassi.harness.cli import main
+
+    run = tmp_path_factory.mktemp("viewer") / "run"
+    assert main(["run", "--subjects", "JW11", "--versions", "cassi-1.0", "cassi-2.1",
+                 "--tasks", "106", "--views", "front", "--no-progress", "--out", str(run)]) == 0
+    return run
+
+
+def _rewrite(run: Path, results: pd.DataFrame) -> None:
+    """The run's results replaced, its other tables (attachments too) kept, as one set."""
+    tables = {name: pd.read_parquet(run / f"{name}.parquet")
+              for name in ("renders", "attachments")}
+    summary = json.loads((run / "summary.json").read_text())
+    write_table_set(run, {"results": results, "ratings": ratings_table(results), **tables},
+                    summary)
+
+
+def test_a_viewer_page_is_linked_when_unchanged_and_made_when_its_rows_change(
+        real_run, tmp_path, monkeypatch):
+    run = tmp_path / "run"
+    shutil.copytree(real_run, run)
+    cache = tmp_path / "media"
+    made = []
+    write_viewer = viewer._write_viewer
+    monkeypatch.setattr(viewer, "_write_viewer", lambda *a, **k: made.append(a[3:6])
+                        or write_viewer(*a, **k))
+    first = write_report(run, tmp_path / "first", media_cache=cache).parent
+    assert made == [("JW11", 106, 1)]
+    overlays = sorted((first / "images" / "masks").rglob("*.png"))
+    second = write_report(run, tmp_path / "second", media_cache=cache).parent
+    assert made == [("JW11", 106, 1)], "an unchanged viewer page was made again"
+    page = Path("viewer/JW11/106_1.js")
+    assert os.path.samefile(first / page, second / page)
+    assert _folder(first) == _folder(second)
+    # one whole-file value of a check changes: the page shows it, so it is made again
+    res = pd.read_parquet(run / "results.parquet")
+    row = res.index[(res["frame"] == -1) & res["table"].notna()
+                    & (res["version"] == "cassi-2.1")][0]
+    res.loc[row, "value"] = float(res.loc[row, "value"]) + 0.125 \
+        if pd.notna(res.loc[row, "value"]) else 0.125
+    _rewrite(run, res)
+    third = write_report(run, tmp_path / "third", media_cache=cache).parent
+    assert made == [("JW11", 106, 1)] * 2
+    assert (third / page).read_bytes() != (first / page).read_bytes()
+    slow = write_report(run, tmp_path / "slow").parent
+    assert _folder(third) == _folder(slow)
+    # the overlays of the page made again came from the cache, drawn once
+    assert overlays
+    for path in overlays:
+        rel = path.relative_to(first)
+        assert os.path.samefile(first / rel, third / rel)
