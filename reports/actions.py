@@ -18,7 +18,8 @@ from cassi.reports.viewer import viewer_href
 
 def cmd_report(args: argparse.Namespace) -> int:
     writable_dir(args.out, "report directory")
-    index = write_report(args.run, args.out, compare=args.compare, ratings=args.ratings)
+    index = write_report(args.run, args.out, compare=args.compare, ratings=args.ratings,
+                         media_cache=args.media_cache)
     print(index)
     return 0
 

@@ -15,6 +15,9 @@ def register(sub) -> None:
     p.add_argument("--out", type=Path, required=True, help="report directory")
     p.add_argument("--ratings", type=Path, help="ratings people gave (CSV, see `cassi agree`): "
                    "adds the agreement section")
+    p.add_argument("--media-cache", type=Path, dest="media_cache",
+                   help="where videos, pictures and pages made before are kept by what they are "
+                   "made of (a nightly's DIR/store/media): linked instead of made again")
     p.set_defaults(func="cassi.reports.actions:cmd_report")
 
     p = sub.add_parser("rate", help="write a blinded rating session for people",

@@ -20,11 +20,15 @@ def _diff(before: pd.DataFrame, after: pd.DataFrame, keys: list[str]) -> pd.Data
     return merged.sort_values(keys, kind="mergesort").reset_index(drop=True)
 
 
-def compare_components(before: pd.DataFrame, after: pd.DataFrame) -> pd.DataFrame:
+def compare_components(before: pd.DataFrame, after: pd.DataFrame, *,
+                       ratings: tuple[pd.DataFrame | None, pd.DataFrame | None] = (None, None)
+                       ) -> pd.DataFrame:
     """Component negatives of two results tables side by side, with ``delta`` and ``change``
-    (``▲ better`` = fewer negatives, ``▼ worse``, ``= same``, ``new``, ``gone``)."""
+    (``▲ better`` = fewer negatives, ``▼ worse``, ``= same``, ``new``, ``gone``); ``ratings``:
+    their :func:`component_ratings` where made already."""
     keys = ["version", "table", "subject", "component"]
-    return _diff(component_ratings(before), component_ratings(after), keys)
+    a, b = (component_ratings(r) if cr is None else cr for r, cr in zip((before, after), ratings))
+    return _diff(a, b, keys)
 
 
 def compare_checks(before: pd.DataFrame, after: pd.DataFrame) -> pd.DataFrame:

@@ -24,7 +24,7 @@ from cassi.reports import compare as cmp
 from cassi.reports.agree import agreement, write_agreement
 from cassi.reports import media, plots
 from cassi.reports.runio import Run, load_run, order_versions
-from cassi.harness.evaluation.frames import COMPARISON_VIEW, VIDEO_VIEWS, linked_frames
+from cassi.harness.evaluation.frames import COMPARISON_VIEW, VIDEO_VIEWS, linked_frames, video_grid
 from cassi.harness.evaluation.provenance import rubric_digest
 from cassi.harness.evaluation.stages import MASKS_OUTPUT
 from cassi.harness.farm.executors import LocalExecutor
@@ -39,7 +39,9 @@ from cassi.harness.rubric.paired import (BOOTSTRAP_N, BOOTSTRAP_SEED, TIE_TOLERA
 from cassi.reports.sensitivity import sensitivity_section
 from cassi.harness.rubric.thesis_findings import reproduced
 from cassi.reports.tables import markdown_table
-from cassi.reports.viewer import mask_overlay, viewer_href, write_viewers
+from cassi.reports.memo import Memo
+from cassi.reports.pagekeys import PageKeys
+from cassi.reports.viewer import stored_overlay, viewer_href, write_viewers
 from cassi.data.corpus.disk import Corpus
 from cassi.data.xrmb.files import NOMINAL_PERIOD_US
 
@@ -199,10 +201,11 @@ def _best(totals: pd.Series) -> dict:
 
 
 def _overview(run: Run, previous: Run | None, cr: pd.DataFrame, diff: pd.DataFrame | None,
-              gate: dict | None) -> dict | None:
+              gate: dict | None, before_cr: pd.DataFrame | None = None) -> dict | None:
     """The report's first screen: negatives per version and table and overall (the rubric's
     one count, :func:`table_totals`), each table's ratings, the best version per table, the
-    change since the previous run with a paired test over the table cells, and the gate."""
+    change since the previous run with a paired test over the table cells, and the gate
+    (``before_cr``: the previous run's component ratings, when made already)."""
     totals = table_totals(run.results, ratings=cr)
     if totals.empty:
         return None
@@ -212,7 +215,7 @@ def _overview(run: Run, previous: Run | None, cr: pd.DataFrame, diff: pd.DataFra
     overall = version_totals(run.results, ratings=cr).set_index("version")["negatives"]
     before = before_overall = None
     if previous is not None:
-        prev = table_totals(previous.results)
+        prev = table_totals(previous.results, ratings=before_cr)
         before = prev.set_index(["version", "table"])["negatives"] if len(prev) else None
         before_overall = prev.groupby("version")["negatives"].sum() if len(prev) else None
     counts = {t: rating_counts(run.results, t, ratings=cr) for t in tables}
@@ -313,49 +316,59 @@ def _cell_faults(v: pd.DataFrame, text: str, links: dict, key: tuple) -> list[di
     return faults
 
 
-def _viewer_images(run: Run, out: Path, place):
+def _viewer_images(run: Run, out: Path, place, cache: Path | None = None):
     """``(subject, task, rep, version) -> renders`` for the viewer: every view of the task
     file's first rendered frame and of each frame a check points at (the nearest rendered one
     where it has none, as on the subject pages), ``place``: :func:`_image_store`, hrefs relative
     to the viewer page; at the frames an image check points at, the masks it read
-    (:func:`mask_overlay`). The video grid's other renders stay in the run: the 3D view and the
-    videos show those frames, and they were four fifths of a night's report."""
-    rend = run.renders
-    groups = {k: g for k, g in rend.groupby(["subject", "task", "rep", "version"])} if len(rend) \
-        else {}
-    att = run.attachments
-    masks = {(a.subject, int(a.task), int(a.rep), a.version, a.view,
-              int(a.name[len(MASKS_OUTPUT):])): a.path
-             for a in att[att["name"].str.startswith(MASKS_OUTPUT)].itertuples(index=False)} \
-        if len(att) else {}
-    res = run.results
-    judged = res[(res["frame"] >= 0) & res["table"].notna()
-                 & ~res["view"].isin(["geometry", "trace"])]
-    evidence = {(r.subject, int(r.task), int(r.rep), r.version, r.view, int(r.frame))
-                for r in judged.itertuples(index=False)}
-    pointed: dict[tuple, set[int]] = {}
-    for r in res[(res["frame"] >= 0) & res["table"].notna() & (res["view"] != "trace")] \
-            .itertuples(index=False):
-        pointed.setdefault((r.subject, int(r.task), int(r.rep), r.version), set()).add(int(r.frame))
+    (:func:`stored_overlay`, kept in ``cache``). The video grid's other renders stay in the run:
+    the 3D view and the videos show those frames, and they were four fifths of a night's
+    report. ``images.prefetch(keys)`` encodes the pictures of those (subject, task, rep,
+    version) at once (the pages a report makes anew)."""
+    @functools.lru_cache(maxsize=None)
+    def prepared():
+        """(masks, evidence, chosen): made once, and only when a page is made."""
+        rend = run.renders
+        groups = {k: g for k, g in rend.groupby(["subject", "task", "rep", "version"])} \
+            if len(rend) else {}
+        att = run.attachments
+        masks = {(a.subject, int(a.task), int(a.rep), a.version, a.view,
+                  int(a.name[len(MASKS_OUTPUT):])): a.path
+                 for a in att[att["name"].str.startswith(MASKS_OUTPUT)].itertuples(index=False)} \
+            if len(att) else {}
+        res = run.results
+        judged = res[(res["frame"] >= 0) & res["table"].notna()
+                     & ~res["view"].isin(["geometry", "trace"])]
+        evidence = {(r.subject, int(r.task), int(r.rep), r.version, r.view, int(r.frame))
+                    for r in judged.itertuples(index=False)}
+        pointed: dict[tuple, set[int]] = {}
+        for r in res[(res["frame"] >= 0) & res["table"].notna() & (res["view"] != "trace")] \
+                .itertuples(index=False):
+            pointed.setdefault((r.subject, int(r.task), int(r.rep), r.version),
+                               set()).add(int(r.frame))
 
-    def shown(key, g: pd.DataFrame) -> pd.DataFrame:
-        """The renders of a task file and version the viewer shows (see above)."""
-        subject, task, rep, version = key
-        frames = {int(g["frame"].min())} | {_nearest_rendered(g, f) for f in
-                                             pointed.get((subject, int(task), int(rep), version), ())}
-        return g[g["frame"].isin(frames)].sort_values(["frame", "view"])
+        def shown(key, g: pd.DataFrame) -> pd.DataFrame:
+            """The renders of a task file and version the viewer shows (see above)."""
+            subject, task, rep, version = key
+            frames = {int(g["frame"].min())} | {
+                _nearest_rendered(g, f)
+                for f in pointed.get((subject, int(task), int(rep), version), ())}
+            return g[g["frame"].isin(frames)].sort_values(["frame", "view"])
 
-    # Encode every picture the viewers will show first, on every core (libwebp releases the
-    # GIL): a night's 6,400 take 85 s of one core; the subject pages' are nearly all among them.
-    viewers = {(a.subject, int(a.task), int(a.rep), a.version)
-               for a in att[att["name"] == "viewer"].itertuples(index=False)} if len(att) else set()
-    chosen = {k: shown(k, g) for k, g in groups.items()}
-    wanted = [str(p) for k, g in chosen.items() if (k[0], int(k[1]), int(k[2]), k[3]) in viewers
-              for p in g["path"]]
-    with ThreadPoolExecutor(usable_cores()) as pool:
-        list(pool.map(place, dict.fromkeys(wanted)))
+        chosen = {k: shown(k, g) for k, g in groups.items()}
+        return masks, evidence, chosen
+
+    def prefetch(keys) -> None:
+        # Encode every picture the pages will show first, on every core (libwebp releases the
+        # GIL): a night's 6,400 take 85 s of one core; the subject pages' are nearly all among
+        # them.
+        chosen = prepared()[2]
+        wanted = [str(p) for k in keys if k in chosen for p in chosen[k]["path"]]
+        with ThreadPoolExecutor(usable_cores()) as pool:
+            list(pool.map(place, dict.fromkeys(wanted)))
 
     def images(subject, task, rep, version) -> list[dict]:
+        masks, evidence, chosen = prepared()
         g = chosen.get((subject, task, rep, version))
         if g is None:
             return []
@@ -369,10 +382,11 @@ def _viewer_images(run: Run, out: Path, place):
                 over = _mask_dest(out, subject, version, task, rep, v.frame, v.view)
                 over.parent.mkdir(parents=True, exist_ok=True)
                 if not over.is_file():
-                    mask_overlay(Path(masks[key]).read_bytes(), int(v.frame), over)
+                    stored_overlay(masks[key], int(v.frame), over, cache)
                 item["mask"] = os.path.relpath(over, out / "viewer" / slug(subject))
             found.append(item)
         return found
+    images.prefetch = prefetch
     return images
 
 
@@ -402,9 +416,11 @@ def _fmt(x) -> str:
 
 
 def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
-                  rule: pd.DataFrame, out: Path, env, place, viewers: dict | None = None) -> str:
+                  rule: pd.DataFrame, out: Path, env, place,
+                  viewers: dict | None = None) -> tuple[str, list[Path]]:
     """Per version and table: the checks that earned negatives first (value, threshold and its
-    side, the thesis's words, the four views of the frame pointed at), silent checks folded."""
+    side, the thesis's words, the four views of the frame pointed at), silent checks folded.
+    Returns the page (relative to ``out``) and every file it shows that lies in the report."""
     evidence = linked_frames(run.results[run.results["subject"] == subject])
     rend = run.renders[run.renders["subject"] == subject] if len(run.renders) else run.renders
     mine = fv[fv["subject"] == subject]
@@ -458,7 +474,10 @@ def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
     atomic_write_text(page, env.get_template("subject.html.j2").render(
         subject=subject, versions=versions, synthetic=run.synthetic,
         derived={k: v for k, v in run.derived.items() if k == subject}))
-    return page.relative_to(out).as_posix()
+    shown = [Path(os.path.normpath(page.parent / image["href"])) for v in versions
+             for t in v["tables"] for item in t["fired"] + t["silent"]
+             for image in item["images"]]
+    return page.relative_to(out).as_posix(), [page, *shown]
 
 
 def _run_corpus(run: Run) -> Corpus | None:
@@ -473,13 +492,23 @@ def _run_corpus(run: Run) -> Corpus | None:
 def _audio_for(run: Run):
     """``(subject, task, rep) -> WAV path or None`` from the run's corpus (None when the corpus
     cannot be opened: the videos are then silent, and say so)."""
+    return _corpus_file(run, "audio_path")
+
+
+def _alignment_for(run: Run):
+    """``(subject, task, rep) -> the file of the task's labels or None`` from the run's corpus
+    (the viewer pages read them from it)."""
+    return _corpus_file(run, "alignment_path")
+
+
+def _corpus_file(run: Run, method: str):
     corpus = _run_corpus(run)
 
     def find(subject: str, task: int, rep: int):
         if corpus is None:
             return None
         try:
-            return corpus.subject(subject).audio_path(task, rep)
+            return getattr(corpus.subject(subject), method)(task, rep)
         except Exception:  # noqa: BLE001
             return None
     return find
@@ -596,8 +625,9 @@ def _start_videos(run: Run, out: Path, media_cache: Path | None = None):
         # A (version, view) was rendered for a video when its grid frames run unbroken (a
         # first frame and a check frame that happen to fall on the grid are no video).
         on_grid = {}
-        for (version, view), p in g.groupby(["version", "view"]):
-            grid = media.video_frames(p, stride=stride)
+        for (version, view), frames in g.groupby(["version", "view"])["frame"]:
+            # media.video_frames of one panel, without its per-panel groupby (1,254 a night)
+            grid = video_grid(set(frames.tolist()), first=int(frames.min()), stride=stride)
             if len(grid) >= 3 and all(b - a == stride for a, b in zip(grid, grid[1:])):
                 on_grid.setdefault(version, set()).add(view)
         versions = order_versions(on_grid)
@@ -680,41 +710,67 @@ def _thesis_findings(cr: pd.DataFrame, out: Path) -> dict | None:
             "md": md.relative_to(out).as_posix()}
 
 
+def _run_tables(run: Run, fv: pd.DataFrame, cr: pd.DataFrame, viewers: dict, out: Path) -> dict:
+    """What index.html shows of the run alone (its tables, plots and their files, the paired
+    comparisons, the criterion, the judges' findings, the sensitivity section), written into
+    ``out``: nothing here reads the previous run or the history."""
+    return {"summaries": _summaries(run), "paired": _paired(run, out),
+            "tables": _table_sections(run, cr, out, _fault_links(run, fv, viewers)),
+            "criterion": _criterion(run, out), "sensitivity": sensitivity_section(run.root, out),
+            "thesis": _thesis_findings(cr, out)}
+
+
 def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
                 encoding: "_Encoding", media_cache: Path | None) -> str:
-    """Subject pages, tables and plots, then index.html's text (the videos awaited last)."""
+    """Subject pages, tables and plots, then index.html's text (the videos awaited last). With
+    ``media_cache``, every part made before of the same inputs (:mod:`.pagekeys`) is linked
+    from there (:mod:`.memo`); what reads the previous run or the history is made each time."""
+    memo = Memo(media_cache, out)
     fv = file_verdicts(run.results)
     cr = component_ratings(run.results)
-    rule = table_c_rule(run.results, fv=fv)
     subjects = sorted(fv["subject"].dropna().unique())
     place = _image_store(out, media_cache)
-    viewers = write_viewers(run, out, env, slug=slug, audio_for=_audio_for(run),
-                            images=_viewer_images(run, out, place))
-    subject_links = [{"name": s, "href": _subject_page(run, s, fv, cr, rule, out, env, place,
-                                                       viewers),
+    audio_for = _audio_for(run)
+    keys = PageKeys(run, audio_for=audio_for, labels_for=_alignment_for(run))
+    viewers = write_viewers(run, out, env, slug=slug, audio_for=audio_for,
+                            images=_viewer_images(run, out, place, media_cache), memo=memo,
+                            key_of=keys.viewer)
+    rule = functools.lru_cache(maxsize=None)(lambda: table_c_rule(run.results, fv=fv))
+
+    def subject_page(subject: str) -> str:
+        return memo.page("subject", keys.subject(subject, viewers), lambda: _subject_page(
+            run, subject, fv, cr, rule(), out, env, place, viewers))
+
+    subject_links = [{"name": s, "href": subject_page(s),
                       "viewers": [{"task": k[1], "rep": k[2], "href": v}
                                   for k, v in sorted(viewers.items()) if k[0] == s]}
                      for s in subjects]
+    own = memo.staged("tables", keys.tables(viewers),
+                      lambda folder: _run_tables(run, fv, cr, viewers, folder))
     trend = None
     if history is not None and history["night"].nunique() > 1:
-        trend = plots.metric_trend(history, out / "plots" / "trend.png",
-                                   synthetic=run.synthetic).relative_to(out).as_posix()
+        trend = memo.staged("trend", keys.trend(history, run.synthetic),
+                            lambda folder: plots.metric_trend(
+                                history, folder / "plots" / "trend.png",
+                                synthetic=run.synthetic).relative_to(folder).as_posix())
     gate_path = run.root / "gate.json"
     gate = json.loads(gate_path.read_text()) if gate_path.is_file() else None
     if gate is not None:
         atomic_write_text(out / "gate.md", (run.root / "gate.md").read_text()
                           if (run.root / "gate.md").is_file() else "")
-    diff = cmp.compare_components(previous.results, run.results) if previous is not None else None
+    before = component_ratings(previous.results) if previous is not None else None
+    diff = cmp.compare_components(previous.results, run.results, ratings=(before, cr)) \
+        if previous is not None else None
     return env.get_template("index.html.j2").render(
         run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
         derived=run.derived,
-        overview=_overview(run, previous, cr, diff, gate),
-        summaries=_summaries(run), paired=_paired(run, out), agreement=agree,
+        overview=_overview(run, previous, cr, diff, gate, before),
+        summaries=own["summaries"], paired=own["paired"], agreement=agree,
         comparison=_comparison(run, previous, out, diff),
-        tables=_table_sections(run, cr, out, _fault_links(run, fv, viewers)),
-        criterion=_criterion(run, out), rescored=_rescored(run, cr),
-        sensitivity=sensitivity_section(run.root, out),
-        thesis=_thesis_findings(cr, out),
+        tables=own["tables"],
+        criterion=own["criterion"], rescored=_rescored(run, cr),
+        sensitivity=own["sensitivity"],
+        thesis=own["thesis"],
         videos=encoding.videos(),
         rules=AGGREGATION_RULES,
         subjects=subject_links, trend=trend, gate=gate,

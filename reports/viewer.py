@@ -17,7 +17,9 @@ judged from (its registry ``view``).
 from __future__ import annotations
 
 import base64
+import hashlib
 import json
+import os
 import urllib.parse
 import wave
 from pathlib import Path
@@ -38,11 +40,12 @@ from cassi.harness.rubric.image import FrameMasks, mouth_opening
 from cassi.harness.rubric.tables import file_verdicts
 from cassi.renderer.gltf import AXES
 from cassi.renderer.views import VIEWS, material_for
+from cassi.reports.memo import code_digest, content_ids
 from cassi.reports.runio import Run, order_versions
 
 __all__ = ["VIEWER_DIR", "STATIC_DIR", "viewer_page", "viewer_href", "write_viewers",
            "version_payload", "viewer_payload", "write_viewer_page", "copy_static",
-           "TABLE_COLOURS", "MASK_COLOURS", "mask_overlay", "table_legend"]
+           "TABLE_COLOURS", "MASK_COLOURS", "mask_overlay", "stored_overlay", "table_legend"]
 
 VIEWER_DIR = "viewer"
 STATIC_DIR = "static"
@@ -204,6 +207,21 @@ def mask_overlay(blob: bytes, frame: int, dest: Path) -> Path:
     return dest
 
 
+def stored_overlay(blob_path, frame: int, dest: Path, cache: Path | None = None) -> Path:
+    """:func:`mask_overlay` of the masks blob at ``blob_path``; with ``cache`` (a nightly
+    store's media) an overlay drawn before from the same blob, frame and code is linked."""
+    if cache is None:
+        return mask_overlay(Path(blob_path).read_bytes(), frame, dest)
+    doc = ["mask-overlay", content_ids([blob_path])[0], int(frame), code_digest()]
+    cached = Path(cache) / f"{hashlib.sha256(json.dumps(doc).encode()).hexdigest()}.png"
+    if cached.is_file():
+        return link_or_copy(cached, dest)
+    mask_overlay(Path(blob_path).read_bytes(), frame, dest)
+    cached.parent.mkdir(parents=True, exist_ok=True)
+    link_or_copy(dest, cached)
+    return dest
+
+
 def copy_static(out: Path) -> None:
     here = Path(__file__).parent / STATIC_DIR
     (out / STATIC_DIR).mkdir(parents=True, exist_ok=True)
@@ -215,45 +233,75 @@ def copy_static(out: Path) -> None:
             atomic_write_bytes(dest, data)
 
 
-def write_viewers(run: Run, out: Path, env, *, slug, audio_for=None, images=None) -> dict:
+def write_viewers(run: Run, out: Path, env, *, slug, audio_for=None, images=None, memo=None,
+                  key_of=None) -> dict:
     """Write every task file's viewer page and data; returns ``(subject, task, rep) -> page``
     (relative to ``out``) for the task files whose geometry jobs kept viewer data.
 
-    ``images(subject, task, rep, version) -> [{"frame", "view", "href"}]``: the renders to show
-    beside the 3D view (hrefs relative to the report); ``audio_for(subject, task, rep)``: the
-    task's WAV (copied beside the page) or None.
+    ``images(subject, task, rep, version) -> [{"frame", "view", "href"[, "mask"]}]``: the
+    renders to show beside the 3D view (hrefs relative to the page), with an optional
+    ``images.prefetch([(subject, task, rep, version), ...])`` that prepares those of the pages
+    to be made; ``audio_for(subject, task, rep)``: the task's WAV (copied beside the page) or
+    None. ``memo`` (:class:`~cassi.reports.memo.Memo`) with ``key_of(subject, task, rep)`` (its
+    key document, None: none): a page made before of the same inputs is linked, not made
+    again.
     """
     att = run.attachments
     att = att[att["name"] == "viewer"] if len(att) else att
     if not len(att):
         return {}
     copy_static(out)
-    pages = {}
-    events = _events(run.results)
+    pages, todo = {}, []
     for (subject, task, rep), g in att.groupby(["subject", "task", "rep"], sort=True):
         task, rep = int(task), int(rep)
-        versions, first = {}, None
-        for version in order_versions(g["version"].unique()):
-            path = Path(g[g["version"] == version]["path"].iloc[0])
-            data = read_viewer_blob(path.read_bytes())
-            first = first or data  # the measured pellets are the same in every version
-            rend = images(subject, task, rep, version) if images else []
-            versions[version] = version_payload(
-                data, events.get((subject, task, rep, version), []), rend)
         page = viewer_page(slug(subject), task, rep)
-        dest = out / page
-        stem = dest.stem
-        audio = audio_for(subject, task, rep) if audio_for else None
-        audio_href = None
-        if audio is not None and Path(audio).is_file():
-            link_or_copy(audio, dest.parent / f"{stem}.wav")
-            audio_href = f"{stem}.wav"
-        payload = viewer_payload(run, subject, task, rep, versions, first, audio=audio,
-                                 audio_href=audio_href,
-                                 subject_page=f"../../subjects/{slug(subject)}.html")
-        write_viewer_page(dest, payload, env, static="../../static", index="../../index.html")
         pages[(subject, task, rep)] = page
+        doc = key_of(subject, task, rep) if memo is not None and key_of is not None else None
+        key = memo.key("viewer", doc) if doc is not None else None
+        if memo is None or not memo.reuse(key)[0]:
+            todo.append((subject, task, rep, g, key))
+    if not todo:
+        return pages
+    if images is not None and hasattr(images, "prefetch"):
+        images.prefetch([(s, t, r, v) for s, t, r, g, _ in todo for v in g["version"].unique()])
+    events = _events(run.results)
+    for subject, task, rep, g, key in todo:
+        files = _write_viewer(run, out, env, subject, task, rep, g, pages[(subject, task, rep)],
+                              events=events, slug=slug, audio_for=audio_for, images=images)
+        if memo is not None:
+            memo.keep(key, files, None)
     return pages
+
+
+def _write_viewer(run: Run, out: Path, env, subject: str, task: int, rep: int,
+                  att: pd.DataFrame, page: str, *, events, slug, audio_for, images) -> list[Path]:
+    """One task file's viewer page (:func:`write_viewers`); returns every file it shows that
+    lies in the report (page, data, sound, renders, mask overlays)."""
+    versions, first, shown = {}, None, []
+    for version in order_versions(att["version"].unique()):
+        path = Path(att[att["version"] == version]["path"].iloc[0])
+        data = read_viewer_blob(path.read_bytes())
+        first = first or data  # the measured pellets are the same in every version
+        rend = images(subject, task, rep, version) if images else []
+        shown += rend
+        versions[version] = version_payload(
+            data, events.get((subject, task, rep, version), []), rend)
+    dest = out / page
+    stem = dest.stem
+    audio = audio_for(subject, task, rep) if audio_for else None
+    audio_href = None
+    files = [dest, dest.with_suffix(".js")]
+    if audio is not None and Path(audio).is_file():
+        link_or_copy(audio, dest.parent / f"{stem}.wav")
+        audio_href = f"{stem}.wav"
+        files.append(dest.parent / audio_href)
+    payload = viewer_payload(run, subject, task, rep, versions, first, audio=audio,
+                             audio_href=audio_href,
+                             subject_page=f"../../subjects/{slug(subject)}.html")
+    write_viewer_page(dest, payload, env, static="../../static", index="../../index.html")
+    files += [Path(os.path.normpath(dest.parent / item[k])) for item in shown
+              for k in ("href", "mask") if k in item]
+    return files
 
 
 def viewer_payload(run: Run, subject: str, task: int, rep: int, versions: dict, first, *,
