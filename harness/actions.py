@@ -15,12 +15,12 @@ from cassi.common.lazy import resolve
 from cassi.harness.bench import BENCHMARKS, run_benchmarks
 from cassi.harness.commands import config_from_args
 from cassi.harness.evaluation.caches import get_corpus, get_face, get_profile, get_version_face
-from cassi.harness.evaluation.config import NIGHTLY
+from cassi.harness.evaluation.config import MEDIA_GC, NIGHTLY
 from cassi.harness.evaluation.nightly import nightly
 from cassi.harness.evaluation.nights import gc
 from cassi.harness.evaluation.run import run
 from cassi.harness.evaluation.sensitivity import JSON_NAME, MD_NAME, sensitivity
-from cassi.harness.farm.store import collect_garbage, store_lock
+from cassi.harness.farm.store import MEDIA_DIR, collect_garbage, store_lock
 from cassi.renderer.commands import NEUTRAL
 from cassi.versions.registry import get_version
 
@@ -109,7 +109,9 @@ def cmd_gc(args: argparse.Namespace) -> int:
     elif (root / "objects").is_dir() and (root / "manifests").is_dir():
         with store_lock(root, exclusive=True):
             c = collect_garbage(root)
-        out = {"blobs_removed": c.blobs, "manifests_removed": c.manifests, "bytes_freed": c.bytes}
+            pages = resolve(MEDIA_GC)(root / MEDIA_DIR)
+        out = {"blobs_removed": c.blobs, "manifests_removed": c.manifests,
+               "bytes_freed": c.bytes + pages}
     else:
         raise CassiInputError("neither a nightly directory (runs/) nor a store (objects/, "
                               "manifests/)", path=root)

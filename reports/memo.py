@@ -254,3 +254,44 @@ class Memo:
                 self._placed.discard(rel)
                 self._place(f, rel)
         return value
+
+
+#: A staging folder older than this was left by a killed report (a report takes minutes).
+STALE_STAGE_S = 6 * 3600
+
+
+def collect_pages(media: str | os.PathLike) -> int:
+    """``cassi gc``'s part for the page memo under a store's ``media``: remove every kept file
+    no report links any more (its only name is the memo's), every page record that names a
+    removed file, and staging folders a killed report left. Returns the bytes freed. Called
+    holding the store's lock exclusively, as the store's own collection is."""
+    import shutil  # noqa: PLC0415 - gc only
+    import time  # noqa: PLC0415
+
+    pages = Path(media) / MEMO_DIR
+    freed, gone = 0, set()
+    for blob in sorted((pages / _BLOBS).glob("*/*")):
+        try:
+            st = blob.stat()
+        except FileNotFoundError:
+            continue
+        if blob.is_file() and st.st_nlink <= 1:
+            blob.unlink()
+            gone.add(blob.name)
+            freed += st.st_size
+    for record in sorted(pages.glob("*.json")):
+        try:
+            files = json.loads(record.read_text(encoding="utf-8"))["files"]
+            stale = any(d in gone or not (pages / _BLOBS / d[:2] / d).is_file() for _, d in files)
+        except (OSError, ValueError, KeyError, TypeError):
+            stale = True  # unreadable: of no use to any report
+        if stale:
+            record.unlink(missing_ok=True)
+    for stage in pages.glob(".stage-*"):
+        try:
+            if time.time() - stage.stat().st_mtime > STALE_STAGE_S:
+                shutil.rmtree(stage, ignore_errors=True)
+        except OSError:
+            continue
+    return freed
+

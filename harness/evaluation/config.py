@@ -124,6 +124,8 @@ NIGHTLY = RunConfig(workers=2, stride=NIGHTLY_STRIDE, extremes=NIGHTLY_EXTREMES,
 #: A night's review (gates, history, report): the reports layer's, named by ``module:function``
 #: where a night is composed (the command, the benchmark), so the harness never imports reports.
 NIGHT_REVIEW = "cassi.reports.nightly:review_night"
+#: The reports layer's part of ``cassi gc`` for a store's media (its page memo), named likewise.
+MEDIA_GC = "cassi.reports.memo:collect_pages"
 #: ``video_versions`` given as one word: every version (None) or none (an empty tuple).
 EVERY_VERSION, NO_VERSION = "all", "none"
 

@@ -26,8 +26,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from cassi.common.errors import CassiInputError
-from cassi.harness.evaluation.config import KEEP_NIGHTS
-from cassi.harness.farm.store import collect_garbage, store_lock
+from cassi.common.lazy import resolve
+from cassi.harness.evaluation.config import KEEP_NIGHTS, MEDIA_GC
+from cassi.harness.farm.store import MEDIA_DIR, collect_garbage, store_lock
 from cassi.harness.farm.tableset import SET_FILE as TABLE_SET
 from cassi.harness.farm.tableset import SUMMARY_FILE, TableSetError, verify_table_set
 
@@ -139,9 +140,23 @@ def gc(out_dir: str | os.PathLike, *, keep: int = KEEP_NIGHTS) -> dict:
                 if d.is_dir():
                     shutil.rmtree(d)
         freed = collect_garbage(root / STORE_DIR)  # the lock made the directory: never missing
+        pages = resolve(MEDIA_GC)(root / STORE_DIR / MEDIA_DIR)
+        _forget_analyses_of_removed_runs(root / STORE_DIR / SENSITIVITY_MEMO)
     return {"nights_removed": old, "nights_kept": [n for n in names if n in kept],
             "blobs_removed": freed.blobs,
-            "manifests_removed": freed.manifests, "bytes_freed": freed.bytes}
+            "manifests_removed": freed.manifests, "bytes_freed": freed.bytes + pages}
+
+
+def _forget_analyses_of_removed_runs(memo: Path) -> None:
+    """Remove the kept robustness analyses whose night is gone (a later night with the same
+    results table computes its own again, in seconds)."""
+    for path in sorted(memo.glob("*.json")):
+        try:
+            run = json.loads(path.read_text(encoding="utf-8"))["run"]
+        except (OSError, ValueError, KeyError, TypeError):
+            run = None
+        if run is None or not Path(run).is_dir():
+            path.unlink(missing_ok=True)
 
 
 @dataclass

@@ -78,3 +78,39 @@ def test_a_name_is_never_used_again_after_gc(ten_nights):
 def test_a_clock_behind_the_newest_night_is_refused(ten_nights):
     with pytest.raises(CassiInputError, match=r"2026-12-07-10, is dated after today \(2026-12-06\)"):
         night_name(ten_nights / "runs", DAY - dt.timedelta(days=1))
+
+
+def test_gc_forgets_the_page_memo_and_the_analyses_no_kept_night_uses(ten_nights):
+    """A report's page memo keeps files hard-linked into reports: gc removes those no report
+    links any more, the page records naming them and stale staging folders; and the kept
+    robustness analyses of removed nights."""
+    import os
+    import time
+
+    from cassi.harness.evaluation.nights import SENSITIVITY_MEMO, STORE_DIR
+    from cassi.reports.memo import STALE_STAGE_S
+
+    pages = ten_nights / STORE_DIR / "media" / "pages"
+    kept_report = ten_nights / "reports" / "2026-12-07-10"
+    for digest, linked in (("aa" + "1" * 62, True), ("bb" + "2" * 62, False)):
+        blob = pages / "blobs" / digest[:2] / digest
+        blob.parent.mkdir(parents=True, exist_ok=True)
+        blob.write_text(digest)
+        if linked:
+            os.link(blob, kept_report / "index.html")
+        (pages / f"{'c' * 63}{int(linked)}.json").write_text(
+            json.dumps({"files": [["index.html", digest]], "value": None}))
+    stale, fresh = pages / ".stage-old", pages / ".stage-new"
+    stale.mkdir(), fresh.mkdir()
+    old = time.time() - STALE_STAGE_S - 60
+    os.utime(stale, (old, old))
+    memo = ten_nights / STORE_DIR / SENSITIVITY_MEMO
+    memo.mkdir(parents=True)
+    (memo / "a.json").write_text(json.dumps({"run": str(ten_nights / "runs" / "2026-12-07-2")}))
+    (memo / "b.json").write_text(json.dumps({"run": str(ten_nights / "runs" / "2026-12-07-10")}))
+    gc(ten_nights, keep=1)
+    assert (pages / "blobs" / "aa" / ("aa" + "1" * 62)).is_file()
+    assert not (pages / "blobs" / "bb" / ("bb" + "2" * 62)).exists()
+    assert [p.name for p in pages.glob("*.json")] == [f"{'c' * 63}1.json"]
+    assert not stale.exists() and fresh.is_dir()
+    assert [p.name for p in memo.iterdir()] == ["b.json"]
