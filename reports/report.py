@@ -18,7 +18,7 @@ import jinja2
 import numpy as np
 import pandas as pd
 
-from cassi.common.atomic import atomic_write_text
+from cassi.common.atomic import atomic_write_bytes, atomic_write_text
 from cassi.common.cores import usable_cores
 from cassi.reports import compare as cmp
 from cassi.reports.agree import agreement, write_agreement
@@ -48,6 +48,12 @@ from cassi.data.xrmb.files import NOMINAL_PERIOD_US
 #: How many fired checks per version and task file show the four views of their frame on a
 #: subject page (the rest link to the frame's number only).
 MAX_SHEETS_PER_VERSION = 12
+#: A subject page shows a check's group of fault cards open when it holds at most this many
+#: (a default night's few task files); larger groups (a full set's 120 files) start folded.
+GROUP_OPEN_UP_TO = 4
+#: A table longer than this many rows is embedded as data and drawn when it is opened (the
+#: silent checks of a subject page, the index's per-file criterion table).
+LAZY_ROWS = 200
 
 
 def slug(text: str) -> str:
@@ -415,6 +421,65 @@ def _fmt(x) -> str:
     return "" if x is None or pd.isna(x) else f"{float(x):.4g}"
 
 
+def _check_groups(fired: list[dict], anchor: str) -> list[dict]:
+    """A version and table's fired checks, one group per check (most negatives, then most
+    files first), its cards in the page's worst-first order; a group of at most
+    :data:`GROUP_OPEN_UP_TO` cards is shown open."""
+    groups: dict[str, dict] = {}
+    for item in fired:
+        g = groups.setdefault(item["check"], {
+            "id": f"{anchor}--{slug(item['check'])}", "check": item["check"],
+            "text": item["text"], "unit": item["unit"], "side": item["side"],
+            "files": 0, "negatives": 0, "cards": []})
+        g["files"] += 1
+        g["negatives"] += item["negatives"]
+        g["cards"].append(item)
+    out = sorted(groups.values(), key=lambda g: (-g["negatives"], -g["files"], g["check"]))
+    for g in out:
+        g["open"] = len(g["cards"]) <= GROUP_OPEN_UP_TO
+    return out
+
+
+def _fired_summary(versions: list[dict]) -> dict:
+    """The subject page's first screen: per table and check (rows) and version (columns), the
+    task files where the check fired and the negatives charged, each linked to its group."""
+    names = [v["version"] for v in versions]
+    rows: dict[tuple, dict] = {}
+    for i, v in enumerate(versions):
+        for t in v["tables"]:
+            for g in t["groups"]:
+                row = rows.setdefault((t["table"], g["check"]), {
+                    "table": t["table"], "check": g["check"], "text": g["text"],
+                    "cells": [None] * len(names)})
+                row["cells"][i] = {"files": g["files"], "negatives": g["negatives"],
+                                   "href": f"#{g['id']}"}
+    return {"versions": names, "rows": [rows[k] for k in sorted(rows)],
+            "checks": sorted({c for _, c in rows}),
+            "tables": sorted({t["table"] for v in versions for t in v["tables"]})}
+
+
+def _lazy_rows(silent: list[dict]) -> dict:
+    """A long silent-check table as data the page renders when it is opened: the checks'
+    words, unit and side once, then per row task, check, value and threshold."""
+    checks = sorted({r["check"] for r in silent})
+    ix = {c: i for i, c in enumerate(checks)}
+    words = {r["check"]: [r["text"], r["unit"], r["side"]] for r in silent}
+    return {"checks": [[c, *words[c]] for c in checks],
+            "rows": [[r["task"], ix[r["check"]], r["value"], r["threshold"]] for r in silent]}
+
+
+#: The subject pages' script (filters, long tables drawn when opened), beside the viewer's.
+SUBJECT_SCRIPT = "subject.js"
+
+
+def _copy_subject_script(out: Path) -> None:
+    data = (Path(__file__).parent / "static" / SUBJECT_SCRIPT).read_bytes()
+    dest = out / "static" / SUBJECT_SCRIPT
+    if not dest.is_file() or dest.read_bytes() != data:
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_bytes(dest, data)
+
+
 def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
                   rule: pd.DataFrame, out: Path, env, place,
                   viewers: dict | None = None) -> tuple[str, list[Path]]:
@@ -466,13 +531,17 @@ def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
                     adj = int(rr.iloc[0]["adjust"])
                     comparison = (f"{'+1' if adj > 0 else '-1' if adj < 0 else 'no change'}: "
                                   f"{rr.iloc[0]['reason']}")
-            tables.append({"id": evidence_anchor(version, table), "title": table_title(table),
+            anchor = evidence_anchor(version, table)
+            tables.append({"id": anchor, "table": table, "title": table_title(table),
                            "rating": rating, "fired": fired, "silent": silent,
+                           "groups": _check_groups(fired, anchor),
+                           "silent_lazy": _lazy_rows(silent) if len(silent) > LAZY_ROWS else None,
                            "comparison": comparison})
         versions.append({"version": version, "id": slug(version), "tables": tables})
     page = out / "subjects" / f"{slug(subject)}.html"
     atomic_write_text(page, env.get_template("subject.html.j2").render(
         subject=subject, versions=versions, synthetic=run.synthetic,
+        summary=_fired_summary(versions), open_up_to=GROUP_OPEN_UP_TO, lazy_rows=LAZY_ROWS,
         derived={k: v for k, v in run.derived.items() if k == subject}))
     shown = [Path(os.path.normpath(page.parent / image["href"])) for v in versions
              for t in v["tables"] for item in t["fired"] + t["silent"]
@@ -736,6 +805,7 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
                             images=_viewer_images(run, out, place, media_cache), memo=memo,
                             key_of=keys.viewer)
     rule = functools.lru_cache(maxsize=None)(lambda: table_c_rule(run.results, fv=fv))
+    _copy_subject_script(out)
 
     def subject_page(subject: str) -> str:
         return memo.page("subject", keys.subject(subject, viewers), lambda: _subject_page(
