@@ -54,6 +54,11 @@ GROUP_OPEN_UP_TO = 4
 #: A table longer than this many rows is embedded as data and drawn when it is opened (the
 #: silent checks of a subject page, the index's per-file criterion table).
 LAZY_ROWS = 200
+#: A run of more than this many task files (a full set: 1,800) gives its viewer pages the
+#: renders of each task file's first frame and of the frames of the checks that earned
+#: negatives only (the frames every link opens), not those of silent checks: the pictures
+#: were two thirds of a full set's report. A default night (57 files) keeps them all.
+ALL_RENDERS_UP_TO = 100
 
 
 def slug(text: str) -> str:
@@ -178,10 +183,10 @@ def _criterion(run: Run, out: Path) -> dict | None:
         ["version", "subject", "task", "rep"])[["value", "detail"]].rename(
         columns={"value": "margin_mm"})
     csv, md = _write_table(table, out, "low_lips_criterion")
-    return {"csv": csv, "md": md,
-            "rows": [{"version": v, "subject": s, "task": int(t), "rep": int(r),
-                      "margin": f"{m:+.2f}", "detail": d}
-                     for (v, s, t, r), (m, d) in zip(table.index, table.itertuples(index=False))]}
+    rows = [{"version": v, "subject": s, "task": int(t), "rep": int(r), "margin": f"{m:+.2f}",
+             "detail": d} for (v, s, t, r), (m, d) in zip(table.index, table.itertuples(index=False))]
+    lazy = {"rows": [list(r.values()) for r in rows]} if len(rows) > LAZY_ROWS else None
+    return {"csv": csv, "md": md, "rows": rows, "lazy": lazy}
 
 
 def _comparison(run: Run, previous: Run | None, out: Path, diff: pd.DataFrame | None) -> dict | None:
@@ -322,7 +327,23 @@ def _cell_faults(v: pd.DataFrame, text: str, links: dict, key: tuple) -> list[di
     return faults
 
 
-def _viewer_images(run: Run, out: Path, place, cache: Path | None = None):
+def _renders_rule(run: Run, fv: pd.DataFrame) -> tuple[set | None, str | None]:
+    """For a run of more than :data:`ALL_RENDERS_UP_TO` task files: the (subject, task, rep,
+    version, check) that earned negatives (the checks whose frames the viewer pages carry
+    renders of) and the sentence each page says it with; (None, None) otherwise."""
+    files = run.results[["subject", "task", "rep"]].drop_duplicates()
+    if len(files) <= ALL_RENDERS_UP_TO:
+        return None, None
+    fired = fv[fv["raw_negatives"] > 0]
+    keys = {(s, int(t), int(r), v, c) for s, t, r, v, c in zip(
+        fired["subject"], fired["task"], fired["rep"], fired["version"], fired["check"])}
+    return keys, (f"This run has {len(files)} task files (more than {ALL_RENDERS_UP_TO}): the "
+                  "renders here are the first frame's and those of the frames of checks that "
+                  "earned negatives, not of silent checks' frames.")
+
+
+def _viewer_images(run: Run, out: Path, place, cache: Path | None = None,
+                   fired: set | None = None, note: str | None = None):
     """``(subject, task, rep, version) -> renders`` for the viewer: every view of the task
     file's first rendered frame and of each frame a check points at (the nearest rendered one
     where it has none, as on the subject pages), ``place``: :func:`_image_store`, hrefs relative
@@ -330,7 +351,8 @@ def _viewer_images(run: Run, out: Path, place, cache: Path | None = None):
     (:func:`stored_overlay`, kept in ``cache``). The video grid's other renders stay in the run:
     the 3D view and the videos show those frames, and they were four fifths of a night's
     report. ``images.prefetch(keys)`` encodes the pictures of those (subject, task, rep,
-    version) at once (the pages a report makes anew)."""
+    version) at once (the pages a report makes anew). ``fired`` (:func:`_renders_rule`): only
+    the frames of those checks, besides the first, said by ``note``."""
     @functools.lru_cache(maxsize=None)
     def prepared():
         """(masks, evidence, chosen): made once, and only when a page is made."""
@@ -350,6 +372,9 @@ def _viewer_images(run: Run, out: Path, place, cache: Path | None = None):
         pointed: dict[tuple, set[int]] = {}
         for r in res[(res["frame"] >= 0) & res["table"].notna() & (res["view"] != "trace")] \
                 .itertuples(index=False):
+            if fired is not None and (r.subject, int(r.task), int(r.rep), r.version,
+                                      r.check) not in fired:
+                continue
             pointed.setdefault((r.subject, int(r.task), int(r.rep), r.version),
                                set()).add(int(r.frame))
 
@@ -393,6 +418,7 @@ def _viewer_images(run: Run, out: Path, place, cache: Path | None = None):
             found.append(item)
         return found
     images.prefetch = prefetch
+    images.note = note
     return images
 
 
@@ -468,13 +494,14 @@ def _lazy_rows(silent: list[dict]) -> dict:
             "rows": [[r["task"], ix[r["check"]], r["value"], r["threshold"]] for r in silent]}
 
 
-#: The subject pages' script (filters, long tables drawn when opened), beside the viewer's.
-SUBJECT_SCRIPT = "subject.js"
+#: The pages' script (long tables drawn when opened, the subject pages' filters), beside the
+#: viewer's.
+REPORT_SCRIPT = "report.js"
 
 
-def _copy_subject_script(out: Path) -> None:
-    data = (Path(__file__).parent / "static" / SUBJECT_SCRIPT).read_bytes()
-    dest = out / "static" / SUBJECT_SCRIPT
+def _copy_report_script(out: Path) -> None:
+    data = (Path(__file__).parent / "static" / REPORT_SCRIPT).read_bytes()
+    dest = out / "static" / REPORT_SCRIPT
     if not dest.is_file() or dest.read_bytes() != data:
         dest.parent.mkdir(parents=True, exist_ok=True)
         atomic_write_bytes(dest, data)
@@ -801,11 +828,18 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
     place = _image_store(out, media_cache)
     audio_for = _audio_for(run)
     keys = PageKeys(run, audio_for=audio_for, labels_for=_alignment_for(run))
+    fired, note = _renders_rule(run, fv)
+
+    def viewer_key(subject, task, rep):
+        # the rule reads the run's count of task files, which a page's own rows do not say
+        doc = keys.viewer(subject, task, rep)
+        return doc if doc is None or note is None else {**doc, "renders_note": note}
+
     viewers = write_viewers(run, out, env, slug=slug, audio_for=audio_for,
-                            images=_viewer_images(run, out, place, media_cache), memo=memo,
-                            key_of=keys.viewer)
+                            images=_viewer_images(run, out, place, media_cache, fired, note),
+                            memo=memo, key_of=viewer_key)
     rule = functools.lru_cache(maxsize=None)(lambda: table_c_rule(run.results, fv=fv))
-    _copy_subject_script(out)
+    _copy_report_script(out)
 
     def subject_page(subject: str) -> str:
         return memo.page("subject", keys.subject(subject, viewers), lambda: _subject_page(
@@ -842,7 +876,7 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
         sensitivity=own["sensitivity"],
         thesis=own["thesis"],
         videos=encoding.videos(),
-        rules=AGGREGATION_RULES,
+        rules=AGGREGATION_RULES, lazy_rows=LAZY_ROWS,
         subjects=subject_links, trend=trend, gate=gate,
         jobs={"counts": run.summary.get("counts", {}), "failed": run.failed,
               "skipped": run.skipped} if run.summary else None)

@@ -1,29 +1,36 @@
-// The subject page: filters of its fault cards, its long silent tables drawn when opened, and
-// links to a folded group that open it (a classic script: pages open from file://).
+// The report's pages: long tables drawn when their <details> is first opened (index and
+// subject pages), and a subject page's filters of its fault cards and links that open a folded
+// group (a classic script: the pages open from file://, where modules and fetch() are blocked).
 (function () {
   "use strict";
-  var form = document.getElementById("filter"), shown = document.getElementById("shown");
-  var cards = Array.prototype.slice.call(document.querySelectorAll("div.fired"));
-  var groups = Array.prototype.slice.call(document.querySelectorAll("details.check"));
-  var opened = groups.map(function (g) { return g.open; });  // the page's own choice
-  form.hidden = false;
   function td(row, text) { var c = row.insertCell(-1); c.textContent = text; }
-  // a long silent table is drawn the first time it is opened
-  document.querySelectorAll("details.silent").forEach(function (d) {
-    var data = d.querySelector("script.lazy-rows");
-    if (!data) return;
-    d.addEventListener("toggle", function () {
+  document.querySelectorAll("script.lazy-rows").forEach(function (data) {
+    var d = data.closest("details");
+    function draw() {
       if (!d.open || d.dataset.drawn) return;
       d.dataset.drawn = "1";
       var x = JSON.parse(data.textContent), table = d.querySelector("table");
       x.rows.forEach(function (r) {
-        var c = x.checks[r[1]], row = table.insertRow(-1);
+        var row = table.insertRow(-1);
+        if (!x.checks) { r.forEach(function (v) { td(row, v); }); return; }
+        // a silent-check row: task, check (by number), value, threshold
+        var c = x.checks[r[1]];
         td(row, r[0]); td(row, c[0]); td(row, c[1]); td(row, r[2] + " " + c[2]); td(row, r[3]);
         td(row, c[3]);
       });
-      d.querySelector(".lazy-note").hidden = true;
-    });
+      var note = d.querySelector(".lazy-note");
+      if (note) note.hidden = true;
+    }
+    d.addEventListener("toggle", draw);
+    draw();
   });
+  var form = document.getElementById("filter");
+  if (!form) return;
+  var shown = document.getElementById("shown");
+  var cards = Array.prototype.slice.call(document.querySelectorAll("div.fired"));
+  var groups = Array.prototype.slice.call(document.querySelectorAll("details.check"));
+  var opened = groups.map(function (g) { return g.open; });  // the page's own choice
+  form.hidden = false;
   function apply() {
     var el = form.elements;
     var f = {version: el.version.value, table: el.table.value, check: el.check.value,
