@@ -18,7 +18,7 @@ import jinja2
 import numpy as np
 import pandas as pd
 
-from cassi.common.atomic import atomic_write_text
+from cassi.common.atomic import atomic_write_bytes, atomic_write_text
 from cassi.common.cores import usable_cores
 from cassi.reports import compare as cmp
 from cassi.reports.agree import agreement, write_agreement
@@ -48,6 +48,17 @@ from cassi.data.xrmb.files import NOMINAL_PERIOD_US
 #: How many fired checks per version and task file show the four views of their frame on a
 #: subject page (the rest link to the frame's number only).
 MAX_SHEETS_PER_VERSION = 12
+#: A subject page shows a check's group of fault cards open when it holds at most this many
+#: (a default night's few task files); larger groups (a full set's 120 files) start folded.
+GROUP_OPEN_UP_TO = 4
+#: A table longer than this many rows is embedded as data and drawn when it is opened (the
+#: silent checks of a subject page, the index's per-file criterion table).
+LAZY_ROWS = 200
+#: A run of more than this many task files (a full set: 1,800) gives its viewer pages the
+#: renders of each task file's first frame and of the frames of the checks that earned
+#: negatives only (the frames every link opens), not those of silent checks: the pictures
+#: were two thirds of a full set's report. A default night (57 files) keeps them all.
+ALL_RENDERS_UP_TO = 100
 
 
 def slug(text: str) -> str:
@@ -172,10 +183,10 @@ def _criterion(run: Run, out: Path) -> dict | None:
         ["version", "subject", "task", "rep"])[["value", "detail"]].rename(
         columns={"value": "margin_mm"})
     csv, md = _write_table(table, out, "low_lips_criterion")
-    return {"csv": csv, "md": md,
-            "rows": [{"version": v, "subject": s, "task": int(t), "rep": int(r),
-                      "margin": f"{m:+.2f}", "detail": d}
-                     for (v, s, t, r), (m, d) in zip(table.index, table.itertuples(index=False))]}
+    rows = [{"version": v, "subject": s, "task": int(t), "rep": int(r), "margin": f"{m:+.2f}",
+             "detail": d} for (v, s, t, r), (m, d) in zip(table.index, table.itertuples(index=False))]
+    lazy = {"rows": [list(r.values()) for r in rows]} if len(rows) > LAZY_ROWS else None
+    return {"csv": csv, "md": md, "rows": rows, "lazy": lazy}
 
 
 def _comparison(run: Run, previous: Run | None, out: Path, diff: pd.DataFrame | None) -> dict | None:
@@ -316,7 +327,23 @@ def _cell_faults(v: pd.DataFrame, text: str, links: dict, key: tuple) -> list[di
     return faults
 
 
-def _viewer_images(run: Run, out: Path, place, cache: Path | None = None):
+def _renders_rule(run: Run, fv: pd.DataFrame) -> tuple[set | None, str | None]:
+    """For a run of more than :data:`ALL_RENDERS_UP_TO` task files: the (subject, task, rep,
+    version, check) that earned negatives (the checks whose frames the viewer pages carry
+    renders of) and the sentence each page says it with; (None, None) otherwise."""
+    files = run.results[["subject", "task", "rep"]].drop_duplicates()
+    if len(files) <= ALL_RENDERS_UP_TO:
+        return None, None
+    fired = fv[fv["raw_negatives"] > 0]
+    keys = {(s, int(t), int(r), v, c) for s, t, r, v, c in zip(
+        fired["subject"], fired["task"], fired["rep"], fired["version"], fired["check"])}
+    return keys, (f"This run has {len(files)} task files (more than {ALL_RENDERS_UP_TO}): the "
+                  "renders here are the first frame's and those of the frames of checks that "
+                  "earned negatives, not of silent checks' frames.")
+
+
+def _viewer_images(run: Run, out: Path, place, cache: Path | None = None,
+                   fired: set | None = None, note: str | None = None):
     """``(subject, task, rep, version) -> renders`` for the viewer: every view of the task
     file's first rendered frame and of each frame a check points at (the nearest rendered one
     where it has none, as on the subject pages), ``place``: :func:`_image_store`, hrefs relative
@@ -324,7 +351,8 @@ def _viewer_images(run: Run, out: Path, place, cache: Path | None = None):
     (:func:`stored_overlay`, kept in ``cache``). The video grid's other renders stay in the run:
     the 3D view and the videos show those frames, and they were four fifths of a night's
     report. ``images.prefetch(keys)`` encodes the pictures of those (subject, task, rep,
-    version) at once (the pages a report makes anew)."""
+    version) at once (the pages a report makes anew). ``fired`` (:func:`_renders_rule`): only
+    the frames of those checks, besides the first, said by ``note``."""
     @functools.lru_cache(maxsize=None)
     def prepared():
         """(masks, evidence, chosen): made once, and only when a page is made."""
@@ -344,6 +372,9 @@ def _viewer_images(run: Run, out: Path, place, cache: Path | None = None):
         pointed: dict[tuple, set[int]] = {}
         for r in res[(res["frame"] >= 0) & res["table"].notna() & (res["view"] != "trace")] \
                 .itertuples(index=False):
+            if fired is not None and (r.subject, int(r.task), int(r.rep), r.version,
+                                      r.check) not in fired:
+                continue
             pointed.setdefault((r.subject, int(r.task), int(r.rep), r.version),
                                set()).add(int(r.frame))
 
@@ -387,6 +418,7 @@ def _viewer_images(run: Run, out: Path, place, cache: Path | None = None):
             found.append(item)
         return found
     images.prefetch = prefetch
+    images.note = note
     return images
 
 
@@ -413,6 +445,66 @@ def _views_at(run: Run, rend: pd.DataFrame, subject: str, task: int, rep: int, v
 
 def _fmt(x) -> str:
     return "" if x is None or pd.isna(x) else f"{float(x):.4g}"
+
+
+def _check_groups(fired: list[dict], anchor: str) -> list[dict]:
+    """A version and table's fired checks, one group per check (most negatives, then most
+    files first), its cards in the page's worst-first order; a group of at most
+    :data:`GROUP_OPEN_UP_TO` cards is shown open."""
+    groups: dict[str, dict] = {}
+    for item in fired:
+        g = groups.setdefault(item["check"], {
+            "id": f"{anchor}--{slug(item['check'])}", "check": item["check"],
+            "text": item["text"], "unit": item["unit"], "side": item["side"],
+            "files": 0, "negatives": 0, "cards": []})
+        g["files"] += 1
+        g["negatives"] += item["negatives"]
+        g["cards"].append(item)
+    out = sorted(groups.values(), key=lambda g: (-g["negatives"], -g["files"], g["check"]))
+    for g in out:
+        g["open"] = len(g["cards"]) <= GROUP_OPEN_UP_TO
+    return out
+
+
+def _fired_summary(versions: list[dict]) -> dict:
+    """The subject page's first screen: per table and check (rows) and version (columns), the
+    task files where the check fired and the negatives charged, each linked to its group."""
+    names = [v["version"] for v in versions]
+    rows: dict[tuple, dict] = {}
+    for i, v in enumerate(versions):
+        for t in v["tables"]:
+            for g in t["groups"]:
+                row = rows.setdefault((t["table"], g["check"]), {
+                    "table": t["table"], "check": g["check"], "text": g["text"],
+                    "cells": [None] * len(names)})
+                row["cells"][i] = {"files": g["files"], "negatives": g["negatives"],
+                                   "href": f"#{g['id']}"}
+    return {"versions": names, "rows": [rows[k] for k in sorted(rows)],
+            "checks": sorted({c for _, c in rows}),
+            "tables": sorted({t["table"] for v in versions for t in v["tables"]})}
+
+
+def _lazy_rows(silent: list[dict]) -> dict:
+    """A long silent-check table as data the page renders when it is opened: the checks'
+    words, unit and side once, then per row task, check, value and threshold."""
+    checks = sorted({r["check"] for r in silent})
+    ix = {c: i for i, c in enumerate(checks)}
+    words = {r["check"]: [r["text"], r["unit"], r["side"]] for r in silent}
+    return {"checks": [[c, *words[c]] for c in checks],
+            "rows": [[r["task"], ix[r["check"]], r["value"], r["threshold"]] for r in silent]}
+
+
+#: The pages' script (long tables drawn when opened, the subject pages' filters), beside the
+#: viewer's.
+REPORT_SCRIPT = "report.js"
+
+
+def _copy_report_script(out: Path) -> None:
+    data = (Path(__file__).parent / "static" / REPORT_SCRIPT).read_bytes()
+    dest = out / "static" / REPORT_SCRIPT
+    if not dest.is_file() or dest.read_bytes() != data:
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_bytes(dest, data)
 
 
 def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
@@ -466,13 +558,17 @@ def _subject_page(run: Run, subject: str, fv: pd.DataFrame, cr: pd.DataFrame,
                     adj = int(rr.iloc[0]["adjust"])
                     comparison = (f"{'+1' if adj > 0 else '-1' if adj < 0 else 'no change'}: "
                                   f"{rr.iloc[0]['reason']}")
-            tables.append({"id": evidence_anchor(version, table), "title": table_title(table),
+            anchor = evidence_anchor(version, table)
+            tables.append({"id": anchor, "table": table, "title": table_title(table),
                            "rating": rating, "fired": fired, "silent": silent,
+                           "groups": _check_groups(fired, anchor),
+                           "silent_lazy": _lazy_rows(silent) if len(silent) > LAZY_ROWS else None,
                            "comparison": comparison})
         versions.append({"version": version, "id": slug(version), "tables": tables})
     page = out / "subjects" / f"{slug(subject)}.html"
     atomic_write_text(page, env.get_template("subject.html.j2").render(
         subject=subject, versions=versions, synthetic=run.synthetic,
+        summary=_fired_summary(versions), open_up_to=GROUP_OPEN_UP_TO, lazy_rows=LAZY_ROWS,
         derived={k: v for k, v in run.derived.items() if k == subject}))
     shown = [Path(os.path.normpath(page.parent / image["href"])) for v in versions
              for t in v["tables"] for item in t["fired"] + t["silent"]
@@ -732,10 +828,18 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
     place = _image_store(out, media_cache)
     audio_for = _audio_for(run)
     keys = PageKeys(run, audio_for=audio_for, labels_for=_alignment_for(run))
+    fired, note = _renders_rule(run, fv)
+
+    def viewer_key(subject, task, rep):
+        # the rule reads the run's count of task files, which a page's own rows do not say
+        doc = keys.viewer(subject, task, rep)
+        return doc if doc is None or note is None else {**doc, "renders_note": note}
+
     viewers = write_viewers(run, out, env, slug=slug, audio_for=audio_for,
-                            images=_viewer_images(run, out, place, media_cache), memo=memo,
-                            key_of=keys.viewer)
+                            images=_viewer_images(run, out, place, media_cache, fired, note),
+                            memo=memo, key_of=viewer_key)
     rule = functools.lru_cache(maxsize=None)(lambda: table_c_rule(run.results, fv=fv))
+    _copy_report_script(out)
 
     def subject_page(subject: str) -> str:
         return memo.page("subject", keys.subject(subject, viewers), lambda: _subject_page(
@@ -772,7 +876,7 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
         sensitivity=own["sensitivity"],
         thesis=own["thesis"],
         videos=encoding.videos(),
-        rules=AGGREGATION_RULES,
+        rules=AGGREGATION_RULES, lazy_rows=LAZY_ROWS,
         subjects=subject_links, trend=trend, gate=gate,
         jobs={"counts": run.summary.get("counts", {}), "failed": run.failed,
               "skipped": run.skipped} if run.summary else None)

@@ -241,7 +241,8 @@ def write_viewers(run: Run, out: Path, env, *, slug, audio_for=None, images=None
     ``images(subject, task, rep, version) -> [{"frame", "view", "href"[, "mask"]}]``: the
     renders to show beside the 3D view (hrefs relative to the page), with an optional
     ``images.prefetch([(subject, task, rep, version), ...])`` that prepares those of the pages
-    to be made; ``audio_for(subject, task, rep)``: the task's WAV (copied beside the page) or
+    to be made and an optional ``images.note`` (what the renders shown leave out, said on each
+    page); ``audio_for(subject, task, rep)``: the task's WAV (copied beside the page) or
     None. ``memo`` (:class:`~cassi.reports.memo.Memo`) with ``key_of(subject, task, rep)`` (its
     key document, None: none): a page made before of the same inputs is linked, not made
     again.
@@ -298,7 +299,8 @@ def _write_viewer(run: Run, out: Path, env, subject: str, task: int, rep: int,
     payload = viewer_payload(run, subject, task, rep, versions, first, audio=audio,
                              audio_href=audio_href,
                              subject_page=f"../../subjects/{slug(subject)}.html")
-    write_viewer_page(dest, payload, env, static="../../static", index="../../index.html")
+    write_viewer_page(dest, payload, env, static="../../static", index="../../index.html",
+                      renders_note=getattr(images, "note", None))
     files += [Path(os.path.normpath(dest.parent / item[k])) for item in shown
               for k in ("href", "mask") if k in item]
     return files
@@ -325,7 +327,7 @@ def viewer_payload(run: Run, subject: str, task: int, rep: int, versions: dict, 
 
 
 def write_viewer_page(dest: Path, payload: dict, env, *, static: str, index: str | None,
-                      blind: bool = False) -> None:
+                      blind: bool = False, renders_note: str | None = None) -> None:
     """A viewer page (``dest``) and its data (``dest`` with ``.js``); ``static``: the way from
     the page to the viewer's scripts; ``index`` None: no way back to a report; ``blind``: a
     rating session's page, without the rubric's events or links to what fired."""
@@ -336,7 +338,7 @@ def write_viewer_page(dest: Path, payload: dict, env, *, static: str, index: str
         synthetic=payload["synthetic"], versions=payload["versions"], data=f"{dest.stem}.js",
         derived={payload["subject"]: payload["derived"]} if payload.get("derived") else {},
         static=static, index=index, subject_page=payload["subject_page"], blind=blind,
-        legend=table_legend(), stride=payload["stride"]))
+        legend=table_legend(), stride=payload["stride"], renders_note=renders_note))
 
 
 def _rate(data) -> float:
