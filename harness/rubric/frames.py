@@ -69,6 +69,26 @@ def _join(parts: list):
     return np.concatenate(parts) if len(parts) > 1 else first
 
 
+class LastRead(Frames):
+    """Another source's frames with its last read kept (read-only), so the many series and
+    single frames of one animation's checks read a task of one chunk once, not once each:
+    memory still holds one chunk."""
+
+    def __init__(self, source: Frames):
+        self.source = source
+        self.n_frames, self.n_vertices, self.chunk = source.n_frames, source.n_vertices, source.chunk
+        self._start, self._data = 0, None
+
+    def read(self, start: int, stop: int) -> np.ndarray:
+        start, stop = max(0, start), min(self.n_frames, stop)
+        data, at = self._data, self._start
+        if data is None or start < at or stop > at + len(data):
+            data = self.source.read(start, stop)
+            data.flags.writeable = False          # shared by every reader: none may change it
+            self._start, self._data = at, data = start, data
+        return data[start - at:stop - at]
+
+
 class ArrayFrames(Frames):
     """Positions held in memory (float (F, V, 3) Parke units)."""
 
