@@ -317,26 +317,26 @@ def _box_pairs(pu: np.ndarray, pv: np.ndarray, ulo: np.ndarray, uhi: np.ndarray,
     merged = np.argsort(np.concatenate([ulo, pu, uhi], axis=1), axis=1, kind="stable")
     is_point = (merged >= T) & (merged < T + P)
     below = np.cumsum(is_point, axis=1)                 # points at or before each position
-    rank = np.empty_like(merged)
-    np.put_along_axis(rank, merged, np.arange(P + 2 * T)[None], axis=1)
-    first = np.take_along_axis(below, rank[:, :T], axis=1)
-    last = np.take_along_axis(below, rank[:, T + P:], axis=1)
-    order = (merged[is_point] - T).reshape(f, P)
-    su = np.take_along_axis(pu, order, axis=1)
-    counts = np.where(live, np.maximum(last - first, 0).reshape(-1), 0)
+    row = np.arange(f, dtype=np.int64)[:, None]
+    first, last = np.empty(f * T, np.int64), np.empty(f * T, np.int64)
+    is_lo, is_hi = merged < T, merged >= T + P
+    first[(merged + row * T)[is_lo]] = below[is_lo]
+    last[(merged - (T + P) + row * T)[is_hi]] = below[is_hi]
+    order = (merged - T + row * P)[is_point]            # flat, each frame's points by u
+    su, sv = pu.reshape(-1)[order], pv.reshape(-1)[order]
+    counts = np.where(live, np.maximum(last - first, 0), 0)
     n = int(counts.sum())
     # flat index into the sorted points: each run's start in its frame, then 0, 1, ...
-    start = (first + P * np.arange(f, dtype=np.int64)[:, None]).reshape(-1)
+    start = (first.reshape(f, T) + P * row).reshape(-1)
     idx = np.repeat(start - (np.cumsum(counts) - counts), counts) + np.arange(n)
     # A NaN in a box makes all four of its bounds NaN (the shared pad), and a NaN u sorts
     # last, past every finite bound: the v comparisons alone then decide as all four did.
-    p_v = np.take_along_axis(pv, order, axis=1).reshape(-1)[idx]
+    p_v = sv[idx]
     keep = ((p_v >= np.repeat(vlo.reshape(-1), counts))
             & (p_v <= np.repeat(vhi.reshape(-1), counts)))
     idx = idx[keep]
     box = np.repeat(np.arange(f * T, dtype=np.int64), counts)[keep]
-    at = order.reshape(-1)[idx] + (idx // P) * P
-    return box, at, su.reshape(-1)[idx], p_v[keep]
+    return box, order[idx], su[idx], p_v[keep]
 
 
 def _extremes(val: np.ndarray, at: np.ndarray, shape) -> tuple:
