@@ -28,7 +28,8 @@ from cassi.harness.rubric.registry import FRONT_TEETH_MIN_NX, FRONT_TEETH_SHARE
 
 __all__ = [
     "MouthParts", "mouth_parts", "mm_per_unit", "surface_hits", "front_triangles",
-    "tongue_teeth_penetration", "tongue_palate_penetration", "lip_teeth_penetration",
+    "tongue_teeth_penetration", "tongue_palate_penetration", "tongue_penetrations",
+    "lip_teeth_penetration",
     "inner_lip_gap", "lower_lip_below_teeth", "protrusion_difference", "lip_nose_clearance",
     "concavity", "corner_misplacement", "excess_jitter", "switch_jumps",
     "palate_below_incisor", "teeth_overlap", "teeth_slope", "teeth_gap", "lip_rounding",
@@ -416,7 +417,11 @@ def tongue_teeth_penetration(pos: np.ndarray, parts: MouthParts, *, rest: np.nda
     """
     pos = np.asarray(pos, np.float64)
     rest = pos[0] if rest is None else np.asarray(rest, np.float64)
-    pts = _edge_samples(pos, parts.tongue, parts.tongue_edges, per_edge)
+    return _tongue_teeth(pos, _edge_samples(pos, parts.tongue, parts.tongue_edges, per_edge),
+                         parts, rest)
+
+
+def _tongue_teeth(pos: np.ndarray, pts: np.ndarray, parts: MouthParts, rest: np.ndarray) -> dict:
     out = {}
     for key, tris in (("upper", parts.upper_teeth_tris), ("lower", parts.lower_teeth_tris)):
         tris = front_triangles(rest, tris)
@@ -431,10 +436,26 @@ def tongue_palate_penetration(pos: np.ndarray, parts: MouthParts, *, per_edge: i
     pos = np.asarray(pos, np.float64)
     if len(parts.palate_tris) == 0:
         return np.zeros(pos.shape[0])
-    pts = _edge_samples(pos, parts.tongue, parts.tongue_edges, per_edge)
+    return _tongue_palate(pos, _edge_samples(pos, parts.tongue, parts.tongue_edges, per_edge),
+                          parts)
+
+
+def _tongue_palate(pos: np.ndarray, pts: np.ndarray, parts: MouthParts) -> np.ndarray:
+    if len(parts.palate_tris) == 0:
+        return np.zeros(pos.shape[0])
     lo, _ = surface_hits(pts, pos[:, parts.palate_tris], axis=2)
     depth = np.where(np.isnan(lo), 0.0, np.maximum(pts[..., 2] - lo, 0.0))
     return depth.max(axis=1)
+
+
+def tongue_penetrations(pos: np.ndarray, parts: MouthParts, *, rest: np.ndarray | None = None,
+                        per_edge: int = 3) -> dict[str, np.ndarray]:
+    """:func:`tongue_teeth_penetration`'s ``upper`` and ``lower`` and
+    :func:`tongue_palate_penetration` as ``palate``, from one sampling of the tongue."""
+    pos = np.asarray(pos, np.float64)
+    rest = pos[0] if rest is None else np.asarray(rest, np.float64)
+    pts = _edge_samples(pos, parts.tongue, parts.tongue_edges, per_edge)
+    return {**_tongue_teeth(pos, pts, parts, rest), "palate": _tongue_palate(pos, pts, parts)}
 
 
 def lip_teeth_penetration(pos: np.ndarray, parts: MouthParts, *, rest: np.ndarray | None = None,
