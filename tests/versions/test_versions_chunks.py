@@ -115,3 +115,19 @@ def test_the_checks_read_a_task_of_one_chunk_once(inputs, tmp_path):
     shared = LastRead(streamed.positions)
     with pytest.raises(ValueError):
         shared.frame(0)[0, 0] = 1.0
+
+
+def test_take_reads_the_stored_frames_across_chunks(tmp_path):
+    """``FileFrames.take`` gives the float32 frames as stored, in the order asked, from
+    several chunks; a frame not in the file is an error."""
+    from cassi.harness.rubric.frames import FileFrames
+
+    store = FileFrames(tmp_path / "p.f32", 4, chunk=7)
+    data = np.random.default_rng(1).standard_normal((30, 4, 3)).astype(np.float32)
+    store.append(data[:11])
+    store.append(data[11:])
+    idx = [29, 0, 6, 7, 7, 13, 20, 3]
+    assert store.take(idx).tobytes() == data[idx].tobytes()
+    assert store.take([]).shape == (0, 4, 3)
+    with pytest.raises(IndexError):
+        store.take([30])
