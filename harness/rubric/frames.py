@@ -76,7 +76,8 @@ class LastRead(Frames):
 
     def __init__(self, source: Frames):
         self.source = source
-        self.n_frames, self.n_vertices, self.chunk = source.n_frames, source.n_vertices, source.chunk
+        self.n_frames, self.n_vertices = source.n_frames, source.n_vertices
+        self.chunk = source.chunk
         self._start, self._data = 0, None
 
     def read(self, start: int, stop: int) -> np.ndarray:

@@ -271,8 +271,7 @@ def surface_hits(points: np.ndarray, tri_pos: np.ndarray, *, axis: int = 0,
         # Per triangle: its corners' coordinates and the barycentric denominator (the same
         # operations as per pair, done once), each (f * T,)
         (au, av, ax), (bu, bv, bx), (cu, cv, cx) = (
-            (tri[:, :, k, u].reshape(-1), tri[:, :, k, v].reshape(-1), tri[:, :, k, axis].reshape(-1))
-            for k in range(3))
+            tuple(tri[:, :, k, i].reshape(-1) for i in (u, v, axis)) for k in range(3))
         den = (bu - au) * (cv - av) - (cu - au) * (bv - av)
         ok = np.abs(den) > eps
         den = np.where(ok, den, 1.0)
