@@ -69,6 +69,27 @@ def _join(parts: list):
     return np.concatenate(parts) if len(parts) > 1 else first
 
 
+class LastRead(Frames):
+    """Another source's frames with its last read kept (read-only), so the many series and
+    single frames of one animation's checks read a task of one chunk once, not once each:
+    memory still holds one chunk."""
+
+    def __init__(self, source: Frames):
+        self.source = source
+        self.n_frames, self.n_vertices = source.n_frames, source.n_vertices
+        self.chunk = source.chunk
+        self._start, self._data = 0, None
+
+    def read(self, start: int, stop: int) -> np.ndarray:
+        start, stop = max(0, start), min(self.n_frames, stop)
+        data, at = self._data, self._start
+        if data is None or start < at or stop > at + len(data):
+            data = self.source.read(start, stop)
+            data.flags.writeable = False          # shared by every reader: none may change it
+            self._start, self._data = at, data = start, data
+        return data[start - at:stop - at]
+
+
 class ArrayFrames(Frames):
     """Positions held in memory (float (F, V, 3) Parke units)."""
 
@@ -117,8 +138,19 @@ class FileFrames(Frames):
         return arr.reshape(n, self.n_vertices, 3).astype(np.float64)
 
     def take(self, frames) -> np.ndarray:
-        """float32 (K, V, 3): the given frames (0-based indices), read one by one."""
+        """float32 (K, V, 3): the given frames (0-based indices), as stored; read a chunk of
+        frames at a time (a viewer keeps hundreds of frames: not a read each)."""
+        frames = np.asarray(frames, np.int64).reshape(-1)
         out = np.empty((len(frames), self.n_vertices, 3), np.float32)
-        for k, f in enumerate(frames):
-            out[k] = self.read(int(f), int(f) + 1)[0]
+        if len(frames) and (frames.min() < 0 or frames.max() >= self.n_frames):
+            raise IndexError(f"frames {frames.min()}..{frames.max()} of {self.n_frames}")
+        with open(self.path, "rb") as fh:
+            for a in range(0, self.n_frames, self.chunk):
+                mine = np.flatnonzero((frames >= a) & (frames < a + self.chunk))
+                if not mine.size:
+                    continue
+                lo, hi = int(frames[mine].min()), int(frames[mine].max()) + 1
+                fh.seek(lo * self._frame_bytes)
+                arr = np.fromfile(fh, dtype=np.float32, count=(hi - lo) * self.n_vertices * 3)
+                out[mine] = arr.reshape(hi - lo, self.n_vertices, 3)[frames[mine] - lo]
         return out

@@ -28,7 +28,8 @@ from cassi.harness.rubric.registry import FRONT_TEETH_MIN_NX, FRONT_TEETH_SHARE
 
 __all__ = [
     "MouthParts", "mouth_parts", "mm_per_unit", "surface_hits", "front_triangles",
-    "tongue_teeth_penetration", "tongue_palate_penetration", "lip_teeth_penetration",
+    "tongue_teeth_penetration", "tongue_palate_penetration", "tongue_penetrations",
+    "lip_teeth_penetration",
     "inner_lip_gap", "lower_lip_below_teeth", "protrusion_difference", "lip_nose_clearance",
     "concavity", "corner_misplacement", "excess_jitter", "switch_jumps",
     "palate_below_incisor", "teeth_overlap", "teeth_slope", "teeth_gap", "lip_rounding",
@@ -263,41 +264,96 @@ def surface_hits(points: np.ndarray, tri_pos: np.ndarray, *, axis: int = 0,
         return lo, hi
     u, v = _AXES[axis]
     step = max(1, chunk // max(1, P * T))
+    tol = -1e-7
     for s in range(0, F, step):
         e = min(F, s + step)
         tri = tri_pos[s:e]                                         # (f, T, 3, 3)
-        # Broad phase: only the (point, triangle) pairs whose (u, v) falls in the triangle's
-        # bounding box (widened past the barycentric tolerance) are solved, usually a few per
-        # point: the same values as solving every pair, at a fraction of the work.
-        tu, tv = tri[..., u], tri[..., v]
-        umin, umax, vmin, vmax = tu.min(-1), tu.max(-1), tv.min(-1), tv.max(-1)
-        pad = 1e-6 * (umax - umin + vmax - vmin) + 1e-9
-        pu, pv = points[s:e, :, None, u], points[s:e, :, None, v]  # (f, P, 1)
-        cand = ((pu >= (umin - pad)[:, None]) & (pu <= (umax + pad)[:, None])
-                & (pv >= (vmin - pad)[:, None]) & (pv <= (vmax + pad)[:, None]))
-        fi, pi, ti = np.nonzero(cand)
-        a, b, c = (tri[fi, ti, k] for k in range(3))                # (K, 3)
-        p = points[s + fi, pi]
-        au, av = a[:, u], a[:, v]
-        bu, bv = b[:, u], b[:, v]
-        cu, cv = c[:, u], c[:, v]
-        pu, pv = p[:, u], p[:, v]
+        # Per triangle: its corners' coordinates and the barycentric denominator (the same
+        # operations as per pair, done once), each (f * T,)
+        (au, av, ax), (bu, bv, bx), (cu, cv, cx) = (
+            tuple(tri[:, :, k, i].reshape(-1) for i in (u, v, axis)) for k in range(3))
         den = (bu - au) * (cv - av) - (cu - au) * (bv - av)
         ok = np.abs(den) > eps
         den = np.where(ok, den, 1.0)
-        w1 = ((bu - pu) * (cv - pv) - (cu - pu) * (bv - pv)) / den
-        w2 = ((cu - pu) * (av - pv) - (au - pu) * (cv - pv)) / den
+        # Broad phase: only the (point, triangle) pairs whose (u, v) falls in the triangle's
+        # bounding box (widened past the barycentric tolerance) are solved, usually a few per
+        # point: the same values as solving every pair, at a fraction of the work. A triangle
+        # without a denominator has no inside.
+        tu, tv = tri[..., u], tri[..., v]
+        umin, umax, vmin, vmax = tu.min(-1), tu.max(-1), tv.min(-1), tv.max(-1)
+        pad = 1e-6 * (umax - umin + vmax - vmin) + 1e-9
+        box, at, pu, pv = _box_pairs(points[s:e, :, u], points[s:e, :, v], umin - pad,
+                                     umax + pad, vmin - pad, vmax + pad, ok)
+        w1 = ((bu[box] - pu) * (cv[box] - pv) - (cu[box] - pu) * (bv[box] - pv)) / den[box]
+        w2 = ((cu[box] - pu) * (av[box] - pv) - (au[box] - pu) * (cv[box] - pv)) / den[box]
         w3 = 1.0 - w1 - w2
-        tol = -1e-7
-        inside = ok & (w1 >= tol) & (w2 >= tol) & (w3 >= tol)
-        val = (w1 * a[:, axis] + w2 * b[:, axis] + w3 * c[:, axis])[inside]
-        at = (fi[inside], pi[inside])
-        low, high = np.full((e - s, P), np.inf), np.full((e - s, P), -np.inf)
-        np.minimum.at(low, at, val)
-        np.maximum.at(high, at, val)
-        lo[s:e] = np.where(np.isfinite(low), low, np.nan)
-        hi[s:e] = np.where(np.isfinite(high), high, np.nan)
+        inside = (w1 >= tol) & (w2 >= tol) & (w3 >= tol)
+        box, at, w1, w2, w3 = box[inside], at[inside], w1[inside], w2[inside], w3[inside]
+        val = w1 * ax[box] + w2 * bx[box] + w3 * cx[box]
+        lo[s:e], hi[s:e] = _extremes(val, at, (e - s, P))
     return lo, hi
+
+
+def _box_pairs(pu: np.ndarray, pv: np.ndarray, ulo: np.ndarray, uhi: np.ndarray,
+               vlo: np.ndarray, vhi: np.ndarray, live: np.ndarray):
+    """The (point, triangle) pairs of each frame with ``ulo <= pu <= uhi`` and
+    ``vlo <= pv <= vhi``, for the ``live`` triangles: points ``pu``, ``pv`` (f, P), boxes
+    ``ulo`` ... (f, T), ``live`` (f * T,).
+
+    Each frame's points sorted by ``u`` give each box the run of points within its ``u`` range
+    (the points below its lower bound, and those not above its upper, counted in one stable
+    sort of the points with the bounds: the same comparisons); only those pairs are compared
+    in ``v``, so the work follows the pairs near a box, not every point against every
+    triangle. The same pairs come out, ordered by frame and triangle (so each point's in
+    triangle order) rather than by point.
+
+    Returns ``box`` (frame * T + triangle), ``at`` (frame * P + point) and the points' ``u``
+    and ``v``, each (K,).
+    """
+    f, P = pu.shape
+    T = ulo.shape[1]
+    # lower bounds, then points, then upper bounds: among equal values a lower bound sorts
+    # before the points (counting those below it), an upper bound after them
+    merged = np.argsort(np.concatenate([ulo, pu, uhi], axis=1), axis=1, kind="stable")
+    is_point = (merged >= T) & (merged < T + P)
+    below = np.cumsum(is_point, axis=1)                 # points at or before each position
+    row = np.arange(f, dtype=np.int64)[:, None]
+    first, last = np.empty(f * T, np.int64), np.empty(f * T, np.int64)
+    is_lo, is_hi = merged < T, merged >= T + P
+    first[(merged + row * T)[is_lo]] = below[is_lo]
+    last[(merged - (T + P) + row * T)[is_hi]] = below[is_hi]
+    order = (merged - T + row * P)[is_point]            # flat, each frame's points by u
+    su, sv = pu.reshape(-1)[order], pv.reshape(-1)[order]
+    counts = np.where(live, np.maximum(last - first, 0), 0)
+    n = int(counts.sum())
+    # flat index into the sorted points: each run's start in its frame, then 0, 1, ...
+    start = (first.reshape(f, T) + P * row).reshape(-1)
+    idx = np.repeat(start - (np.cumsum(counts) - counts), counts) + np.arange(n)
+    # A NaN in a box makes all four of its bounds NaN (the shared pad), and a NaN u sorts
+    # last, past every finite bound: the v comparisons alone then decide as all four did.
+    p_v = sv[idx]
+    keep = ((p_v >= np.repeat(vlo.reshape(-1), counts))
+            & (p_v <= np.repeat(vhi.reshape(-1), counts)))
+    idx = idx[keep]
+    box = np.repeat(np.arange(f * T, dtype=np.int64), counts)[keep]
+    return box, order[idx], su[idx], p_v[keep]
+
+
+def _extremes(val: np.ndarray, at: np.ndarray, shape) -> tuple:
+    """Per point (flat ``at`` into ``shape``): the smallest and the largest ``val`` of its
+    crossings; NaN where it has none (or only non-finite ones).
+
+    A point's crossings come in triangle order, as when every pair was solved point by
+    point: which of 0.0 and -0.0 (equal) a minimum keeps depends on that order."""
+    n = int(np.prod(shape))
+    many = np.bincount(at, minlength=n)[at] > 1
+    low, high = np.full(n, np.inf), np.full(n, -np.inf)
+    low[at[~many]] = val[~many]                  # a point's only crossing: its min and max
+    high[at[~many]] = val[~many]
+    np.minimum.at(low, at[many], val[many])
+    np.maximum.at(high, at[many], val[many])
+    return (np.where(np.isfinite(low), low, np.nan).reshape(shape),
+            np.where(np.isfinite(high), high, np.nan).reshape(shape))
 
 
 def front_triangles(rest: np.ndarray, tris: np.ndarray, *, front_share: float = FRONT_TEETH_SHARE,
@@ -360,7 +416,11 @@ def tongue_teeth_penetration(pos: np.ndarray, parts: MouthParts, *, rest: np.nda
     """
     pos = np.asarray(pos, np.float64)
     rest = pos[0] if rest is None else np.asarray(rest, np.float64)
-    pts = _edge_samples(pos, parts.tongue, parts.tongue_edges, per_edge)
+    return _tongue_teeth(pos, _edge_samples(pos, parts.tongue, parts.tongue_edges, per_edge),
+                         parts, rest)
+
+
+def _tongue_teeth(pos: np.ndarray, pts: np.ndarray, parts: MouthParts, rest: np.ndarray) -> dict:
     out = {}
     for key, tris in (("upper", parts.upper_teeth_tris), ("lower", parts.lower_teeth_tris)):
         tris = front_triangles(rest, tris)
@@ -375,10 +435,26 @@ def tongue_palate_penetration(pos: np.ndarray, parts: MouthParts, *, per_edge: i
     pos = np.asarray(pos, np.float64)
     if len(parts.palate_tris) == 0:
         return np.zeros(pos.shape[0])
-    pts = _edge_samples(pos, parts.tongue, parts.tongue_edges, per_edge)
+    return _tongue_palate(pos, _edge_samples(pos, parts.tongue, parts.tongue_edges, per_edge),
+                          parts)
+
+
+def _tongue_palate(pos: np.ndarray, pts: np.ndarray, parts: MouthParts) -> np.ndarray:
+    if len(parts.palate_tris) == 0:
+        return np.zeros(pos.shape[0])
     lo, _ = surface_hits(pts, pos[:, parts.palate_tris], axis=2)
     depth = np.where(np.isnan(lo), 0.0, np.maximum(pts[..., 2] - lo, 0.0))
     return depth.max(axis=1)
+
+
+def tongue_penetrations(pos: np.ndarray, parts: MouthParts, *, rest: np.ndarray | None = None,
+                        per_edge: int = 3) -> dict[str, np.ndarray]:
+    """:func:`tongue_teeth_penetration`'s ``upper`` and ``lower`` and
+    :func:`tongue_palate_penetration` as ``palate``, from one sampling of the tongue."""
+    pos = np.asarray(pos, np.float64)
+    rest = pos[0] if rest is None else np.asarray(rest, np.float64)
+    pts = _edge_samples(pos, parts.tongue, parts.tongue_edges, per_edge)
+    return {**_tongue_teeth(pos, pts, parts, rest), "palate": _tongue_palate(pos, pts, parts)}
 
 
 def lip_teeth_penetration(pos: np.ndarray, parts: MouthParts, *, rest: np.ndarray | None = None,

@@ -96,8 +96,10 @@ class GeometryContext:
         return self.frames.frame(i)
 
     @functools.cached_property
-    def tongue_teeth(self) -> dict[str, np.ndarray]:
-        d = self.series(G.tongue_teeth_penetration, self.parts, rest=self.rest)
+    def tongue(self) -> dict[str, np.ndarray]:
+        """mm per frame: the tongue through the upper and the lower front teeth and the palate
+        (:func:`geometry.tongue_penetrations`: the tongue sampled once for the three)."""
+        d = self.series(G.tongue_penetrations, self.parts, rest=self.rest)
         return {k: v * self.mm for k, v in d.items()}
 
     @functools.cached_property
@@ -280,7 +282,7 @@ def m_lower_lip_protrudes(ctx):
 
 
 def m_tongue_teeth(ctx):
-    up, lo = ctx.tongue_teeth["upper"], ctx.tongue_teeth["lower"]
+    up, lo = ctx.tongue["upper"], ctx.tongue["lower"]
     du, fu = sustained(up, k=ctx.min_frames)
     dl, fl = sustained(lo, k=ctx.min_frames)
     c = CHECKS["tongue_through_teeth"]
@@ -293,7 +295,7 @@ def m_tongue_teeth(ctx):
 
 
 def m_tongue_palate(ctx):
-    d = ctx.series(G.tongue_palate_penetration, ctx.parts) * ctx.mm
+    d = ctx.tongue["palate"]
     return _m_sustained(ctx, d, detail="tongue above the palatal surface (not counted by the thesis)")
 
 

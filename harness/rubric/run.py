@@ -15,7 +15,7 @@ import pandas as pd
 from cassi.common.errors import CassiInputError
 
 from cassi.harness.rubric import geometry as G
-from cassi.harness.rubric.frames import ArrayFrames, Frames
+from cassi.harness.rubric.frames import ArrayFrames, Frames, LastRead
 from cassi.harness.rubric.measures import CRITERION_DIAGNOSTICS, GeometryContext
 from cassi.harness.rubric.model import Check, Measurement
 from cassi.harness.rubric.registry import TRACE_STEP_MS, TRACE_TASKS, checks_for, get_check
@@ -89,12 +89,15 @@ def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | N
         Results-table rows (``frame`` are recording rows; -1 = whole task), view ``geometry``.
     """
     positions = anim.positions
-    pos = positions if isinstance(positions, Frames) else ArrayFrames(positions)
+    # every check reads the positions through one LastRead: a short task is read once
+    pos = LastRead(positions if isinstance(positions, Frames) else ArrayFrames(positions))
+    anim = _Reading(anim, pos)
     rest = np.asarray(face.vertices, dtype=np.float64) if face is not None else None
+    face_parts = None  # the face's own mouth parts, when computed
     if parts is None:
         if face is None:
             raise CassiInputError("run_geometry_checks needs a face or explicit parts")
-        parts = G.mouth_parts(face)
+        parts = face_parts = G.mouth_parts(face)
     if mm_per_unit is None:
         jaw = getattr(profile, "jaw_length_mm", None) if profile is not None else None
         mm_per_unit = G.mm_per_unit(rest if rest is not None else pos.frame(0), jaw)
@@ -110,10 +113,21 @@ def run_geometry_checks(anim, face, profile=None, *, task: int, subject: str | N
     rows = _measured_rows(checks_for(kind="geometry", task=task), ctx, ids, wanted, frame_no)
     if recording is not None:
         rows.extend(_fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no,
-                                   withheld))
+                                   withheld, face_parts))
     if wanted is None:
         rows.extend(criterion_rows(ctx.diagnostics, ids, mm_per_unit))
     return _frame(rows)
+
+
+class _Reading:
+    """An animation as its checks read it: its positions through the checks' one
+    :class:`~cassi.harness.rubric.frames.LastRead`, everything else its own."""
+
+    def __init__(self, anim, positions: Frames):
+        self._anim, self.positions = anim, positions
+
+    def __getattr__(self, name):
+        return getattr(self._anim, name)
 
 
 def _period_us(anim, recording) -> float:
@@ -162,7 +176,7 @@ def _measured_rows(checks, ctx, ids: dict, wanted, frame_no) -> list[dict]:
 
 
 def _fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no,
-                   withheld=None) -> list[dict]:
+                   withheld=None, parts=None) -> list[dict]:
     jaw = getattr(profile, "jaw_length_mm", None)
     if face is None or jaw is None:
         raise CassiInputError("fidelity checks need the face and the subject's jaw length "
@@ -176,7 +190,8 @@ def _fidelity_rows(anim, face, profile, recording, ids, wanted, frame_no,
                           wanted, frame_no)
     shape = [c for c in todo if c.measure.startswith("shape:")]
     if shape:  # the lips' shape between the pellets, against the same recording
-        sctx = ShapeContext.of(anim, recording, mapping, G.mouth_parts(face))
+        sctx = ShapeContext.of(anim, recording, mapping,
+                               G.mouth_parts(face) if parts is None else parts)
         rows.extend(_measured_rows(shape, sctx, ids, wanted, frame_no))
     leave = [c for c in todo if c.measure.startswith("leaveout:")]
     if leave and withheld is not None:  # the tongue between the pellets, one withheld at a time

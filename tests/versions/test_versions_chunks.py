@@ -95,3 +95,39 @@ def test_series_hold_one_chunk_of_positions_at_a_time(tmp_path):
     assert z.shape == (50_000,) and peak / 1e6 < whole_mb / 4
     np.testing.assert_array_equal(z, np.concatenate(
         [store.read(a, a + 1000)[:, 3, 2] for a in range(0, 50_000, 1000)]))
+
+
+def test_the_checks_read_a_task_of_one_chunk_once(inputs, tmp_path):
+    """Every series and single frame the geometric, fidelity and shape checks read of a task
+    that fits one chunk comes from one read of the positions file, handed out read-only."""
+    from cassi.harness.evaluation.caches import get_neutral
+    from cassi.harness.evaluation.stages import animate_to_file
+    from cassi.harness.rubric import run_geometry_checks
+    from cassi.harness.rubric.frames import LastRead
+
+    (subject, task), (profile, face, rec) = next(iter(inputs.items()))
+    streamed = animate_to_file(get_version("cassi-2.1"), profile, face, rec, tmp_path)
+    reads, read = [], streamed.positions.read
+    streamed.positions.read = lambda a, b: reads.append((a, b)) or read(a, b)
+    run_geometry_checks(streamed, face, profile, task=task, subject=subject, rep=1,
+                        neutral=get_neutral(), recording=rec)
+    assert reads == [(0, streamed.positions.n_frames)]
+    shared = LastRead(streamed.positions)
+    with pytest.raises(ValueError):
+        shared.frame(0)[0, 0] = 1.0
+
+
+def test_take_reads_the_stored_frames_across_chunks(tmp_path):
+    """``FileFrames.take`` gives the float32 frames as stored, in the order asked, from
+    several chunks; a frame not in the file is an error."""
+    from cassi.harness.rubric.frames import FileFrames
+
+    store = FileFrames(tmp_path / "p.f32", 4, chunk=7)
+    data = np.random.default_rng(1).standard_normal((30, 4, 3)).astype(np.float32)
+    store.append(data[:11])
+    store.append(data[11:])
+    idx = [29, 0, 6, 7, 7, 13, 20, 3]
+    assert store.take(idx).tobytes() == data[idx].tobytes()
+    assert store.take([]).shape == (0, 4, 3)
+    with pytest.raises(IndexError):
+        store.take([30])

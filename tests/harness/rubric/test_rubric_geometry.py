@@ -537,6 +537,26 @@ def test_surface_hits_equals_solving_every_point_triangle_pair():
         np.testing.assert_array_equal(hi, want_hi)
 
 
+def test_surface_hits_takes_each_points_crossings_in_triangle_order():
+    """Crossings at 0.0 and -0.0 compare equal, so the smallest kept depends on their order:
+    a point's crossings are taken in triangle order, as solving pair after pair did; a NaN
+    corner or point crosses nothing."""
+    flat = np.array([[0.0, -1, -1], [0.0, 3, -1], [0.0, -1, 3]])  # the plane x = 0
+    for signs in ((0.0, -0.0), (-0.0, 0.0)):
+        tri = np.stack([flat, flat, flat])[None].copy()         # (1, 3, 3, 3)
+        tri[0, 0, :, 0], tri[0, 1, :, 0] = signs
+        tri[0, 2, 0, 1] = np.nan
+        pts = np.array([[[5.0, 0.0, 0.0], [5.0, np.nan, 0.0]]])
+        lo, hi = G.surface_hits(pts, tri, axis=0)
+        want = np.inf
+        for s in signs:
+            want = np.minimum(want, s * 1.0)
+        assert lo[0, 0] == 0.0 and np.signbit(lo[0, 0]) == np.signbit(want)
+        assert np.signbit(hi[0, 0]) == np.signbit(np.maximum(np.maximum(-np.inf, signs[0]),
+                                                             signs[1]))
+        assert np.isnan(lo[0, 1]) and np.isnan(hi[0, 1])
+
+
 def test_surface_hits_against_a_unit_square():
     tri = np.array([[[0, 0, 0], [0, 1, 0], [0, 1, 1]], [[0, 0, 0], [0, 1, 1], [0, 0, 1]]], float)
     tri[..., 0] = [[1, 1, 2], [1, 2, 1]]  # a sloped plane x = 1 + z
