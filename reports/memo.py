@@ -29,7 +29,7 @@ import numpy as np
 import pandas as pd
 
 from cassi.common.atomic import atomic_write_text, link_or_copy
-from cassi.harness.farm.store import sha256_file_once
+from cassi.harness.farm.store import remove_unlinked, sha256_file_once
 
 MEMO_DIR = "pages"
 _BLOBS = "blobs"
@@ -269,16 +269,8 @@ def collect_pages(media: str | os.PathLike) -> int:
     import time  # noqa: PLC0415
 
     pages = Path(media) / MEMO_DIR
-    freed, gone = 0, set()
-    for blob in sorted((pages / _BLOBS).glob("*/*")):
-        try:
-            st = blob.stat()
-        except FileNotFoundError:
-            continue
-        if blob.is_file() and st.st_nlink <= 1:
-            blob.unlink()
-            gone.add(blob.name)
-            freed += st.st_size
+    removed = remove_unlinked((pages / _BLOBS).glob("*/*"))
+    gone, freed = {p.name for p, _ in removed}, sum(size for _, size in removed)
     for record in sorted(pages.glob("*.json")):
         try:
             files = json.loads(record.read_text(encoding="utf-8"))["files"]

@@ -328,11 +328,18 @@ class OutputStore:
         return ref
 
     def _cache_blob_ok(self, ref: BlobRef) -> bool:
-        if ref.relpath in self._cache_good:
-            return os.path.isfile(os.path.join(self.cache, ref.relpath))
-        if not self.stamps.verified(ref.relpath, os.path.join(self.cache, ref.relpath)):
+        return self._stamped_ok(self.cache, ref, self._cache_good)
+
+    def _stamped_ok(self, base: Path, ref: BlobRef, good: set[str]) -> bool:
+        """Whether ``base``'s blob hashes to its name, by its stamp where it has one (a run's
+        blob is a link to the store's, the same file, or across file systems a copy, another
+        file: not stamped, :meth:`Stamps.save`); remembered in ``good``."""
+        path = os.path.join(base, ref.relpath)
+        if ref.relpath in good:
+            return os.path.isfile(path)
+        if not self.stamps.verified(ref.relpath, path):
             return False
-        self._cache_good.add(ref.relpath)
+        good.add(ref.relpath)
         return True
 
     # -- memos: results derived from blobs, by a key the caller makes of its inputs ---------
@@ -389,14 +396,7 @@ class OutputStore:
     def _blob_ok(self, ref: BlobRef) -> bool:
         if self.stamps is None:
             return _hashes_to_its_name(self.root, ref, self._good)
-        if ref.relpath in self._good:
-            return os.path.isfile(os.path.join(self.root, ref.relpath))
-        # a run's blob is a link to the store's (the same file: stamped as the store's) or,
-        # across file systems, a copy (another file: not stamped, Stamps.save)
-        if not self.stamps.verified(ref.relpath, os.path.join(self.root, ref.relpath)):
-            return False
-        self._good.add(ref.relpath)
-        return True
+        return self._stamped_ok(self.root, ref, self._good)
 
     def get(self, ref: BlobRef) -> bytes:
         data = (self.root / ref.relpath).read_bytes()
@@ -474,6 +474,21 @@ class OutputStore:
         return {**doc, "key": key, "outputs": outputs}
 
 
+def remove_unlinked(paths) -> list[tuple[Path, int]]:
+    """Remove each of ``paths`` that is a file with no other name (no run or report links it
+    any more); returns the removed ones with their sizes."""
+    out = []
+    for path in sorted(paths):
+        try:
+            st = path.stat()
+        except FileNotFoundError:
+            continue
+        if path.is_file() and st.st_nlink <= 1:
+            path.unlink()
+            out.append((path, st.st_size))
+    return out
+
+
 @dataclass(frozen=True)
 class Collected:
     """What :func:`collect_garbage` removed: blobs and manifests, and the bytes freed."""
@@ -496,20 +511,11 @@ def collect_garbage(cache: str | os.PathLike) -> Collected:
     removed, freed = set(), 0
     # unlinking a run's copies changes its blobs' change times: their stamps would only miss
     (root / Stamps.NAME).unlink(missing_ok=True)
-    for path in sorted((root / "objects").glob("*/*")):
-        try:
-            st = path.stat()
-        except FileNotFoundError:
-            continue
-        if path.is_file() and st.st_nlink <= 1:
-            path.unlink()
-            removed.add(path.relative_to(root).as_posix())
-            freed += st.st_size
-    for path in sorted((root / MEDIA_DIR).glob("*")):  # report media (cassi.reports.media)
-        st = path.stat()
-        if path.is_file() and st.st_nlink <= 1:
-            path.unlink()
-            freed += st.st_size
+    for path, size in remove_unlinked((root / "objects").glob("*/*")):
+        removed.add(path.relative_to(root).as_posix())
+        freed += size
+    # report media (cassi.reports.media; its page memo is the reports' own: MEDIA_GC)
+    freed += sum(size for _, size in remove_unlinked((root / MEDIA_DIR).glob("*")))
     manifests = 0
     for path in sorted((root / "manifests").glob("*/*.json")):
         try:
