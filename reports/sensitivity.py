@@ -34,5 +34,10 @@ def sensitivity_section(run_root: Path, out: Path) -> dict | None:
     return {"rows": table.to_dict("records"),
             "flipped": int((table["flipped by"] != "").sum()),
             "thresholds": kinds.count("threshold"), "versions": kinds.count("version"),
-            "note": doc.get("note", ""), "timing": doc.get("timing", {}),
+            "note": _sentence(doc.get("note", "")), "timing": doc.get("timing", {}),
             "csv": csv.relative_to(out).as_posix(), "md": md.relative_to(out).as_posix()}
+
+
+def _sentence(text: str) -> str:
+    """``text`` as a sentence of its own (the analysis writes it to follow a semicolon)."""
+    return text[:1].upper() + text[1:]
