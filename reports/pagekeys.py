@@ -14,7 +14,7 @@ import pandas as pd
 
 from cassi.reports.memo import RowDigests, by_content, content_ids, frame_digest
 from cassi.reports.runio import Run
-from cassi.reports.sensitivity import SENSITIVITY_FILE
+from cassi.reports.sensitivity import section_digest
 
 _FILE = ["subject", "task", "rep"]
 
@@ -72,10 +72,9 @@ class PageKeys:
         """The thesis tables, their plots and files, the paired comparisons, the criterion,
         the judges' findings and the sensitivity section (all rows of the run; the viewers
         the tables' faults open)."""
-        sens = self.run.root / SENSITIVITY_FILE
         return {"results": self._results, "synthetic": self.run.synthetic,
                 "viewers": sorted([s, int(t), int(r)] for s, t, r in viewers),
-                "sensitivity": content_ids([sens])[0] if sens.is_file() else None}
+                "sensitivity": section_digest(self.run.root)}
 
     @staticmethod
     def trend(history: pd.DataFrame, synthetic: bool) -> dict:

@@ -2,6 +2,7 @@
 it has one, as a table of every version-level finding with the settings it holds in."""
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 
@@ -41,3 +42,25 @@ def sensitivity_section(run_root: Path, out: Path) -> dict | None:
 def _sentence(text: str) -> str:
     """``text`` as a sentence of its own (the analysis writes it to follow a semicolon)."""
     return text[:1].upper() + text[1:]
+
+
+#: What an analysis file says of where it was made, which the section does not show: a night
+#: that reuses an earlier night's analysis rewrites them (cassi.harness.evaluation.sensitivity).
+_PROVENANCE_KEYS = ("run", "reused_from")
+
+
+def section_digest(run_root: Path) -> str | None:
+    """The digest of what :func:`sensitivity_section` shows of a run's analysis (None: no
+    analysis), so that a report's page memo reuses the section of a night that took the same
+    analysis from the store; a file that is not JSON is digested by its bytes."""
+    path = Path(run_root) / SENSITIVITY_FILE
+    if not path.is_file():
+        return None
+    data = path.read_bytes()
+    try:
+        doc = json.loads(data)
+        data = json.dumps({k: v for k, v in doc.items() if k not in _PROVENANCE_KEYS},
+                          sort_keys=True).encode()
+    except ValueError:
+        pass
+    return hashlib.sha256(data).hexdigest()

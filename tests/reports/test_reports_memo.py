@@ -249,3 +249,28 @@ def test_a_viewer_page_is_linked_when_unchanged_and_made_when_its_rows_change(
     for path in overlays:
         rel = path.relative_to(first)
         assert os.path.samefile(first / rel, third / rel)
+
+
+def test_an_analysis_taken_from_an_earlier_night_keeps_the_tables_linked(tmp_path, monkeypatch):
+    """A night that reuses an earlier night's robustness analysis rewrites only where it was
+    made (``run``, ``reused_from``), which the section does not show: the tables stay linked;
+    a changed finding makes them again."""
+    from cassi.reports.sensitivity import SENSITIVITY_FILE
+    run = _run(tmp_path / "run")
+    doc = {"run": "/nights/runs/2026-12-06", "synthetic": True, "only": "thresholds",
+           "settings_per_constant": 2, "timing": {"baseline_s": 0.1},
+           "constants": [{"kind": "threshold", "constant": "lip_gap_start", "value": 1.5,
+                          "low": 1.0, "high": 2.0, "reason": "r"}],
+           "findings": [], "note": "n"}
+    (run / SENSITIVITY_FILE).write_text(json.dumps(doc))
+    cache = tmp_path / "media"
+    made = _counting(monkeypatch)
+    write_report(run, tmp_path / "first", media_cache=cache)
+    assert made["tables"] == 1
+    (run / SENSITIVITY_FILE).write_text(json.dumps(
+        {**doc, "run": "/nights/runs/2026-12-07", "reused_from": "/nights/runs/2026-12-06"}))
+    write_report(run, tmp_path / "second", media_cache=cache)
+    assert made["tables"] == 1, "the tables were made again for a rewritten provenance"
+    (run / SENSITIVITY_FILE).write_text(json.dumps({**doc, "note": "another note"}))
+    write_report(run, tmp_path / "third", media_cache=cache)
+    assert made["tables"] == 2
