@@ -149,8 +149,9 @@ class Stamps:
             st = os.stat(path)
             digest = _HASHED.get(_identity(st))
             if digest is None:
+                # the identity before reading: a write while or after it was read leaves a
+                # stat that save() finds changed, and the blob is not stamped
                 digest = sha256_file_once(path)
-                st = os.stat(path)
         except OSError:
             return False
         if digest != _name_digest(rel):
