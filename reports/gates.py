@@ -16,7 +16,7 @@ import pandas as pd
 
 from cassi.common.atomic import atomic_tmp_path, atomic_write_text, replacing, writable_dir
 from cassi.common.errors import CassiInputError, first_few
-from cassi.harness.farm.store import sha256_file_once
+from cassi.harness.farm.store import is_sha256, sha256_file_once
 from cassi.reports.media import read_rgb8
 from cassi.reports.runio import Run, load_run
 from cassi.renderer.compare import MAX_CHANGED_SHARE, compare_images
@@ -192,16 +192,12 @@ def _content_name(path: Path) -> str | None:
     """The SHA-256 a content-addressed blob is named by (``objects/ab/<sha256>.png``, or a
     link to one), or None for another file."""
     stem = os.path.basename(path).split(".", 1)[0]
-    if not _is_digest(stem):
+    if not is_sha256(stem):
         try:
             stem = os.path.basename(os.path.realpath(path)).split(".", 1)[0]
         except OSError:
             return None
-    return stem if _is_digest(stem) else None
-
-
-def _is_digest(name: str) -> bool:
-    return len(name) == 64 and all(c in "0123456789abcdef" for c in name)
+    return stem if is_sha256(stem) else None
 
 
 def _not_its_name(path: Path) -> str | None:

@@ -29,7 +29,7 @@ import numpy as np
 import pandas as pd
 
 from cassi.common.atomic import atomic_write_text, link_or_copy
-from cassi.harness.farm.store import remove_unlinked, sha256_file_once
+from cassi.harness.farm.store import remove_stale_records, remove_unlinked, sha256_file_once
 
 MEMO_DIR = "pages"
 _BLOBS = "blobs"
@@ -269,16 +269,9 @@ def collect_pages(media: str | os.PathLike) -> int:
     import time  # noqa: PLC0415
 
     pages = Path(media) / MEMO_DIR
-    removed = remove_unlinked((pages / _BLOBS).glob("*/*"))
-    gone, freed = {p.name for p, _ in removed}, sum(size for _, size in removed)
-    for record in sorted(pages.glob("*.json")):
-        try:
-            files = json.loads(record.read_text(encoding="utf-8"))["files"]
-            stale = any(d in gone or not (pages / _BLOBS / d[:2] / d).is_file() for _, d in files)
-        except (OSError, ValueError, KeyError, TypeError):
-            stale = True  # unreadable: of no use to any report
-        if stale:
-            record.unlink(missing_ok=True)
+    freed = sum(size for _, size in remove_unlinked((pages / _BLOBS).glob("*/*")))
+    remove_stale_records(pages.glob("*.json"),
+                         lambda doc: [pages / _BLOBS / d[:2] / d for _, d in doc["files"]])
     for stage in pages.glob(".stage-*"):
         try:
             if time.time() - stage.stat().st_mtime > STALE_STAGE_S:

@@ -79,6 +79,17 @@ def store_lock(cache: str | os.PathLike, *, exclusive: bool) -> Iterator[None]:
         os.close(fd)
 
 
+def is_sha256(name: str) -> bool:
+    """Whether ``name`` is a SHA-256 digest as the store writes them (64 lowercase hex)."""
+    return len(name) == 64 and all(c in "0123456789abcdef" for c in name)
+
+
+def _require_sha256(digest: str) -> str:
+    if not is_sha256(digest):
+        raise ValueError(f"not a SHA-256 digest: {digest!r}")
+    return digest
+
+
 def sha256_bytes(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
@@ -130,16 +141,25 @@ class Stamps:
         #: relpath -> identity at which it hashed to its name, for this process's linking
         self.seen: dict[str, tuple[int, ...]] = {}
 
-    def load(self) -> None:
-        """Teach :func:`sha256_file_once` the stamped blobs."""
+    def _read(self) -> tuple[int | None, dict]:
+        """(the store's device, relpath -> [inode, size, mtime, ctime]) as stamped; nothing
+        for a missing or unreadable file, or one stamped on another file system (a copied
+        store: its inode numbers mean nothing here)."""
         try:
             doc = json.loads(self.path.read_text(encoding="utf-8"))
             dev = os.stat(self.cache).st_dev
-            if doc.get("dev") != dev:
-                return  # another file system (a copied store): inode numbers mean nothing
-            for rel, (ino, size, mtime, ctime) in doc["blobs"].items():
-                _HASHED[(dev, int(ino), int(size), int(mtime), int(ctime))] = _name_digest(rel)
+            blobs = doc["blobs"] if doc.get("dev") == dev else {}
+            return dev, dict(blobs)
         except (OSError, ValueError, KeyError, TypeError, AttributeError):
+            return None, {}
+
+    def load(self) -> None:
+        """Teach :func:`sha256_file_once` the stamped blobs."""
+        dev, blobs = self._read()
+        try:
+            for rel, (ino, size, mtime, ctime) in blobs.items():
+                _HASHED[(dev, int(ino), int(size), int(mtime), int(ctime))] = _name_digest(rel)
+        except (ValueError, TypeError):
             return
 
     def verified(self, rel: str, path: str) -> bool:
@@ -167,12 +187,7 @@ class Stamps:
     def save(self) -> None:
         """Stamp every blob verified or written here with its identity now (after this
         process's links), merged with the stamps already there; best effort."""
-        try:
-            old = json.loads(self.path.read_text(encoding="utf-8"))
-            dev = os.stat(self.cache).st_dev
-            blobs = old["blobs"] if old.get("dev") == dev else {}
-        except (OSError, ValueError, KeyError, TypeError, AttributeError):
-            blobs, dev = {}, None
+        dev, blobs = self._read()
         for rel, then in self.seen.items():
             try:
                 st = os.stat(self.cache / rel)
@@ -345,9 +360,7 @@ class OutputStore:
 
     # -- memos: results derived from blobs, by a key the caller makes of its inputs ---------
     def _memo_path(self, name: str, key: str) -> Path:
-        if not all(c in "0123456789abcdef" for c in key) or len(key) != 64:
-            raise ValueError(f"not a SHA-256 digest: {key!r}")
-        return self.cache / MEMO_DIR / _safe_key(name) / f"{key}.json"
+        return self.cache / MEMO_DIR / _safe_key(name) / f"{_require_sha256(key)}.json"
 
     def memo(self, name: str, key: str) -> bytes | None:
         """The bytes :meth:`remember` kept under ``name``/``key`` in the shared store, if its
@@ -428,9 +441,7 @@ class OutputStore:
         atomic_write_text(self.manifest_path(key), text)
 
     def _cache_manifest(self, digest: str) -> Path:
-        if not all(c in "0123456789abcdef" for c in digest) or len(digest) != 64:
-            raise ValueError(f"not a SHA-256 digest: {digest!r}")
-        return self.cache / "manifests" / digest[:2] / f"{digest}.json"
+        return self.cache / "manifests" / digest[:2] / f"{_require_sha256(digest)}.json"
 
     def read_manifest(self, key: str) -> dict | None:
         path = self.manifest_path(key)
@@ -490,6 +501,21 @@ def remove_unlinked(paths) -> list[tuple[Path, int]]:
     return out
 
 
+def remove_stale_records(paths, blobs_of) -> int:
+    """Remove each JSON record of ``paths`` that cannot be read or names a blob that is gone
+    (``blobs_of(record)``: the paths of the blobs it names); returns how many were removed."""
+    stale = 0
+    for path in sorted(paths):
+        try:
+            blobs = blobs_of(json.loads(path.read_text(encoding="utf-8")))
+        except (OSError, ValueError, KeyError, TypeError):
+            blobs = None  # unreadable: of no use to anyone
+        if blobs is None or not all(Path(b).is_file() for b in blobs):
+            path.unlink(missing_ok=True)
+            stale += 1
+    return stale
+
+
 @dataclass(frozen=True)
 class Collected:
     """What :func:`collect_garbage` removed: blobs and manifests, and the bytes freed."""
@@ -517,23 +543,12 @@ def collect_garbage(cache: str | os.PathLike) -> Collected:
         freed += size
     # report media (cassi.reports.media; its page memo is the reports' own: MEDIA_GC)
     freed += sum(size for _, size in remove_unlinked((root / MEDIA_DIR).glob("*")))
-    manifests = 0
-    for path in sorted((root / "manifests").glob("*/*.json")):
-        try:
-            doc = json.loads(path.read_text(encoding="utf-8"))
-            names = [BlobRef(o["sha256"], o["suffix"]).relpath for o in doc["outputs"].values()]
-        except (OSError, ValueError, KeyError, TypeError):
-            names = None  # unreadable: of no use to any run
-        if names is None or any(n in removed or not (root / n).is_file() for n in names):
-            path.unlink(missing_ok=True)
-            manifests += 1
-    for path in sorted((root / MEMO_DIR).glob("*/*.json")):
-        try:
-            doc = json.loads(path.read_text(encoding="utf-8"))
-            name = BlobRef(doc["sha256"], doc["suffix"]).relpath
-        except (OSError, ValueError, KeyError, TypeError):
-            name = None
-        if name is None or name in removed or not (root / name).is_file():
-            path.unlink(missing_ok=True)
+    # a removed blob is no longer a file: the records naming it go
+    manifests = remove_stale_records(
+        (root / "manifests").glob("*/*.json"),
+        lambda doc: [root / BlobRef(o["sha256"], o["suffix"]).relpath
+                     for o in doc["outputs"].values()])
+    remove_stale_records((root / MEMO_DIR).glob("*/*.json"),
+                         lambda doc: [root / BlobRef(doc["sha256"], doc["suffix"]).relpath])
     return Collected(len(removed), manifests, freed)
 
