@@ -109,11 +109,9 @@ class Scheduler:
         return self.records
 
     def manifest(self, key: str) -> dict | None:
-        """The verified manifest of a finished job (DONE or CACHED), else None."""
-        rec = self.records.get(key)
-        if rec is None or rec.state not in (State.DONE, State.CACHED):
-            return None
-        return self.verified.get(key) or self.store.verified(key, self.digests[key])
+        """The verified manifest of a finished job (DONE or CACHED), else None: the one that
+        verified when it finished (a DONE job whose outputs did not verify is FAILED)."""
+        return self.verified.get(key)
 
     # -- transitions ---------------------------------------------------------------------------
     def _record(self, job: Job, state: State, reason: str = "", **kw) -> JobRecord:
