@@ -22,11 +22,15 @@ _FILE = ["subject", "task", "rep"]
 class PageKeys:
     """Key documents of one run's pages; ``audio_for(subject, task, rep)``: the task's WAV or
     None, ``labels_for(subject, task, rep)``: the file of its phone and word labels or None
-    (both as the viewer pages find them; the labels are read from that file alone)."""
+    (both as the viewer pages find them; the labels are read from that file alone);
+    ``renders_note``: the sentence a large run's viewer pages carry, or None."""
 
-    def __init__(self, run: Run, *, audio_for=None, labels_for=None):
+    def __init__(self, run: Run, *, audio_for=None, labels_for=None, renders_note=None):
         self.run = run
         self._audio_for, self._labels_for = audio_for, labels_for
+        #: what a large run's viewer pages say their renders leave out (it reads the run's
+        #: count of task files, which a page's own rows do not say)
+        self._renders_note = renders_note
         res = RowDigests(run.results)
         rend = RowDigests(by_content(run.renders))
         self._results = res.whole()
@@ -44,11 +48,12 @@ class PageKeys:
         results = self._results_of["file"].get(file)
         if results is None:
             return None
-        return {"file": list(file), **self._common(subject), "results": results,
-                "renders": self._renders_of["file"].get(file, ""),
-                "attachments": self._attachments_of["file"].get(file, ""),
-                "audio": self._file(self._audio_for, file),
-                "labels": self._file(self._labels_for, file)}
+        doc = {"file": list(file), **self._common(subject), "results": results,
+               "renders": self._renders_of["file"].get(file, ""),
+               "attachments": self._attachments_of["file"].get(file, ""),
+               "audio": self._file(self._audio_for, file),
+               "labels": self._file(self._labels_for, file)}
+        return doc if self._renders_note is None else {**doc, "renders_note": self._renders_note}
 
     @staticmethod
     def _file(find, file: tuple):

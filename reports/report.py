@@ -827,17 +827,11 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
     subjects = sorted(fv["subject"].dropna().unique())
     place = _image_store(out, media_cache)
     audio_for = _audio_for(run)
-    keys = PageKeys(run, audio_for=audio_for, labels_for=_alignment_for(run))
     fired, note = _renders_rule(run, fv)
-
-    def viewer_key(subject, task, rep):
-        # the rule reads the run's count of task files, which a page's own rows do not say
-        doc = keys.viewer(subject, task, rep)
-        return doc if doc is None or note is None else {**doc, "renders_note": note}
-
+    keys = PageKeys(run, audio_for=audio_for, labels_for=_alignment_for(run), renders_note=note)
     viewers = write_viewers(run, out, env, slug=slug, audio_for=audio_for,
                             images=_viewer_images(run, out, place, media_cache, fired, note),
-                            memo=memo, key_of=viewer_key)
+                            memo=memo, key_of=keys.viewer)
     rule = functools.lru_cache(maxsize=None)(lambda: table_c_rule(run.results, fv=fv))
     _copy_report_script(out)
 

@@ -61,6 +61,6 @@ def section_digest(run_root: Path) -> str | None:
         doc = json.loads(data)
         data = json.dumps({k: v for k, v in doc.items() if k not in _PROVENANCE_KEYS},
                           sort_keys=True).encode()
-    except ValueError:
+    except (ValueError, AttributeError):  # not a JSON object: the section refuses it
         pass
     return hashlib.sha256(data).hexdigest()
