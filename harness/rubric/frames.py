@@ -82,12 +82,11 @@ class LastRead(Frames):
 
     def read(self, start: int, stop: int) -> np.ndarray:
         start, stop = max(0, start), min(self.n_frames, stop)
-        data, at = self._data, self._start
-        if data is None or start < at or stop > at + len(data):
-            data = self.source.read(start, stop)
-            data.flags.writeable = False          # shared by every reader: none may change it
-            self._start, self._data = at, data = start, data
-        return data[start - at:stop - at]
+        if self._data is None or start < self._start or stop > self._start + len(self._data):
+            self._data = self.source.read(start, stop)
+            self._data.flags.writeable = False    # shared by every reader: none may change it
+            self._start = start
+        return self._data[start - self._start:stop - self._start]
 
 
 class ArrayFrames(Frames):
