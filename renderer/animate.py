@@ -31,6 +31,12 @@ def realtime_fps(stride: int, *, period_us: float = NOMINAL_PERIOD_US, cap: floa
     return float(min(cap, 1e6 / (period_us * max(1, stride))))
 
 
+#: x264's speed preset. Measured on 354 five-panel report frames (1280x256): "medium" (the
+#: default) 2.04 s of encoder CPU and 732 KB, "veryfast" 1.13 s and 918 KB, "superfast" 0.89 s
+#: and 1.7 MB. A night encodes about 18,000 such panels; its videos are 5 MB of 150.
+X264_SPEED = ("-preset", "veryfast")
+
+
 def side_by_side(images: Sequence[np.ndarray], gap: int = 0) -> np.ndarray:
     """uint8 (H, sum W, 3) of equal-height images (linear float images are sRGB-encoded)."""
     if len({i.shape[0] for i in images}) != 1:
@@ -59,13 +65,14 @@ def write_animation(path: str | os.PathLike, frames: Iterable[np.ndarray], *, fp
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".mp4":
-        kw = dict(codec="libx264", pix_fmt_out="yuv420p", quality=quality)
+        kw = dict(codec="libx264", pix_fmt_out="yuv420p", quality=quality,
+                  output_params=list(X264_SPEED))
         if audio is not None:
             trim = f"atrim=start={audio_start_s:.6f}"
             if duration_s is not None:
                 trim += f":end={audio_start_s + duration_s:.6f}"
             kw.update(audio_path=str(audio), audio_codec="aac",
-                      output_params=["-af", trim + ",asetpts=PTS-STARTPTS"])
+                      output_params=[*X264_SPEED, "-af", trim + ",asetpts=PTS-STARTPTS"])
     elif suffix == ".gif":
         kw = dict(codec="gif", pix_fmt_out="rgb8")
     else:

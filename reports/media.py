@@ -89,27 +89,44 @@ def store_image(src: str | os.PathLike, images: Path, cache: Path | None = None)
 
 def read_rgb8(path) -> np.ndarray:
     """An image file as 8-bit RGB (grey expanded, alpha dropped)."""
+    from PIL import Image  # noqa: PLC0415 - Pillow comes with imageio
+
+    with Image.open(path) as img:
+        if img.mode in _PIL_TO_RGB:  # Pillow directly: imageio's wrapper decoded each PNG twice
+            return np.asarray(img.convert("RGB"))
     img = np.asarray(iio.imread(path))
     if img.ndim == 2:
         img = np.stack([img] * 3, axis=-1)
     return img[..., :3].astype(np.uint8)
 
 
+#: 8-bit modes whose conversion to RGB keeps the values (alpha dropped, grey expanded).
+_PIL_TO_RGB = frozenset({"RGB", "RGBA", "RGBX", "L", "LA", "P", "PA"})
 LABEL_PX = 14
+_LABEL_BG = (24, 24, 24)
+
+
+@functools.lru_cache(maxsize=256)
+def _label_line(width: int, text: str) -> np.ndarray:
+    """One line of label text on the band's colour, (LABEL_PX, width, 3): a video draws a
+    panel's name once and each frame's time once for all its panels."""
+    from PIL import Image, ImageDraw, ImageFont  # noqa: PLC0415 - Pillow comes with imageio
+
+    font = ImageFont.load_default(size=LABEL_PX - 3)
+    canvas = Image.new("RGB", (width, LABEL_PX), _LABEL_BG)
+    ImageDraw.Draw(canvas).text((4, 1), text, fill=(235, 235, 235), font=font)
+    out = np.asarray(canvas)
+    out.flags.writeable = False
+    return out
 
 
 def label_panel(image: np.ndarray, lines: list[str]) -> np.ndarray:
     """``image`` (uint8 (H, W, 3)) with a dark band on top carrying ``lines`` of text."""
-    from PIL import Image, ImageDraw, ImageFont  # noqa: PLC0415 - Pillow comes with imageio
-
-    font = ImageFont.load_default(size=LABEL_PX - 3)
-    band = LABEL_PX * len(lines) + 2
-    canvas = Image.new("RGB", (image.shape[1], image.shape[0] + band), (24, 24, 24))
-    canvas.paste(Image.fromarray(np.ascontiguousarray(image[..., :3])), (0, band))
-    draw = ImageDraw.Draw(canvas)
-    for i, line in enumerate(lines):
-        draw.text((4, 1 + i * LABEL_PX), line, fill=(235, 235, 235), font=font)
-    return np.asarray(canvas)
+    width = image.shape[1]
+    parts = [_label_line(width, line) for line in lines]
+    parts.append(np.full((2, width, 3), _LABEL_BG, np.uint8))
+    parts.append(np.ascontiguousarray(image[..., :3], np.uint8))
+    return np.concatenate(parts, axis=0)
 
 
 def video_frames(renders: pd.DataFrame, *, stride: int) -> list[int]:
