@@ -768,6 +768,44 @@ def _meta_items(run: Run) -> list[tuple[str, str]]:
     return [(k, str(run.meta[k])) for k in keys if run.meta.get(k) not in (None, "")]
 
 
+def _frames_judged(run: Run) -> str | None:
+    """Which frames the run's checks judged, said on the index so that a run on a sparser grid
+    (``--animate-stride``) can never pass for the default one."""
+    meta = run.meta
+    if not meta.get("tasks_resolved"):
+        return None
+    grid, extremes = int(meta.get("animate_stride") or 0), int(meta.get("extremes") or 0)
+    stride = int(meta.get("stride") or 0)
+    views = set(meta.get("views_resolved") or meta.get("views") or ())
+    if "front" not in views:  # the view every image check judges (frames.image_views)
+        return "The geometric checks read every row; the front view was not rendered, so no " \
+               "image check judged."
+    first = next((t for t in meta["tasks_resolved"] if t[3]), None)
+    seconds = ""
+    if first is not None and grid > 0:
+        period = _period_for(run)(first[0], int(first[1]), int(first[2]))
+        seconds = f" ({grid * period / 1e6:.3f} s at {1e6 / period:.1f} Hz)"
+    picked = ["the first frame"]
+    if grid > 0:
+        picked.append(f"{_every(grid)}{seconds}")
+    if stride > 0:
+        picked.append(_every(stride))
+    if extremes > 0:
+        picked.append(f"up to {extremes} frame{'s' if extremes != 1 else ''} the geometric "
+                      "checks point at")
+    return ("The geometric checks read every row. In each task file and version the image checks "
+            "judge the front view at " + ", ".join(picked[:-1])
+            + (" and " if len(picked) > 1 else "") + picked[-1] + ".")
+
+
+def _every(n: int) -> str:
+    """``every 24th row``, ``every 2nd row``, ``every row``."""
+    if n == 1:
+        return "every row"
+    suffix = "th" if 10 <= n % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(n % 10, "th")
+    return f"every {n}{suffix} row"
+
+
 def _rescored(run: Run, cr: pd.DataFrame) -> list[str]:
     """Why the tables below may not be what the run itself concluded: the rubric registry
     changed since the run (its check values and negatives come from the old one, their
@@ -861,6 +899,7 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
         if previous is not None else None
     return env.get_template("index.html.j2").render(
         run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
+        frames_judged=_frames_judged(run),
         derived=run.derived,
         overview=_overview(run, previous, cr, diff, gate, before),
         summaries=own["summaries"], paired=own["paired"], agreement=agree,

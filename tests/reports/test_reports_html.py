@@ -143,3 +143,25 @@ def test_a_run_scored_under_another_rubric_says_its_tables_are_rescored(tmp_path
     # a pipeline's own ratings table (no rubric columns) is not compared, and breaks nothing
     rewrite({}, pd.DataFrame({"subject": ["JW11"], "score": [0.5]}))
     assert "Rescored with today" not in write_report(run, tmp_path / "r4").read_text()
+
+
+def test_the_index_says_which_frames_the_checks_judged(monkeypatch):
+    """A run on a sparser image grid than the nightly's can never pass for it: the index names
+    the grid, in rows and seconds at the recordings' rate."""
+    from types import SimpleNamespace
+
+    from cassi.reports import report
+
+    monkeypatch.setattr(report, "_period_for", lambda run: lambda s, t, r: 6866.0)
+    tasks = [["JW11", 5, 1, False, "no file", ""], ["JW11", 19, 1, True, "", "ab"]]
+    meta = {"tasks_resolved": tasks, "views_resolved": ["front", "side"], "animate_stride": 96,
+            "extremes": 2, "stride": 0}
+    said = report._frames_judged(SimpleNamespace(meta=meta))
+    assert "every 96th row (0.659 s at 145.6 Hz)" in said
+    assert "the first frame, every 96th row" in said and "up to 2 frames" in said
+    said = report._frames_judged(SimpleNamespace(meta={**meta, "animate_stride": 0, "extremes": 1,
+                                                       "stride": 22}))
+    assert "the first frame, every 22nd row and up to 1 frame the geometric" in said
+    said = report._frames_judged(SimpleNamespace(meta={**meta, "views_resolved": ["geometry"]}))
+    assert "no image check judged" in said
+    assert report._frames_judged(SimpleNamespace(meta={})) is None
