@@ -24,7 +24,8 @@ from cassi.reports import compare as cmp
 from cassi.reports.agree import agreement, write_agreement
 from cassi.reports import media, plots
 from cassi.reports.runio import Run, load_run, order_versions
-from cassi.harness.evaluation.frames import COMPARISON_VIEW, VIDEO_VIEWS, linked_frames, video_grid
+from cassi.harness.evaluation.frames import (COMPARED_TASKS, COMPARISON_VIEW, VIDEO_VIEWS, linked_frames,
+                                             video_grid)
 from cassi.harness.evaluation.provenance import rubric_digest
 from cassi.harness.evaluation.stages import MASKS_OUTPUT
 from cassi.harness.farm.executors import LocalExecutor
@@ -327,17 +328,24 @@ def _cell_faults(v: pd.DataFrame, text: str, links: dict, key: tuple) -> list[di
     return faults
 
 
+def _large_run(run: Run) -> int | None:
+    """The run's number of task files when it has more than :data:`ALL_RENDERS_UP_TO` (a full
+    set: its viewer pages carry fewer renders and its videos are made on demand), else None."""
+    files = len(run.results[["subject", "task", "rep"]].drop_duplicates())
+    return files if files > ALL_RENDERS_UP_TO else None
+
+
 def _renders_rule(run: Run, fv: pd.DataFrame) -> tuple[set | None, str | None]:
     """For a run of more than :data:`ALL_RENDERS_UP_TO` task files: the (subject, task, rep,
     version, check) that earned negatives (the checks whose frames the viewer pages carry
     renders of) and the sentence each page says it with; (None, None) otherwise."""
-    files = run.results[["subject", "task", "rep"]].drop_duplicates()
-    if len(files) <= ALL_RENDERS_UP_TO:
+    files = _large_run(run)
+    if files is None:
         return None, None
     fired = fv[fv["raw_negatives"] > 0]
     keys = {(s, int(t), int(r), v, c) for s, t, r, v, c in zip(
         fired["subject"], fired["task"], fired["rep"], fired["version"], fired["check"])}
-    return keys, (f"This run has {len(files)} task files (more than {ALL_RENDERS_UP_TO}): the "
+    return keys, (f"This run has {files} task files (more than {ALL_RENDERS_UP_TO}): the "
                   "renders here are the first frame's and those of the frames of checks that "
                   "earned negatives, not of silent checks' frames.")
 
@@ -712,8 +720,11 @@ def _start_videos(run: Run, out: Path, media_cache: Path | None = None):
     def add(kind, label, g, dest, audio, columns, period):
         specs.append((kind, label, dest, g, audio, columns, period))
 
+    large = _large_run(run)
     for (subject, task, rep), g in run.renders.groupby(["subject", "task", "rep"]):
         task, rep = int(task), int(rep)
+        if large is not None and task not in COMPARED_TASKS:
+            continue  # made on demand: videos_note
         audio, period = audio_for(subject, task, rep), period_for(subject, task, rep)
         stem = f"{slug(subject)}_{task:03d}_{rep}"
         name = f"{subject} task {task}" + (f" rep {rep}" if rep != 1 else "")
@@ -739,6 +750,23 @@ def _start_videos(run: Run, out: Path, media_cache: Path | None = None):
             add("comparison", f"{name}, {COMPARISON_VIEW} view ({', '.join(compared)})", g,
                 dest, audio, [(v, COMPARISON_VIEW) for v in compared], period)
     return _Encoding(specs, out, stride=stride, media_cache=media_cache)
+
+
+#: The command the index gives for a task file's video that a large run does not make.
+ANIMATE_COMMAND = "cassi animate --subject S --task T --version V --views front,side --stride 24 --out video.mp4"
+
+
+def _videos_note(run: Run) -> dict | None:
+    """What a large run's index says of the videos it does not make (None: it makes them all)."""
+    files = _large_run(run)
+    if files is None or not len(run.renders):
+        return None
+    tasks = " and ".join(str(t) for t in COMPARED_TASKS)
+    return {"text": f"This run has {files} task files (more than {ALL_RENDERS_UP_TO}): its videos "
+                    f"are made for tasks {tasks} only, the tasks whose versions the thesis compares "
+                    "side by side. Any other task file's video is made on demand: its task viewer "
+                    "plays every version in any view, and this command writes one:",
+            "command": ANIMATE_COMMAND}
 
 
 def _summaries(run: Run) -> list[dict]:
@@ -899,7 +927,7 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
         if previous is not None else None
     return env.get_template("index.html.j2").render(
         run_name=run.name, meta_items=_meta_items(run), synthetic=run.synthetic,
-        frames_judged=_frames_judged(run),
+        frames_judged=_frames_judged(run), videos_note=_videos_note(run),
         derived=run.derived,
         overview=_overview(run, previous, cr, diff, gate, before),
         summaries=own["summaries"], paired=own["paired"], agreement=agree,

@@ -92,7 +92,7 @@ def test_video_frames_keep_only_the_common_grid():
 
 
 @pytest.mark.render
-def test_every_task_file_becomes_a_video_and_versions_compare(tmp_path):
+def test_every_task_file_becomes_a_video_and_versions_compare(tmp_path, monkeypatch):
     """cassi-2.0 is the video version: all views on the grid and a two-view video; cassi-1.0
     gets the grid in the view the image checks judge (front) in every task file, so those
     checks judge both versions on the same frames, and both appear side by side."""
@@ -127,3 +127,14 @@ def test_every_task_file_becomes_a_video_and_versions_compare(tmp_path):
     comparison = tmp_path / "report" / "animations" / "JW45_118_1_front.mp4"
     assert comparison.is_file() and "animations/JW45_118_1_front.mp4" in index
     assert "silent (no tpNNN.wav in the corpus)" in index
+
+    # A run past the large-run limit (a full set) makes the compared tasks' videos only, and
+    # its index says how to get any other.
+    from cassi.reports import report as report_module
+    monkeypatch.setattr(report_module, "ALL_RENDERS_UP_TO", 1)
+    index = write_report(tmp_path / "run", tmp_path / "large").read_text()
+    assert (tmp_path / "large" / "animations" / "JW45_118_1_front.mp4").is_file()
+    assert not (tmp_path / "large" / "animations" / "JW45_005_1_front.mp4").exists()
+    assert not list((tmp_path / "large").rglob("JW45_005_*.mp4"))
+    assert "2 task files (more than 1): its videos are made for tasks 106 and 118 only" in index
+    assert "<code>cassi animate --subject S --task T" in index
