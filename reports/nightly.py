@@ -13,7 +13,8 @@ from cassi.harness.evaluation.nights import STORE_DIR, Night
 from cassi.harness.farm.store import MEDIA_DIR
 from cassi.harness.rubric import version_totals
 from cassi.reports.gates import (GOLDEN_MARK, GateResult, IncompleteRun, MismatchedBaseline,
-                                 NothingCompared, gate, job_gates, write_gate_report)
+                                 NothingCompared, compared, job_gates, load_baseline,
+                                 write_gate_report)
 from cassi.reports.report import write_report
 from cassi.reports.runio import load_run
 
@@ -40,9 +41,13 @@ def review_night(night: Night, *, common_only: bool = False) -> tuple[bool, Path
                  if p is not None]
     run = load_run(run_dir)
     gate_results = job_gates(run)
+    previous = None  # the previous night as the gates loaded it, for the report's comparison
     for baseline in baselines:
         try:
-            gate_results += gate(run, baseline, common_only=common_only, jobs=False)[1]
+            base = load_baseline(baseline)
+            if baseline == night.previous:
+                previous = base.run
+            gate_results += compared(run, base, common_only=common_only, jobs=False)[0]
         except (MismatchedBaseline, IncompleteRun, NothingCompared) as err:
             gate_results.append(GateResult("baseline", "all", "all", str(baseline), "fail",
                                            err.reason))
@@ -68,6 +73,7 @@ def review_night(night: Night, *, common_only: bool = False) -> tuple[bool, Path
 
     timer.stop()
     with timer("report (tables, pages, videos)"):
-        index = write_report(run_dir, night.report_dir, compare=night.previous, history=history,
+        index = write_report(run, night.report_dir, history=history,
+                             compare=previous if previous is not None else night.previous,
                              media_cache=root / STORE_DIR / MEDIA_DIR)
     return passed, index

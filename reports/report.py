@@ -943,8 +943,8 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
               "skipped": run.skipped} if run.summary else None)
 
 
-def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
-                 compare: str | os.PathLike | None = None,
+def write_report(run_dir: str | os.PathLike | Run, out_dir: str | os.PathLike, *,
+                 compare: str | os.PathLike | Run | None = None,
                  history: pd.DataFrame | None = None,
                  media_cache: str | os.PathLike | None = None,
                  ratings: str | os.PathLike | None = None) -> Path:
@@ -952,12 +952,12 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
 
     Parameters
     ----------
-    run_dir : path
-        A run directory (``cassi run --out``).
+    run_dir : path or Run
+        A run directory (``cassi run --out``), or the run a caller already loaded.
     out_dir : path
         Where the report goes (created).
-    compare : path, optional
-        A previous run to compare with.
+    compare : path or Run, optional
+        A previous run to compare with (or that run, loaded).
     history : DataFrame, optional
         Columns night, version, negatives: a trend plot over nights (``cassi nightly``).
     media_cache : path, optional
@@ -968,8 +968,9 @@ def write_report(run_dir: str | os.PathLike, out_dir: str | os.PathLike, *,
         Ratings people gave (:mod:`cassi.reports.agree`): the report's agreement section, and
         agreement.json / .md / .csv beside index.html.
     """
-    run = load_run(run_dir)
-    previous = load_run(compare) if compare else None
+    run = run_dir if isinstance(run_dir, Run) else load_run(run_dir)  # a caller's loaded run
+    previous = compare if isinstance(compare, Run) or compare is None else \
+        (load_run(compare) if compare else None)
     # a bad ratings file is refused before anything is written
     agree = agreement(run, ratings, evidence_href) if ratings is not None else None
     out = Path(out_dir)

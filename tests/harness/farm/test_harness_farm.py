@@ -286,3 +286,18 @@ def test_tables_that_cannot_be_written_keep_finished_outputs(tmp_path):
     (tmp_path / "results.parquet").rmdir()
     res = _run(tmp_path, tasks=TASKS[:1], versions=("v1",), views=())
     assert res.summary.counts()["cached"] == 1 and (tmp_path / "results.parquet").is_file()
+
+
+def test_a_jobs_digest_is_the_json_of_all_its_fields():
+    """Job.digest is the SHA-256 of every field as dataclasses.asdict gives them (tuples
+    nested included): stores written before keep their digests."""
+    import dataclasses
+    import hashlib
+    import json
+
+    job = Job(stage="render", subject="JW11", task=19, rep=2, version="cassi-2.1", view="front",
+              frames=tuple(range(0, 2000, 24)), chunk=3, evidence=True, parents=("a", "b"),
+              parent_digest="p", inputs="i", reads=(("keyframes", "ab"), ("x", "cd")))
+    doc = json.dumps({"job": dataclasses.asdict(job), "salt": "s"}, sort_keys=True, default=str)
+    assert job.digest("s") == hashlib.sha256(doc.encode()).hexdigest()
+    assert job.digest("s") != dataclasses.replace(job, frames=job.frames[:-1]).digest("s")
