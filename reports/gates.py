@@ -56,12 +56,18 @@ _GATE_FIELDS = tuple(f.name for f in fields(GateResult))
 
 def golden_key(row) -> Path:
     """Where a render lives in a golden directory: version/view/subject_task_rep_frame.png."""
+    return Path(golden_name(row))
+
+
+def golden_name(row) -> str:
+    """:func:`golden_key` as a string (the image gates compare 50,000 of them a subject's full
+    set: strings, not Paths)."""
     for name in ("version", "view", "subject"):
         value = str(row[name])
         if not value or "/" in value or "\\" in value or value in (".", ".."):
             raise CassiInputError(f"unsafe {name} {value!r} in render index")
-    return Path(str(row["version"]), str(row["view"]),
-                f"{row['subject']}_{int(row['task']):03d}_{int(row['rep'])}_{int(row['frame']):05d}.png")
+    return (f"{row['version']}/{row['view']}/"
+            f"{row['subject']}_{int(row['task']):03d}_{int(row['rep'])}_{int(row['frame']):05d}.png")
 
 
 def mouth_box_of(path: Path, shape: tuple[int, ...]) -> tuple[int, int, int, int] | None:
@@ -149,23 +155,26 @@ def image_gates(run: Run, reference_dir: Path | None = None, *, baseline: Run | 
     """
     out = []
     images_dir = Path(images_dir or run.root)
-    theirs = None if baseline is None else {golden_key(r): Path(r["path"])
+    # Paths as strings (os.path), made Paths only where an image is decoded: the same texts
+    theirs = None if baseline is None else {golden_name(r): os.fspath(Path(r["path"]))
                                             for r in _pngs(baseline.renders)}
     for row in _pngs(run.renders):
         item = f"{row['view']} task {int(row['task'])} frame {int(row['frame'])}"
-        key = golden_key(row)
-        ref = reference_dir / key if theirs is None else theirs.get(key)
-        if ref is None or not ref.is_file():
+        key = golden_name(row)
+        path = os.fspath(Path(row["path"])) if not isinstance(row["path"], str) else row["path"]
+        ref = os.fspath(reference_dir / key) if theirs is None else theirs.get(key)
+        if ref is None or not os.path.isfile(ref):
             missing = (f"no golden image {ref}" if theirs is None else
-                       f"no render of the baseline {baseline.root} at {key.as_posix()}")
+                       f"no render of the baseline {baseline.root} at {key}")
             out.append(GateResult("image", row["subject"], row["version"], item, "skip",
                                   missing))
             continue
-        corrupt = _not_its_name(Path(row["path"])) or _not_its_name(ref)
+        corrupt = _not_its_name(path) or _not_its_name(ref)
         if corrupt:
             out.append(GateResult("image", row["subject"], row["version"], item, "fail", corrupt))
             continue
-        same = _same_bytes(Path(row["path"]), ref)
+        ref = Path(ref)
+        same = _same_bytes(path, ref)
         if same:
             # equal digests are equal images, nothing to decode
             out.append(GateResult("image", row["subject"], row["version"], item, "pass",
@@ -191,7 +200,7 @@ def image_gates(run: Run, reference_dir: Path | None = None, *, baseline: Run | 
     return out
 
 
-def _content_name(path: Path) -> str | None:
+def _content_name(path: str | os.PathLike) -> str | None:
     """The SHA-256 a content-addressed blob is named by (``objects/ab/<sha256>.png``, or a
     link to one), or None for another file."""
     stem = os.path.basename(path).split(".", 1)[0]
@@ -203,7 +212,7 @@ def _content_name(path: Path) -> str | None:
     return stem if is_sha256(stem) else None
 
 
-def _not_its_name(path: Path) -> str | None:
+def _not_its_name(path: str | os.PathLike) -> str | None:
     """Why a content-addressed file is not what its name says (its bytes hash to another
     digest: a write into a blob the store and its runs share), or None (it is, or it is
     named otherwise). Hashed once per process (:func:`sha256_file_once`)."""
@@ -221,7 +230,7 @@ def _not_its_name(path: Path) -> str | None:
             "without the damaged blob)")
 
 
-def _same_bytes(a: Path, b: Path) -> str | None:
+def _same_bytes(a: str | os.PathLike, b: str | os.PathLike) -> str | None:
     """The SHA-256 both files share, or None (unequal or unreadable: the comparison rule
     then decides, or says why it cannot). Each file is hashed once per process: renders
     linked from one store blob are one file, hashed once."""

@@ -38,6 +38,7 @@ import fcntl
 import hashlib
 import json
 import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, Mapping
@@ -79,9 +80,12 @@ def store_lock(cache: str | os.PathLike, *, exclusive: bool) -> Iterator[None]:
         os.close(fd)
 
 
+_SHA256 = re.compile(r"[0-9a-f]{64}")
+
+
 def is_sha256(name: str) -> bool:
     """Whether ``name`` is a SHA-256 digest as the store writes them (64 lowercase hex)."""
-    return len(name) == 64 and all(c in "0123456789abcdef" for c in name)
+    return _SHA256.fullmatch(name) is not None
 
 
 def _require_sha256(digest: str) -> str:
