@@ -761,11 +761,14 @@ def _videos_note(run: Run) -> dict | None:
     files = _large_run(run)
     if files is None or not len(run.renders):
         return None
-    tasks = " and ".join(str(t) for t in COMPARED_TASKS)
-    return {"text": f"This run has {files} task files (more than {ALL_RENDERS_UP_TO}): its videos "
-                    f"are made for tasks {tasks} only, the tasks whose versions the thesis compares "
-                    "side by side. Any other task file's video is made on demand: its task viewer "
-                    "plays every version in any view, and this command writes one:",
+    compared = " and ".join(str(t) for t in COMPARED_TASKS)
+    made = sorted(set(int(t) for t in run.renders["task"]) & set(COMPARED_TASKS))
+    here = (f"here task{'s' if len(made) > 1 else ''} {' and '.join(map(str, made))}" if made
+            else "and it has none of them")
+    return {"text": f"This run has {files} task files (more than {ALL_RENDERS_UP_TO}): it makes "
+                    "videos only for the tasks whose versions the thesis compares side by side "
+                    f"({compared}), {here}. Any other task file's video is made on demand: its "
+                    "task viewer plays every version in any view, and this command writes one:",
             "command": ANIMATE_COMMAND}
 
 

@@ -136,5 +136,6 @@ def test_every_task_file_becomes_a_video_and_versions_compare(tmp_path, monkeypa
     assert (tmp_path / "large" / "animations" / "JW45_118_1_front.mp4").is_file()
     assert not (tmp_path / "large" / "animations" / "JW45_005_1_front.mp4").exists()
     assert not list((tmp_path / "large").rglob("JW45_005_*.mp4"))
-    assert "2 task files (more than 1): its videos are made for tasks 106 and 118 only" in index
+    assert ("2 task files (more than 1): it makes videos only for the tasks whose versions the "
+            "thesis compares side by side (106 and 118), here task 118.") in index
     assert "<code>cassi animate --subject S --task T" in index
