@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 from cassi.common.errors import CassiInputError
 from cassi.common.lazy import resolve
 from cassi.harness.evaluation.config import KEEP_NIGHTS, MEDIA_GC
-from cassi.harness.farm.store import MEDIA_DIR, collect_garbage, store_lock
+from cassi.harness.farm.store import MEDIA_DIR, collect_garbage, remove_stale_records, store_lock
 from cassi.harness.farm.tableset import SET_FILE as TABLE_SET
 from cassi.harness.farm.tableset import SUMMARY_FILE, TableSetError, verify_table_set
 
@@ -150,13 +150,7 @@ def gc(out_dir: str | os.PathLike, *, keep: int = KEEP_NIGHTS) -> dict:
 def _forget_analyses_of_removed_runs(memo: Path) -> None:
     """Remove the kept robustness analyses whose night is gone (a later night with the same
     results table computes its own again, in seconds)."""
-    for path in sorted(memo.glob("*.json")):
-        try:
-            run = json.loads(path.read_text(encoding="utf-8"))["run"]
-        except (OSError, ValueError, KeyError, TypeError):
-            run = None
-        if run is None or not Path(run).is_dir():
-            path.unlink(missing_ok=True)
+    remove_stale_records(memo.glob("*.json"), lambda doc: [doc["run"]], present=os.path.isdir)
 
 
 @dataclass

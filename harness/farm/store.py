@@ -237,21 +237,6 @@ class BlobRef:
         return f"objects/{self.sha256[:2]}/{self.sha256}{self.suffix}"
 
 
-def _hashes_to_its_name(base: Path, ref: BlobRef, good: set[str]) -> bool:
-    """Whether the blob under ``base`` exists and hashes to its name; hashed once, then
-    remembered in ``good``."""
-    path = os.path.join(base, ref.relpath)
-    if ref.relpath in good:
-        return os.path.isfile(path)
-    try:
-        ok = sha256_file_once(path) == ref.sha256
-    except OSError:
-        return False
-    if ok:
-        good.add(ref.relpath)
-    return ok
-
-
 def _read_only(path: str | os.PathLike) -> None:
     """Take the write permissions off a blob (where this user may: else it stays as it is)."""
     with contextlib.suppress(OSError):
@@ -351,16 +336,23 @@ class OutputStore:
         return self._stamped_ok(self.cache, ref, self._cache_good)
 
     def _stamped_ok(self, base: Path, ref: BlobRef, good: set[str]) -> bool:
-        """Whether ``base``'s blob hashes to its name, by its stamp where it has one (a run's
-        blob is a link to the store's, the same file, or across file systems a copy, another
-        file: not stamped, :meth:`Stamps.save`); remembered in ``good``."""
+        """Whether ``base``'s blob exists and hashes to its name: by its stamp where it has one
+        (a run's blob is a link to the store's, the same file, or across file systems a copy,
+        another file: not stamped, :meth:`Stamps.save`), else hashed once per process (a run
+        without a shared store keeps no stamps); remembered in ``good``."""
         path = os.path.join(base, ref.relpath)
         if ref.relpath in good:
             return os.path.isfile(path)
-        if not self.stamps.verified(ref.relpath, path):
-            return False
-        good.add(ref.relpath)
-        return True
+        if self.stamps is not None:
+            ok = self.stamps.verified(ref.relpath, path)
+        else:
+            try:
+                ok = sha256_file_once(path) == ref.sha256
+            except OSError:
+                ok = False
+        if ok:
+            good.add(ref.relpath)
+        return ok
 
     # -- memos: results derived from blobs, by a key the caller makes of its inputs ---------
     def _memo_path(self, name: str, key: str) -> Path:
@@ -412,8 +404,6 @@ class OutputStore:
         self._good.add(ref.relpath)
 
     def _blob_ok(self, ref: BlobRef) -> bool:
-        if self.stamps is None:
-            return _hashes_to_its_name(self.root, ref, self._good)
         return self._stamped_ok(self.root, ref, self._good)
 
     def get(self, ref: BlobRef) -> bytes:
@@ -505,16 +495,17 @@ def remove_unlinked(paths) -> list[tuple[Path, int]]:
     return out
 
 
-def remove_stale_records(paths, blobs_of) -> int:
+def remove_stale_records(paths, blobs_of, present=os.path.isfile) -> int:
     """Remove each JSON record of ``paths`` that cannot be read or names a blob that is gone
-    (``blobs_of(record)``: the paths of the blobs it names); returns how many were removed."""
+    (``blobs_of(record)``: the paths of the blobs it names, each kept while ``present`` says
+    so); returns how many were removed."""
     stale = 0
     for path in sorted(paths):
         try:
-            blobs = blobs_of(json.loads(path.read_text(encoding="utf-8")))
+            blobs = [os.fspath(b) for b in blobs_of(json.loads(path.read_text(encoding="utf-8")))]
         except (OSError, ValueError, KeyError, TypeError):
             blobs = None  # unreadable: of no use to anyone
-        if blobs is None or not all(Path(b).is_file() for b in blobs):
+        if blobs is None or not all(present(b) for b in blobs):
             path.unlink(missing_ok=True)
             stale += 1
     return stale
