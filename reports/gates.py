@@ -70,7 +70,8 @@ def golden_name(row) -> str:
             f"{row['subject']}_{int(row['task']):03d}_{int(row['rep'])}_{int(row['frame']):05d}.png")
 
 
-def mouth_box_of(path: Path, shape: tuple[int, ...]) -> tuple[int, int, int, int] | None:
+def mouth_box_of(path: str | os.PathLike,
+                 shape: tuple[int, ...]) -> tuple[int, int, int, int] | None:
     """(row0, row1, col0, col1) of the mouth region recorded in a render's PNG, or None."""
     from PIL import Image  # noqa: PLC0415 - Pillow comes with imageio
 
@@ -161,7 +162,7 @@ def image_gates(run: Run, reference_dir: Path | None = None, *, baseline: Run | 
     for row in _pngs(run.renders):
         item = f"{row['view']} task {int(row['task'])} frame {int(row['frame'])}"
         key = golden_name(row)
-        path = os.fspath(Path(row["path"])) if not isinstance(row["path"], str) else row["path"]
+        path = os.fspath(row["path"])
         ref = os.fspath(reference_dir / key) if theirs is None else theirs.get(key)
         if ref is None or not os.path.isfile(ref):
             missing = (f"no golden image {ref}" if theirs is None else
@@ -182,8 +183,8 @@ def image_gates(run: Run, reference_dir: Path | None = None, *, baseline: Run | 
                                   MAX_CHANGED_SHARE))
             continue
         try:
-            rendered, reference = read_rgb8(Path(row["path"])), read_rgb8(ref)
-            box = mouth_box_of(Path(row["path"]), rendered.shape)
+            rendered, reference = read_rgb8(path), read_rgb8(ref)
+            box = mouth_box_of(path, rendered.shape)
             m = image_metrics(rendered, reference, box)
         except (OSError, ValueError) as err:
             out.append(GateResult("image", row["subject"], row["version"], item, "fail", str(err)))
