@@ -229,7 +229,9 @@ def test_the_render_panel_follows_the_view(report, browser):
     assert p.page.text_content("#renders .meta") == \
         f"cassi-1.0: Mitsuba render, front view, frame {frame}"
     assert p.page.locator("#renders img").count() >= 1
-    # the WebP copy decodes in the browser at the render's size
+    # the WebP copy decodes in the browser at the render's size (once it has loaded or failed:
+    # naturalWidth is 0 until then, and on a busy machine the click returns first)
+    p.page.wait_for_function("document.querySelector('#renders img').complete")
     assert p.page.evaluate("document.querySelector('#renders img').naturalWidth") == \
         iio.imread(run / pd.read_parquet(run / "renders.parquet")["path"].iloc[0]).shape[1]
     p.page.click("button[data-view='top']")
