@@ -18,6 +18,7 @@ Layout::
 """
 from __future__ import annotations
 
+import functools
 import json
 import multiprocessing
 import os
@@ -32,6 +33,7 @@ import numpy as np
 
 from cassi.common.atomic import atomic_write_text, replacing
 from cassi.common.cores import usable_cores
+from cassi.common.digest import tree_digest
 from cassi.common.errors import CassiInputError
 from cassi.data.synth.motion import PERIOD_S, Anatomy, add_noise, expand_phones, pellets, \
     segment_targets, smooth
@@ -50,7 +52,11 @@ from cassi.data.xrmb.files import (JAW_WAGGING_TASK, MAX_PROTRUSION_TASK, NOMINA
 #: 5: issue 23 (resting lips from real recordings and published norms, the upper lip rising with
 #: the jaw, mistracked stretches mostly 1000000 and a stuck pellet's report smooth).
 #: 7: the upper lip drawn back by the opening jaw (motion.UL_BACK_MM_PER_DEG, real JW11 frames).
-GENERATOR_VERSION = "7"
+#: 8: guessed jaws no shorter than the closed vermilions between the lip pellets need
+#: (subjects.jaw_floor_mm: JW21, JW25, JW27, JW502).
+#: The cache also records :func:`generator_digest`, so a change to the generator's code that
+#: forgot this bump still makes the corpus anew.
+GENERATOR_VERSION = "8"
 DEFAULT_SEED = 0
 #: Tasks every subject keeps free of artifacts (section 5.3 uses 106 and 118; 13 is the
 #: thesis's Figure 3.9 example), unless the subject's story says otherwise (JW32, JW12).
@@ -518,6 +524,7 @@ def make_corpus(out_dir: str | os.PathLike, *, subjects=None, seed: int = DEFAUL
         "synthetic": True,
         "generator": "cassi.data.synth.corpus",
         "generator_version": GENERATOR_VERSION,
+        "generator_digest": generator_digest(),
         "seed": int(seed),
         "subjects": names,
         "tasks": len(TASKS),
@@ -545,13 +552,21 @@ def cache_root() -> Path:
     return Path(env).expanduser() if env else Path.home() / ".cache" / "cassi-farm"
 
 
+@functools.lru_cache(maxsize=None)
+def generator_digest() -> str:
+    """Digest of the generator's code (this package's files): the subjects' figures, the
+    motion, the task programs."""
+    return tree_digest([Path(__file__).resolve().parent])
+
+
 def _complete(path: Path, seed: int) -> bool:
     try:
         meta = json.loads((path / "corpus.json").read_text())
     except (OSError, ValueError):
         return False
     return (meta.get("generator_version") == GENERATOR_VERSION and meta.get("seed") == seed
-            and meta.get("subjects") == list(SUBJECTS))
+            and meta.get("subjects") == list(SUBJECTS)
+            and meta.get("generator_digest") == generator_digest())
 
 
 def default_corpus(*, seed: int = DEFAULT_SEED) -> Path:

@@ -27,6 +27,22 @@ Sources of the columns
   37.9 mm gave 13.1, 8.7 and 37.0 mm. JW11's head measures were derived (rule below) with those
   former pellets (MNI y -7.6 mm, jaw length 37.9 mm) and are kept: the real pellets sit higher on
   the incisor and further back along the molars, which moves the pellets, not the bone.
+- The other subjects' ``jaw_length_mm`` is this generator's guess, with one floor from the thesis
+  and published anatomy: the lip pellets are "glued to the outside of the lips at the upper and
+  lower edges of the lips" (thesis 3.2.3), and lipthick is their average distance in the first
+  valid row of every task, where "the lips are lightly placed together" (4.2.3). Lips lightly
+  together hold their two vermilions between the pellets, so lipthick times the jaw length is at
+  least the closed vermilion span of the subject's sex (:data:`VERMILION_HEIGHTS_MM`: 17.05 mm men,
+  18.11 mm women). A guess below that floor is raised to it, rounded up to 0.1 mm
+  (:func:`jaw_floor_mm`): JW21 33.9 -> 35.1, JW25 32.0 -> 43.8, JW27 31.1 -> 40.9, JW502 34.1 ->
+  36.9 mm (the guesses put JW25's and JW27's resting pellets 13.3 and 13.8 mm apart, thinner than
+  any adult's closed lips). The two real jaws bracket the raised ones' range (JW45 34.18, JW11
+  42.6 mm; the MNM pellet sits "in the vicinity of the area between the first and second
+  mandibular molars", 3.2.3, so its spacing from MNI varies with where it was glued). The rule
+  was written down before any result of the raised jaws was looked at; what it moves is the
+  face's scale (4.1.1), so the resting mouth, 1.39 times the jaw length, as well. The head
+  measures were derived with the former guesses and are kept, as for JW11: a longer pellet
+  spacing moves the molar pellet, not the bone.
 - JW12's palate parameters are a least-squares fit (max error 0.42 mm) to thesis Figure 3.11
   (JW12 PAL.DAT).
 - ``gonion_mm``, ``gnathion_mm`` (the head measures written to ``Headmeasures.txt``): not printed
@@ -77,12 +93,13 @@ Sources of the columns
   oral-motor gesture draws the upper lip's vermilion back onto the incisor tip (spreading moves
   it 1.9-6.2 mm in the five others). The generator spreads them by a typical 1.5 mm instead
   (:attr:`SubjectFigures.spread_ul_mm`): their generated MIN UL is 0.30-0.50.
-- Everything else (the other subjects' jaw length and pellet placement, condyle, palate shape,
+- Everything else (the other subjects' jaw length above its floor, their pellet placement, condyle, palate shape,
   pharynx, lip height, tongue size) is this generator's choice: drawn once around typical adult
   values (larger for the male speakers) and frozen here. They are plausible, not measured.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -91,6 +108,16 @@ import numpy as np
 #: 42:1130, men) and Pietruski et al. 2022 (Aesthet. Plast. Surg., women). They place the resting
 #: lips here and set the face's closed-lip span (:data:`cassi.data.face.build.CLOSED_LIP_SPAN`).
 VERMILION_HEIGHTS_MM = {"M": (5.9, 11.15), "F": (6.47, 11.64)}
+
+
+def jaw_floor_mm(sex: str, lipthick: float) -> float:
+    """The shortest jaw length (mm, rounded up to 0.1) at which a subject's lipthick (UL-LL over
+    the jaw length in the first valid rows, thesis Figure 4.25) holds the closed vermilions of its
+    sex between the lip pellets (module docstring)."""
+    upper, lower = VERMILION_HEIGHTS_MM[sex]
+    return math.ceil(round((upper + lower) / lipthick * 10.0, 6)) / 10.0
+
+
 #: Resting lip midpoint above the incisor tip (mm) by sex, from published norms (see the module
 #: docstring): incisor display at rest minus half the vermilion-height difference.
 LIP_MID_BY_SEX = {sex: round(display - (VERMILION_HEIGHTS_MM[sex][1] - VERMILION_HEIGHTS_MM[sex][0])
@@ -257,7 +284,7 @@ SUBJECTS: dict[str, SubjectFigures] = {s.name: s for s in (
        gonion_mm=(-80.1, -24.6), gnathion_mm=(-1.8, -43.3),
        lip_mid_y_mm=LIP_MID_BY_SEX["M"], tongue_scale=0.99),
     _S("JW21", "F", 0.335453, 0.278352, 0.502530, 0.440367, 0.008934, 0.007164, 0.517419,
-       jaw_length_mm=33.9, mni_mm=(-1.5, -7.4), jaw_slope_deg=3.1, condyle_mm=(-77.4, 16.6),
+       jaw_length_mm=35.1, mni_mm=(-1.5, -7.4), jaw_slope_deg=3.1, condyle_mm=(-77.4, 16.6),
        palate=(-5.2, 9.0, 18.9, 15.1, 1.44, 0.17, -47.6, 10), pharynx_x_mm=(-82.0, -80.2),
        gonion_mm=(-82.7, -16.5), gnathion_mm=(-5.3, -39.8),
        lip_mid_y_mm=LIP_MID_BY_SEX["F"], tongue_scale=0.95),
@@ -267,12 +294,12 @@ SUBJECTS: dict[str, SubjectFigures] = {s.name: s for s in (
        gonion_mm=(-86.1, -21.5), gnathion_mm=(-6.9, -44.0),
        lip_mid_y_mm=LIP_MID_BY_SEX["M"], tongue_scale=0.99),
     _S("JW25", "F", 0.363746, 0.404857, 0.668489, 0.787208, 0.007766, 0.008383, 0.414120,
-       jaw_length_mm=32.0, mni_mm=(-1.5, -6.8), jaw_slope_deg=4.1, condyle_mm=(-79.9, 21.5),
+       jaw_length_mm=43.8, mni_mm=(-1.5, -6.8), jaw_slope_deg=4.1, condyle_mm=(-79.9, 21.5),
        palate=(-4.4, 10.2, 19.5, 13.1, 1.64, 0.09, -46.3, 10), pharynx_x_mm=(-74.2, -81.4),
        gonion_mm=(-78.4, -20.2), gnathion_mm=(-5.1, -39.8),
        lip_mid_y_mm=LIP_MID_BY_SEX["F"], tongue_scale=0.88),
     _S("JW27", "F", 0.349867, 0.342236, 0.639942, 0.535901, 0.007401, 0.005606, 0.442891,
-       jaw_length_mm=31.1, mni_mm=(-0.2, -6.5), jaw_slope_deg=6.0, condyle_mm=(-76.0, 16.9),
+       jaw_length_mm=40.9, mni_mm=(-0.2, -6.5), jaw_slope_deg=6.0, condyle_mm=(-76.0, 16.9),
        palate=(-4.8, 8.7, 16.7, 13.7, 1.44, 0.17, -50.2, 14), pharynx_x_mm=(-80.0, -79.5),
        gonion_mm=(-80.6, -17.2), gnathion_mm=(-6.8, -38.4),
        lip_mid_y_mm=LIP_MID_BY_SEX["F"], tongue_scale=0.89),
@@ -297,7 +324,7 @@ SUBJECTS: dict[str, SubjectFigures] = {s.name: s for s in (
        gonion_mm=(-85.1, -18.0), gnathion_mm=(-6.9, -44.4),
        lip_mid_y_mm=LIP_MID_REAL["JW45"], tongue_scale=1.0),
     _S("JW502", "F", 0.319526, 0.268207, 0.582271, 0.563677, 0.264849, -0.037349, 0.491017,
-       jaw_length_mm=34.1, mni_mm=(-0.3, -7.4), jaw_slope_deg=2.6, condyle_mm=(-82.2, 20.8),
+       jaw_length_mm=36.9, mni_mm=(-0.3, -7.4), jaw_slope_deg=2.6, condyle_mm=(-82.2, 20.8),
        palate=(-5.1, 7.3, 19.4, 13.4, 1.38, 0.08, -51.1, 13), pharynx_x_mm=(-81.4, -80.8),
        gonion_mm=(-82.7, -12.6), gnathion_mm=(-5.7, -42.6),
        lip_mid_y_mm=LIP_MID_BY_SEX["F"], tongue_scale=0.91),

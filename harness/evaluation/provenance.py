@@ -27,6 +27,7 @@ from typing import Iterable
 import numpy as np
 from cassi.harness.rubric import registry_table
 from cassi.harness.evaluation.config import package_version
+from cassi.common.digest import source_files, tree_digest
 from cassi.harness.farm.store import sha256_file
 
 #: The packages of cassi-farm whose code shapes a job's outputs. The reports and the benchmarks
@@ -38,7 +39,6 @@ EXCLUDED_PACKAGES = ("cassi.harness.bench",)
 #: tables' bytes (pyarrow), the renders (mitsuba, drjit) and the image checks (scikit-image).
 #: Upgrading one recomputes every job.
 RESULT_PACKAGES = ("numpy", "scipy", "pandas", "pyarrow", "mitsuba", "drjit", "scikit-image")
-_SKIP_DIRS = {"__pycache__"}
 VERSIONS_PACKAGE = "cassi.versions"
 
 
@@ -49,29 +49,6 @@ def _package_dirs(name: str) -> list[Path]:
     if spec.submodule_search_locations:
         return [Path(p) for p in spec.submodule_search_locations]
     return [Path(spec.origin)]
-
-
-def _files(root: Path, exclude: Iterable[Path] = ()) -> list[Path]:
-    exclude = [e.resolve() for e in exclude]
-    if root.is_file():
-        return [root]
-    return sorted(p for p in root.rglob("*") if p.is_file() and not _SKIP_DIRS & set(p.parts)
-                  and p.suffix not in (".pyc", ".pyo")
-                  and not any(p.resolve().is_relative_to(e) for e in exclude))
-
-
-def tree_digest(paths: Iterable[Path], *, exclude: Iterable[Path] = ()) -> str:
-    """SHA-256 over the relative names and bytes of every file under ``paths`` (sorted), less
-    the files under ``exclude``."""
-    exclude = list(exclude)
-    h = hashlib.sha256()
-    for root in paths:
-        for path in _files(root, exclude):
-            rel = path.name if path == root else path.relative_to(root).as_posix()
-            h.update(f"{root.name}/{rel}\0".encode())
-            h.update(path.read_bytes())
-            h.update(b"\0")
-    return h.hexdigest()
 
 
 def _module_imports(path: Path, package: str) -> set[str]:
@@ -92,7 +69,7 @@ def _versions_modules() -> dict[str, Path]:
     """Module name -> file of every module of cassi.versions."""
     mods = {}
     for root in _package_dirs(VERSIONS_PACKAGE):
-        for path in _files(root):
+        for path in source_files(root):
             if path.suffix == ".py":
                 stem = path.relative_to(root).with_suffix("").as_posix().replace("/", ".")
                 mods[f"{VERSIONS_PACKAGE}.{stem}".removesuffix(".__init__")] = path
@@ -122,7 +99,7 @@ def _version_sources(name: str) -> tuple[list[Path], list[Path]]:
     if module.startswith(VERSIONS_PACKAGE + "."):
         return [_versions_modules()[module]], []
     dirs = _package_dirs(module.split(".")[0])
-    return [f for d in dirs for f in _files(d) if f.suffix == ".py"], dirs
+    return [f for d in dirs for f in source_files(d) if f.suffix == ".py"], dirs
 
 
 @functools.lru_cache(maxsize=None)
@@ -157,7 +134,7 @@ def _shared_excluded() -> list[Path]:
 def shared_code_files() -> list[Path]:
     """The files :func:`code_digest` reads."""
     excluded = _shared_excluded()
-    return [f for root in _shared_roots() for f in _files(root, excluded)]
+    return [f for root in _shared_roots() for f in source_files(root, excluded)]
 
 
 @functools.lru_cache(maxsize=None)

@@ -113,11 +113,30 @@ def test_cache_directory_is_named_by_generator_version(tmp_path, monkeypatch):
     (stale / "corpus.json").write_text(json.dumps(
         {"synthetic": True, "generator_version": "2", "seed": 0, "subjects": list(SUBJECTS)}))
     assert not synth._complete(stale, 0)
-    (stale / "corpus.json").write_text(json.dumps(
-        {"synthetic": True, "generator_version": GENERATOR_VERSION, "seed": 0,
-         "subjects": list(SUBJECTS)}))
+    current = {"synthetic": True, "generator_version": GENERATOR_VERSION, "seed": 0,
+               "subjects": list(SUBJECTS), "generator_digest": synth.generator_digest()}
+    (stale / "corpus.json").write_text(json.dumps(current))
     assert synth._complete(stale, 0)
     assert GENERATOR_VERSION != "2"
+    # the generator's code changed without a bump of its version: not reused either
+    (stale / "corpus.json").write_text(json.dumps({**current, "generator_digest": "0" * 64}))
+    assert not synth._complete(stale, 0)
+
+
+def test_the_generator_digest_follows_the_subjects_table(tmp_path, monkeypatch):
+    import cassi.data.synth.corpus as synth
+    pkg = tmp_path / "synth"
+    pkg.mkdir()
+    (pkg / "subjects.py").write_text("JAW = 31.1\n")
+    monkeypatch.setattr(synth, "__file__", str(pkg / "corpus.py"))
+    synth.generator_digest.cache_clear()
+    try:
+        first = synth.generator_digest()
+        (pkg / "subjects.py").write_text("JAW = 40.9\n")
+        synth.generator_digest.cache_clear()
+        assert synth.generator_digest() != first
+    finally:
+        synth.generator_digest.cache_clear()
 
 
 def test_task_files_are_xrmb_shaped(small):

@@ -17,7 +17,8 @@ from cassi.data.synth.motion import (CLOSURE_PRESS, CLOSURE_PRESS_SD, DIPHTHONGS
                                      LIPS_PRESSED_MIN, OMEGA, PHONE_SPECS, Anatomy,
                                      expand_phones, jaw_transform, pellets, segment_targets,
                                      smooth)
-from cassi.data.synth.subjects import (LIP_MID_BY_SEX, LIP_MID_REAL, SUBJECTS, palate_y,
+from cassi.data.synth.subjects import (LIP_MID_BY_SEX, LIP_MID_REAL, SUBJECTS,
+                                      VERMILION_HEIGHTS_MM, jaw_floor_mm, palate_y,
                                       subject_figures)
 from cassi.data.synth.tasks import LEXICON, TASKS, word_phones
 from cassi.data.xrmb.files import read_pal, read_txy
@@ -141,6 +142,25 @@ def test_resting_lips_come_from_real_recordings_or_the_sex_norm():
         assert fig.lip_mid_y_mm == want, name
         _, xy = generate_task(fig, 13)
         assert 0.5 * (xy[0, 0, 1] + xy[0, 1, 1]) == pytest.approx(want, abs=0.3), name
+
+
+def test_every_jaw_holds_the_closed_vermilions_between_the_lip_pellets():
+    """Thesis 3.2.3 glues the lip pellets at the lips' outer edges and 4.2.3 takes lipthick where
+    the lips are lightly together: lipthick x jaw length is at least the closed vermilion span of
+    the subject's sex. Both real jaws pass the rule; a guessed jaw below its floor was raised to it."""
+    raised = {}
+    for name, fig in SUBJECTS.items():
+        span = sum(VERMILION_HEIGHTS_MM[fig.sex])
+        assert fig.lipthick * fig.jaw_length_mm >= span - 1e-9, name
+        if fig.jaw_length_mm == jaw_floor_mm(fig.sex, fig.lipthick):
+            raised[name] = fig.jaw_length_mm
+    for real in ("JW11", "JW45"):
+        assert SUBJECTS[real].lipthick * SUBJECTS[real].jaw_length_mm > sum(VERMILION_HEIGHTS_MM["M"]) + 4
+    assert raised == {"JW21": 35.1, "JW25": 43.8, "JW27": 40.9, "JW502": 36.9}
+    # the floor rounds up: 0.1 mm shorter would put the pellets inside the vermilions
+    for name, jaw in raised.items():
+        fig = SUBJECTS[name]
+        assert fig.lipthick * (jaw - 0.1) < sum(VERMILION_HEIGHTS_MM[fig.sex]), name
 
 
 def test_unknown_subject_names_the_known_ones():
