@@ -36,8 +36,8 @@ Sources of the columns
   18.11 mm women). A guess below that floor is raised to it, rounded up to 0.1 mm
   (:func:`jaw_floor_mm`): JW21 33.9 -> 35.1, JW25 32.0 -> 43.8, JW27 31.1 -> 40.9, JW502 34.1 ->
   36.9 mm (the guesses put JW25's and JW27's resting pellets 13.3 and 13.8 mm apart, thinner than
-  any adult's closed lips). The two real jaws bracket the raised ones' range (JW45 34.18, JW11
-  42.6 mm; the MNM pellet sits "in the vicinity of the area between the first and second
+  any adult's closed lips). Three of the raised jaws lie between the two real ones (JW45 34.18,
+  JW11 42.6 mm) and JW25's is 1.2 mm longer than JW11's (the MNM pellet sits "in the vicinity of the area between the first and second
   mandibular molars", 3.2.3, so its spacing from MNI varies with where it was glued). The rule
   was written down before any result of the raised jaws was looked at; what it moves is the
   face's scale (4.1.1), so the resting mouth, 1.39 times the jaw length, as well. The head
