@@ -220,11 +220,14 @@ def _combined(store: OutputStore, rows: list[tuple[str, BlobRef]]) -> pd.DataFra
     return table
 
 
-def collect(scheduler: Scheduler, attachments=()) -> tuple[pd.DataFrame, list[dict],
-                                                         list[dict]]:
+def collect(scheduler: Scheduler, attachments=()) -> tuple[pd.DataFrame, dict[str, list],
+                                                         dict[str, list]]:
     """The combined stored rows of every finished job, the render index and the attachment
-    index entries (the outputs named in ``attachments``)."""
-    rows, renders, attached = [], [], []
+    index entries (the outputs named in ``attachments``), each index as column lists."""
+    rows = []
+    # column lists, not a dict a row: a full set's 120,000 index rows
+    renders = {c: [] for c in RENDER_COLUMNS}
+    attached = {c: [] for c in ATTACHMENT_COLUMNS}
     for key in sorted(scheduler.records):
         manifest = scheduler.manifest(key)
         if manifest is None:
@@ -235,14 +238,26 @@ def collect(scheduler: Scheduler, attachments=()) -> tuple[pd.DataFrame, list[di
         job = scheduler.jobs[key]
         for name, ref in outputs.items():
             if name.startswith(RENDER_PREFIX) and name[len(RENDER_PREFIX):].isdigit():
-                renders.append({"subject": job.subject, "task": job.task, "rep": job.rep,
-                                "version": job.version, "view": job.view,
-                                "frame": int(name[len(RENDER_PREFIX):]), "path": ref.relpath})
+                _index_row(renders, job, frame=int(name[len(RENDER_PREFIX):]), path=ref.relpath)
             elif _attached(name, attachments):
-                attached.append({"subject": job.subject, "task": job.task, "rep": job.rep,
-                                 "version": job.version, "view": job.view, "name": name,
-                                 "path": ref.relpath})
+                _index_row(attached, job, name=name, path=ref.relpath)
     return _combined(scheduler.store, rows), renders, attached
+
+
+def _index_row(columns: dict[str, list], job, **values) -> None:
+    """Append one row of a job's output to an index held as column lists."""
+    for c in ("subject", "task", "rep", "version", "view"):
+        columns[c].append(getattr(job, c))
+    for c, v in values.items():
+        columns[c].append(v)
+
+
+def _index_frame(columns: dict[str, list], names) -> pd.DataFrame:
+    """An index's column lists as a table (an empty index: no rows, the named columns, as a
+    list of row dicts made it)."""
+    if not columns[names[0]]:
+        return pd.DataFrame([], columns=list(names))
+    return pd.DataFrame({c: columns[c] for c in names})
 
 
 def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterable[str],
@@ -267,12 +282,12 @@ def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterabl
     summary = Summary(records, time.perf_counter() - t0,
                       worker_crashes=getattr(executor, "crashes", 0),
                       reused=len(scheduler.store.reused))
-    render_index = pd.DataFrame(renders, columns=list(RENDER_COLUMNS)).sort_values(
+    render_index = _index_frame(renders, RENDER_COLUMNS).sort_values(
         ["subject", "task", "rep", "version", "view", "frame"], kind="mergesort")
     try:
         write_table_set(scheduler.store.root,
                         {"results": table, "ratings": rated, "renders": render_index,
-                         "attachments": pd.DataFrame(attached, columns=list(ATTACHMENT_COLUMNS))},
+                         "attachments": _index_frame(attached, ATTACHMENT_COLUMNS)},
                         {**summary.to_dict(), **(extra_meta or {})})
     except OSError as err:
         # A full disk or a directory gone read-only: every finished job's outputs are intact
