@@ -972,8 +972,7 @@ def write_report(run_dir: str | os.PathLike | Run, out_dir: str | os.PathLike, *
         agreement.json / .md / .csv beside index.html.
     """
     run = run_dir if isinstance(run_dir, Run) else load_run(run_dir)  # a caller's loaded run
-    previous = compare if isinstance(compare, Run) or compare is None else \
-        (load_run(compare) if compare else None)
+    previous = compare if isinstance(compare, Run) else (load_run(compare) if compare else None)
     # a bad ratings file is refused before anything is written
     agree = agreement(run, ratings, evidence_href) if ratings is not None else None
     out = Path(out_dir)

@@ -245,11 +245,10 @@ def collect(scheduler: Scheduler, attachments=()) -> tuple[pd.DataFrame, dict[st
 
 
 def _index_row(columns: dict[str, list], job, **values) -> None:
-    """Append one row of a job's output to an index held as column lists."""
-    for c in ("subject", "task", "rep", "version", "view"):
-        columns[c].append(getattr(job, c))
-    for c, v in values.items():
-        columns[c].append(v)
+    """Append one row of a job's output to an index held as column lists: ``values`` for the
+    output's own columns, the job's attributes for the rest."""
+    for c, column in columns.items():
+        column.append(values[c] if c in values else getattr(job, c))
 
 
 def _index_frame(columns: dict[str, list], names) -> pd.DataFrame:
