@@ -37,8 +37,9 @@ Sources of the columns
   (:func:`jaw_floor_mm`): JW21 33.9 -> 35.1, JW25 32.0 -> 43.8, JW27 31.1 -> 40.9, JW502 34.1 ->
   36.9 mm (the guesses put JW25's and JW27's resting pellets 13.3 and 13.8 mm apart, thinner than
   any adult's closed lips). Three of the raised jaws lie between the two real ones (JW45 34.18,
-  JW11 42.6 mm) and JW25's is 1.2 mm longer than JW11's (the MNM pellet sits "in the vicinity of the area between the first and second
-  mandibular molars", 3.2.3, so its spacing from MNI varies with where it was glued). The rule
+  JW11 42.6 mm) and JW25's is 1.2 mm longer than JW11's (the MNM pellet sits "in the vicinity
+  of the area between the first and second mandibular molars", 3.2.3, so its spacing from MNI
+  varies with where it was glued). The rule
   was written down before any result of the raised jaws was looked at; what it moves is the
   face's scale (4.1.1), so the resting mouth, 1.39 times the jaw length, as well. The head
   measures were derived with the former guesses and are kept, as for JW11: a longer pellet
@@ -93,9 +94,10 @@ Sources of the columns
   oral-motor gesture draws the upper lip's vermilion back onto the incisor tip (spreading moves
   it 1.9-6.2 mm in the five others). The generator spreads them by a typical 1.5 mm instead
   (:attr:`SubjectFigures.spread_ul_mm`): their generated MIN UL is 0.30-0.50.
-- Everything else (the other subjects' jaw length above its floor, their pellet placement, condyle, palate shape,
-  pharynx, lip height, tongue size) is this generator's choice: drawn once around typical adult
-  values (larger for the male speakers) and frozen here. They are plausible, not measured.
+- Everything else (the other subjects' jaw length above its floor, their pellet placement,
+  condyle, palate shape, pharynx, lip height, tongue size) is this generator's choice: drawn
+  once around typical adult values (larger for the male speakers) and frozen here. They are
+  plausible, not measured.
 """
 from __future__ import annotations
 

@@ -147,7 +147,8 @@ def test_resting_lips_come_from_real_recordings_or_the_sex_norm():
 def test_every_jaw_holds_the_closed_vermilions_between_the_lip_pellets():
     """Thesis 3.2.3 glues the lip pellets at the lips' outer edges and 4.2.3 takes lipthick where
     the lips are lightly together: lipthick x jaw length is at least the closed vermilion span of
-    the subject's sex. Both real jaws pass the rule; a guessed jaw below its floor was raised to it."""
+    the subject's sex. Both real jaws pass the rule; a guessed jaw below its floor was raised to
+    it."""
     raised = {}
     for name, fig in SUBJECTS.items():
         span = sum(VERMILION_HEIGHTS_MM[fig.sex])
@@ -155,7 +156,8 @@ def test_every_jaw_holds_the_closed_vermilions_between_the_lip_pellets():
         if fig.jaw_length_mm == jaw_floor_mm(fig.sex, fig.lipthick):
             raised[name] = fig.jaw_length_mm
     for real in ("JW11", "JW45"):
-        assert SUBJECTS[real].lipthick * SUBJECTS[real].jaw_length_mm > sum(VERMILION_HEIGHTS_MM["M"]) + 4
+        fig = SUBJECTS[real]
+        assert fig.lipthick * fig.jaw_length_mm > sum(VERMILION_HEIGHTS_MM["M"]) + 4
     assert raised == {"JW21": 35.1, "JW25": 43.8, "JW27": 40.9, "JW502": 36.9}
     # the floor rounds up: 0.1 mm shorter would put the pellets inside the vermilions
     for name, jaw in raised.items():
