@@ -130,6 +130,27 @@ class RaycastPass:
         dr.eval(packed, depth, rgb)
         return packed, depth, rgb
 
+    def region(self, rows: range, cols: range) -> tuple[np.ndarray, np.ndarray]:
+        """(mask int32, depth float32) of the pixels ``rows`` x ``cols`` only: the same rays
+        as the whole frame's (gathered from them), so the same values, without the shading."""
+        import drjit as dr
+        import mitsuba as mi
+
+        idx = (np.arange(rows.start, rows.stop)[:, None] * self.width
+               + np.arange(cols.start, cols.stop)[None, :]).ravel()
+        shape = (len(rows), len(cols))
+        if not idx.size:
+            return np.zeros(shape, np.int32), np.full(shape, np.inf, np.float32)
+        idx = mi.UInt32(idx.astype(np.uint32))
+        ray = dr.gather(type(self._ray), self._ray, idx)
+        pi = self._scene.ray_intersect_preliminary(ray, coherent=True)
+        hit = pi.is_valid() & (dr.reinterpret_array(mi.UInt32, pi.shape) == self._mesh_id)
+        part = dr.select(hit, dr.gather(mi.UInt32, self._tri_part, pi.prim_index, hit), 0)
+        depth = dr.select(hit, pi.t + dr.gather(mi.Float, self._near, idx), dr.inf)
+        dr.eval(part, depth)
+        return (np.asarray(part).astype(np.int32).reshape(shape),
+                np.asarray(depth).reshape(shape))
+
     def __call__(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(mask int32 (H, W), depth float32 (H, W), linear rgb float32 (H, W, 3),
         srgb uint8 (H, W, 3)) of the scene's current geometry."""

@@ -28,7 +28,7 @@ from cassi.common.errors import CassiInputError
 
 from cassi.renderer import raycast, scenes, shading
 from cassi.renderer.variant import activate_variant, choose_variant
-from cassi.renderer.views import Preset, View, mouth_box, preset as _preset, view as _view
+from cassi.renderer.views import Preset, View, mouth_box, preset as _preset, project, view as _view
 from cassi.renderer.images import to_srgb8
 from cassi.renderer.images import write_result
 
@@ -134,6 +134,12 @@ def _near_offset(view: View, preset: Preset) -> np.ndarray:
     sy = (1.0 - (np.arange(h) + 0.5) / h * 2.0) * tan
     cos = 1.0 / np.sqrt(1.0 + sx[None, :] ** 2 + sy[:, None] ** 2)
     return (view.camera.near_clip / cos).astype(np.float32)
+
+
+#: Pixels around the projected vertices of :meth:`FaceRenderer.render_region`'s parts: a part's
+#: pixels lie within its vertices' projection, and two pixels more hold the ring the image
+#: measures keep around them (:func:`cassi.harness.rubric.image.read_box`) with a pixel to spare.
+REGION_MARGIN = 2
 
 
 class FaceRenderer:
@@ -269,8 +275,9 @@ class FaceRenderer:
         return np.concatenate([expanded[m] for m in members]).astype(np.float32)
 
     # -- per frame -------------------------------------------------------------------------
-    def update(self, positions: np.ndarray) -> None:
-        """Move the mesh to ``positions`` (float (V, 3), Parke units, FaceModel numbering)."""
+    def update(self, positions: np.ndarray) -> dict[str, np.ndarray]:
+        """Move the mesh to ``positions`` (float (V, 3), Parke units, FaceModel numbering);
+        returns the parts' vertices (``topology.expand``)."""
         positions = np.asarray(positions)
         if positions.ndim != 2 or positions.shape[1] != 3:
             raise CassiInputError(f"positions must be (V, 3), not {positions.shape}")
@@ -279,7 +286,7 @@ class FaceRenderer:
         expanded = self.topology.expand(positions)
         if self._scene is None:
             self._load(expanded)
-            return
+            return expanded
         activate_variant(self.variant)
         changed = False
         for name, key in self._keys.items():
@@ -296,6 +303,7 @@ class FaceRenderer:
             changed = True
         if changed:
             self._params.update()
+        return expanded
 
     def render_pass(self) -> np.ndarray:
         """The preset's one colour-giving ``mi.render`` of the current geometry, as Mitsuba
@@ -349,6 +357,33 @@ class FaceRenderer:
         """(mask int32 (H, W), depth float32 (H, W)) of the current geometry."""
         mask, depth, _ = self.render_aov()
         return mask, depth
+
+    def render_region(self, positions: np.ndarray, parts) -> tuple[np.ndarray, np.ndarray,
+                                                                   tuple[int, int]]:
+        """Part mask and depth of the frame's region that holds the parts for which ``parts``
+        (a test of a part name) is true: ``(mask int32, depth float32, (row, column) of the
+        region in the frame)``. The region is the parts' vertices projected into the view
+        with a margin of :data:`REGION_MARGIN` pixels, clipped to the film; its pixels hold
+        the very values of a whole frame's (the same rays), and no pixel of those parts lies
+        outside it. Only the region's rays are traced and nothing is shaded: a frame whose
+        picture nobody looks at (JIT variants; scalar_rgb renders the frame and crops it)."""
+        expanded = self.update(positions)
+        points = [expanded[p] for p in self.part_names[1:] if p in expanded and parts(p)]
+        if not points:
+            return np.zeros((0, 0), np.int32), np.zeros((0, 0), np.float32), (0, 0)
+        px = project(self.view, self.preset, np.concatenate(points))
+        h, w = self.preset.height, self.preset.width
+        c0, r0 = np.floor(px.min(axis=0)).astype(int) - REGION_MARGIN
+        c1, r1 = np.ceil(px.max(axis=0)).astype(int) + REGION_MARGIN + 1
+        rows = range(min(h, max(0, int(r0))), max(0, min(h, int(r1))))
+        cols = range(min(w, max(0, int(c0))), max(0, min(w, int(c1))))
+        if self._raycast is not None:
+            mask, depth = self._raycast.region(rows, cols)
+        else:
+            mask, depth = self.render_mask()
+            mask, depth = mask[rows.start:rows.stop, cols.start:cols.stop], \
+                depth[rows.start:rows.stop, cols.start:cols.stop]
+        return mask, depth, (rows.start, cols.start)
 
     def render(self, positions: np.ndarray) -> RenderResult:
         """Render one frame: colour, mask and depth (one pass for raycast presets)."""

@@ -24,8 +24,9 @@ from cassi.reports import compare as cmp
 from cassi.reports.agree import agreement, write_agreement
 from cassi.reports import media, plots
 from cassi.reports.runio import Run, load_run, order_versions
-from cassi.harness.evaluation.frames import (COMPARED_TASKS, COMPARISON_VIEW, VIDEO_VIEWS, linked_frames,
-                                             video_grid)
+from cassi.harness.evaluation import frames as frame_policy
+from cassi.harness.evaluation.frames import (COMPARED_TASKS, COMPARISON_VIEW, VIDEO_VIEWS,
+                                             linked_frames, video_grid)
 from cassi.harness.evaluation.provenance import rubric_digest
 from cassi.harness.evaluation.stages import MASKS_OUTPUT
 from cassi.harness.farm.executors import LocalExecutor
@@ -55,11 +56,6 @@ GROUP_OPEN_UP_TO = 4
 #: A table longer than this many rows is embedded as data and drawn when it is opened (the
 #: silent checks of a subject page, the index's per-file criterion table).
 LAZY_ROWS = 200
-#: A run of more than this many task files (a full set: 1,800) gives its viewer pages the
-#: renders of each task file's first frame and of the frames of the checks that earned
-#: negatives only (the frames every link opens), not those of silent checks: the pictures
-#: were two thirds of a full set's report. A default night (57 files) keeps them all.
-ALL_RENDERS_UP_TO = 100
 
 
 def slug(text: str) -> str:
@@ -329,10 +325,16 @@ def _cell_faults(v: pd.DataFrame, text: str, links: dict, key: tuple) -> list[di
 
 
 def _large_run(run: Run) -> int | None:
-    """The run's number of task files when it has more than :data:`ALL_RENDERS_UP_TO` (a full
-    set: its viewer pages carry fewer renders and its videos are made on demand), else None."""
-    files = len(run.results[["subject", "task", "rep"]].drop_duplicates())
-    return files if files > ALL_RENDERS_UP_TO else None
+    """The run's number of task files when it is a large run (:func:`~cassi.harness.evaluation.frames.large_run`, a full set:
+    its viewer pages carry fewer renders and its videos are made on demand), else None. The
+    usable task files the run planned, as its render plan counted them (``run.json``), else
+    those with results."""
+    planned = run.meta.get("tasks_resolved")
+    if planned:
+        files = sum(1 for t in planned if len(t) > 3 and t[3])
+    else:
+        files = len(run.results[["subject", "task", "rep"]].drop_duplicates())
+    return files if frame_policy.large_run(files) else None
 
 
 def _renders_rule(run: Run, fv: pd.DataFrame) -> tuple[set | None, str | None]:
@@ -345,7 +347,7 @@ def _renders_rule(run: Run, fv: pd.DataFrame) -> tuple[set | None, str | None]:
     fired = fv[fv["raw_negatives"] > 0]
     keys = {(s, int(t), int(r), v, c) for s, t, r, v, c in zip(
         fired["subject"], fired["task"], fired["rep"], fired["version"], fired["check"])}
-    return keys, (f"This run has {files} task files (more than {ALL_RENDERS_UP_TO}): the "
+    return keys, (f"This run has {files} task files (more than {frame_policy.ALL_RENDERS_UP_TO}): the "
                   "renders here are the first frame's and those of the frames of checks that "
                   "earned negatives, not of silent checks' frames.")
 
@@ -765,7 +767,7 @@ def _videos_note(run: Run) -> dict | None:
     made = sorted(set(int(t) for t in run.renders["task"]) & set(COMPARED_TASKS))
     here = (f"here task{'s' if len(made) > 1 else ''} {' and '.join(map(str, made))}" if made
             else "and it has none of them")
-    return {"text": f"This run has {files} task files (more than {ALL_RENDERS_UP_TO}): it makes "
+    return {"text": f"This run has {files} task files (more than {frame_policy.ALL_RENDERS_UP_TO}): it makes "
                     "videos only for the tasks whose versions the thesis compares side by side "
                     f"({compared}), {here}. Any other task file's video is made on demand: its "
                     "task viewer plays every version in any view, and this command writes one:",

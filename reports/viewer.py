@@ -197,7 +197,7 @@ def mask_overlay(blob: bytes, frame: int, dest: Path) -> Path:
     """An RGBA PNG of what the image checks read in a frame (``masks-<frame>`` blob): lips,
     upper and lower teeth (split as the checks split them), tongue and the mouth opening,
     coloured as :data:`MASK_COLOURS`, transparent elsewhere; shown over the render."""
-    fm = FrameMasks.of(frame, read_masks_blob(blob))
+    fm = FrameMasks.of(frame, read_masks_blob(blob).full())
     layers = {"lips": fm.lips, "upper_teeth": fm.upper_teeth, "lower_teeth": fm.lower_teeth,
               "tongue": fm.tongue, "opening": mouth_opening(fm.lips) & ~fm.teeth & ~fm.tongue}
     rgba = np.zeros((*fm.lips.shape, 4), np.uint8)

@@ -11,7 +11,10 @@ What a night keeps, and why (measured on the default nightly, docs/farm.md "Disk
   previous night and the goldens;
 - the front view on the ``animate_stride`` grid for every version: the frames the image checks
   judge (their masks, the only masks kept) on the same frames for every version, and the
-  versions side by side in one front-view video per task file;
+  versions side by side in one front-view video per task file. A large run (a full set,
+  :func:`large_run`) makes videos of the :data:`COMPARED_TASKS` only, so the other files' grid
+  frames are rendered as masks only (:func:`masks_only`): no picture, only the region that
+  holds what the image checks read, the same masks at about 2.7 ms a frame against 6;
 - the side, half and top views on that grid only for the ``video_versions`` (a four-view
   video each): none by default, since the report's task viewer (and `cassi export --format
   gltf`) shows any view of any version from geometry. cassi-2.1's four-view grid was 10,968
@@ -41,6 +44,32 @@ VIDEO_VIEWS = ("front", "side", "half", "top")
 #: Tasks whose versions are compared side by side (front view) in the nightly report.
 COMPARED_TASKS = (JAW_WAGGING_TASK, MAX_PROTRUSION_TASK)
 COMPARISON_VIEW = "front"
+#: A run of more than this many usable task files is a large one (a full set: 1,800): its
+#: report's viewer pages carry the renders of first frames and of the frames of checks that
+#: earned negatives only (the frames every link opens; the pictures were two thirds of a full
+#: set's report), it makes videos of the :data:`COMPARED_TASKS` only, and so the other task
+#: files' video grid is rendered as masks only where the image checks judge it
+#: (:func:`masks_only`). A default night (57 files) keeps them all.
+ALL_RENDERS_UP_TO = 100
+
+
+def large_run(files: int) -> bool:
+    """Whether a run of ``files`` usable task files is a large one (:data:`ALL_RENDERS_UP_TO`)."""
+    return files > ALL_RENDERS_UP_TO
+
+
+def masks_only(tasks, views) -> frozenset:
+    """(subject, task, rep, view) whose judged frames beyond the first and the check frames get
+    no picture (:attr:`cassi.harness.farm.plan.BatchPlan.masks_only`): in a large run, the
+    judged views of every task file but the :data:`COMPARED_TASKS`, whose videos it does not
+    make. A night of 1,696 task files otherwise encodes and stores 800,000 pictures nobody
+    sees."""
+    usable = [t for t in tasks if t.usable]
+    if not large_run(len(usable)):
+        return frozenset()
+    return frozenset((t.subject, t.task, t.rep, view) for t in usable
+                     if t.task not in COMPARED_TASKS
+                     for view in views if view in image_views(t.task))
 
 
 def select_frames(first: int, last: int, *, stride: int, extremes=()) -> list[int]:

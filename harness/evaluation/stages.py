@@ -12,6 +12,7 @@ import platform
 import re
 import shutil
 import tempfile
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Mapping
@@ -34,7 +35,7 @@ from cassi.harness.evaluation.inputs import (read_planned, verify_code, verify_p
 from cassi.harness.farm.jobs import Job, SkipJob, StageContext, StageOutput, npz_bytes
 from cassi.harness.farm.runner import Pipeline
 from cassi.harness.rubric.frames import CHUNK_FRAMES, FileFrames
-from cassi.harness.rubric.image import depth_read
+from cassi.harness.rubric.image import depth_read, is_read, read_box
 from cassi.harness.rubric.measures import CRITERION_DIAGNOSTICS, DIAGNOSTICS_READ
 from cassi.renderer.images import png_bytes
 from cassi.renderer.views import PRESET_NAMES, VIEW_NAMES
@@ -243,48 +244,89 @@ def _png_bytes(srgb: np.ndarray, metadata: dict | None = None) -> bytes:
 
 
 class StoredFrame:
-    """A rendered frame as the image checks need it, rebuilt from a render job's outputs."""
+    """A rendered frame as the image checks need it, rebuilt from a render job's outputs: the
+    crop of the frame that holds what they read (``mask``, ``depth``) at ``origin`` (row,
+    column) of a frame of ``shape`` (H, W)."""
 
-    def __init__(self, mask: np.ndarray, depth: np.ndarray, part_names: tuple[str, ...]):
+    def __init__(self, mask: np.ndarray, depth: np.ndarray, part_names: tuple[str, ...],
+                 origin: tuple[int, int] = (0, 0), shape: tuple[int, int] | None = None):
         self.mask, self.depth, self.part_names = mask, depth, part_names
+        self.origin = (int(origin[0]), int(origin[1]))
+        self.shape = tuple(int(n) for n in (shape if shape is not None else mask.shape))
+
+    def full(self) -> "StoredFrame":
+        """The whole frame: background (part 0, depth inf) outside the crop."""
+        if self.shape == tuple(self.mask.shape):
+            return self
+        (r, c), (h, w) = self.origin, self.mask.shape
+        mask = np.zeros(self.shape, self.mask.dtype)
+        depth = np.full(self.shape, np.inf, np.float32)
+        mask[r:r + h, c:c + w], depth[r:r + h, c:c + w] = self.mask, self.depth
+        return StoredFrame(mask, depth, self.part_names, (0, 0), self.shape)
 
 
 #: The ``masks-<frame>`` blob's format, a run option and so part of every job's digest: a store
 #: written in another format recomputes instead of being read as this one. 1: mask and the
 #: whole depth image (53 of a front frame's 55 KB deflated). 2: depth only where the image
 #: measures read it (:func:`cassi.harness.rubric.image.depth_read`: teeth and tongue), exact
-#: float32 there and inf elsewhere, as for background (about 2 KB a frame).
-MASKS_FORMAT = 2
+#: float32 there and inf elsewhere, as for background (about 2 KB a frame). 3: only the crop
+#: that holds the parts the measures read (:func:`cassi.harness.rubric.image.read_box`), with
+#: its place in the frame: the same values for every measure, and a sixth of format 2's
+#: encoding and the image checks' work.
+MASKS_FORMAT = 3
 #: The masks outputs' name prefix (``masks-<frame:06d>``), listed as run attachments.
 MASKS_OUTPUT = "masks-"
 
 
-def masks_blob(mask: np.ndarray, depth: np.ndarray, part_names) -> bytes:
-    """A frame's ``masks-<frame>`` blob: npz, deflated, ``mask`` uint8 (H, W) part ids,
-    ``depth`` float32 (H, W) Parke units where :func:`depth_read` (inf elsewhere),
-    ``part_names``. The image measures read the same values as from the full depth image."""
+def masks_blob(mask: np.ndarray, depth: np.ndarray, part_names, *, origin=(0, 0),
+               shape=None) -> bytes:
+    """A frame's ``masks-<frame>`` blob: npz, deflated, of the crop :func:`read_box` of
+    ``mask`` (part ids, a frame of ``shape``, or the part of one at ``origin``): ``mask`` uint8
+    part ids, ``depth`` float32 Parke units where :func:`depth_read` (inf elsewhere),
+    ``part_names``, ``origin`` (row, column in the frame) and ``shape`` (the frame's H, W)."""
     mask = np.asarray(mask)
     if mask.max(initial=0) > 255:
         raise ValueError("more than 255 parts: masks are stored as uint8")
-    kept = np.where(depth_read(mask, part_names), np.asarray(depth, np.float32),
+    shape = tuple(mask.shape) if shape is None else tuple(shape)
+    (h, w), ids = mask.shape, [i for i, n in enumerate(part_names) if is_read(n)]
+    edges = [e for e, cut in ((mask[0], origin[0] > 0), (mask[:, 0], origin[1] > 0),
+                              (mask[-1], origin[0] + h < shape[0]),
+                              (mask[:, -1], origin[1] + w < shape[1])) if cut] if mask.size else []
+    if any(np.isin(e, ids).any() for e in edges):
+        # what the measures read, and the ring around it, must lie in the rendered region
+        raise ValueError(f"the rendered region {h}x{w} at {tuple(origin)} of a {shape} frame "
+                         "cuts the parts the image measures read")
+    r0, r1, c0, c1 = read_box(mask, part_names)
+    mask = mask[r0:r1, c0:c1]
+    kept = np.where(depth_read(mask, part_names), np.asarray(depth, np.float32)[r0:r1, c0:c1],
                     np.float32(np.inf))
     return npz_bytes(mask=mask.astype(np.uint8), depth=kept,
-                     part_names=np.asarray(part_names, dtype=str), compressed=True)
+                     part_names=np.asarray(part_names, dtype=str),
+                     origin=np.asarray([origin[0] + r0, origin[1] + c0], np.int32),
+                     shape=np.asarray(shape, np.int32), compressed=True)
 
 
 def read_masks_blob(data: bytes) -> StoredFrame:
-    """A ``masks-<frame>`` blob (:func:`masks_blob`) as the image checks read it."""
+    """A ``masks-<frame>`` blob (:func:`masks_blob`) as the image checks read it: the crop
+    (:meth:`StoredFrame.full` for the whole frame)."""
     d = np.load(io.BytesIO(data))
-    return StoredFrame(d["mask"].astype(np.int32), d["depth"],
-                       tuple(str(n) for n in d["part_names"]))
+    names = tuple(str(n) for n in d["part_names"])
+    if "origin" not in d:  # format 2: the whole frame
+        return StoredFrame(d["mask"].astype(np.int32), d["depth"], names)
+    return StoredFrame(d["mask"].astype(np.int32), d["depth"], names,
+                       tuple(d["origin"].tolist()), tuple(d["shape"].tolist()))
 
 
 def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> StageOutput:
     """Render ``job.frames`` of ``job.view``.
 
-    Outputs: one PNG per frame (``render-<frame>``) and, for the frames the task's image checks
-    judge (their views, not an evidence job's frames), ``masks-<frame>`` (:func:`masks_blob`).
-    Nothing else reads masks, and a night's masks of every view were 6.9 GB written and hashed.
+    Outputs: one PNG per frame (``render-<frame>``; none for a job of masks only,
+    ``job.pictures`` False) and, for the frames the task's image checks judge (their views,
+    not an evidence job's frames), ``masks-<frame>`` (:func:`masks_blob`). Nothing else reads
+    masks, and a night's masks of every view were 6.9 GB written and hashed. A job of masks
+    only traces the rays of the region that holds what the image measures read
+    (:meth:`~cassi.renderer.render.FaceRenderer.render_region`): the same masks, at a third of
+    a pictured frame's cost.
     """
     judged = not job.evidence and job.view in image_views(job.task)
 
@@ -298,8 +340,17 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
     face = get_version_face(corpus, job.subject, profile, get_version(job.version))
     renderer = get_renderer(corpus, job.subject, face, job.view, ctx.preset, ctx.variant)
     files = {}
+    t0 = time.perf_counter()
     seconds = 0.0
     for f in job.frames:
+        if not job.pictures:
+            if not judged:
+                raise ValueError(f"{job.key}: masks only of frames no image check judges")
+            mask, depth, origin = renderer.render_region(positions[all_frames.index(f)], is_read)
+            files[f"{MASKS_OUTPUT}{f:06d}"] = (masks_blob(
+                mask, depth, renderer.part_names, origin=origin,
+                shape=(renderer.preset.height, renderer.preset.width)), ".npz")
+            continue
         res = renderer.render(positions[all_frames.index(f)])
         seconds += float(getattr(res, "render_s", 0.0))
         meta = {"subject": job.subject, "task": job.task, "rep": job.rep,
@@ -309,8 +360,11 @@ def render_stage(job: Job, ctx: StageContext, inputs: Mapping[str, bytes]) -> St
         if not judged:
             continue
         files[f"{MASKS_OUTPUT}{f:06d}"] = (masks_blob(res.mask, res.depth, res.part_names), ".npz")
+    if not job.pictures:
+        seconds = time.perf_counter() - t0
+    what = "frame(s)" if job.pictures else "frame(s), masks only,"
     return StageOutput(files=files, meta={"render_s": round(seconds, 3)},
-                       log=[f"rendered {len(job.frames)} frame(s) of {job.view} "
+                       log=[f"rendered {len(job.frames)} {what} of {job.view} "
                             f"({ctx.preset}, {renderer.variant}) in {seconds:.2f} s"])
 
 

@@ -76,6 +76,9 @@ class Job:
     evidence : bool
         A render job of evidence frames only (the frames the report links to), which no image
         job judges; its chunks are counted apart from the judged ones.
+    pictures : bool
+        Whether a render job keeps a picture of each frame. False: masks only, for frames an
+        image job judges and nobody looks at (``.../masks-NNN``, counted apart too).
     parents : tuple of str
         Keys of the jobs whose outputs this one reads (a render job's geometry job, an image
         job's render chunks).
@@ -99,6 +102,7 @@ class Job:
     frames: tuple[int, ...] = ()
     chunk: int = 0
     evidence: bool = False
+    pictures: bool = True
     parents: tuple[str, ...] = ()
     parent_digest: str = ""
     inputs: str = ""
@@ -108,12 +112,13 @@ class Job:
     def key(self) -> str:
         """A readable, path-safe, unique name: ``JW11/019-1/cassi-2.1/geometry``,
         ``JW11/019-1/cassi-2.1/front/render-000``, ``JW11/019-1/cassi-2.1/front/evidence-000``,
+        ``JW11/019-1/cassi-2.1/front/masks-000``,
         ``JW11/019-1/cassi-2.1/front/checks``."""
         head = f"{self.subject}/{self.task:03d}-{self.rep}/{self.version}"
         if self.stage == "geometry":
             return f"{head}/{GEOMETRY_VIEW}"
         if self.stage == "render":
-            kind = "evidence" if self.evidence else "render"
+            kind = "evidence" if self.evidence else "render" if self.pictures else "masks"
             return f"{head}/{self.view}/{kind}-{self.chunk:03d}"
         return f"{head}/{self.view}/checks"
 

@@ -9,6 +9,7 @@ scheduler (:mod:`.runner`) asks the plan what a finished job unlocks.
 The dependency graph, per task file and version::
 
     geometry ──> render(view, chunk 0..n) ──> image(view)      for every view
+             ├─> masks(view, chunk 0..k) ───┘                  (masks only: see masks_only)
              └─> evidence render(view, chunk 0..m)              (no image job reads them)
 """
 from __future__ import annotations
@@ -63,6 +64,9 @@ class BatchPlan:
         Frames per render job.
     images : bool
         Whether each view's renders are followed by an image job.
+    masks_only : frozenset of (subject, task, rep, view)
+        Where the judged frames other than ``meta["render_frames"]`` (a video's grid whose
+        video is not made) are rendered as masks only, for the image job, with no picture.
     """
 
     geometry: tuple[Job, ...]
@@ -70,10 +74,11 @@ class BatchPlan:
     views: tuple[str, ...]
     chunk_size: int
     images: bool
+    masks_only: frozenset = frozenset()
 
     @classmethod
     def build(cls, tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterable[str], *,
-              chunk_size: int, render: bool, images: bool) -> "BatchPlan":
+              chunk_size: int, render: bool, images: bool, masks_only=()) -> "BatchPlan":
         versions = list(versions)
         geometry, skipped = [], []
         for spec in tasks:
@@ -86,7 +91,7 @@ class BatchPlan:
                     skipped.append((job, spec.reason or "task file not usable"))
         views = tuple(v for v in views if v != GEOMETRY_VIEW) if render else ()
         return cls(tuple(geometry), tuple(skipped), views, max(1, int(chunk_size)),
-                   bool(images and views))
+                   bool(images and views), frozenset(masks_only) if images else frozenset())
 
     @staticmethod
     def judged_frames(meta: Mapping, view: str) -> list[int]:
@@ -104,24 +109,40 @@ class BatchPlan:
 
     def render_jobs(self, geometry: Job, manifest: Mapping) -> dict[str, tuple[Job, ...]]:
         """The render chunks of :meth:`judged_frames` a finished geometry job unlocks, per
-        view: together, the frames the view's image job judges."""
-        return self._chunks(geometry, manifest, self.judged_frames, evidence=False)
+        view: together, the frames the view's image job judges. Where :attr:`masks_only`
+        says so, those beyond ``meta["render_frames"]`` are chunks of masks only."""
+        pictured = self._chunks(geometry, manifest, self._pictured, evidence=False)
+        masks = self._chunks(geometry, manifest, self._masks_only, evidence=False,
+                             pictures=False)
+        return {view: pictured[view] + masks[view] for view in pictured}
+
+    def _masks_only(self, meta: Mapping, view: str, geometry: Job) -> list[int]:
+        if (geometry.subject, geometry.task, geometry.rep, view) not in self.masks_only:
+            return []
+        shown = {int(f) for f in meta.get("render_frames", [])}
+        return [f for f in self.judged_frames(meta, view) if int(f) not in shown]
+
+    def _pictured(self, meta: Mapping, view: str, geometry: Job) -> list[int]:
+        left = set(self._masks_only(meta, view, geometry))
+        return [f for f in self.judged_frames(meta, view) if f not in left]
 
     def evidence_jobs(self, geometry: Job, manifest: Mapping) -> dict[str, tuple[Job, ...]]:
         """The render chunks of :meth:`evidence_frames` a finished geometry job unlocks, per
         view (views without any left out): rendered and listed, never judged."""
-        out = self._chunks(geometry, manifest, self.evidence_frames, evidence=True)
+        out = self._chunks(geometry, manifest,
+                           lambda meta, view, _: self.evidence_frames(meta, view), evidence=True)
         return {view: jobs for view, jobs in out.items() if jobs}
 
-    def _chunks(self, geometry: Job, manifest: Mapping, frames_of, *,
-                evidence: bool) -> dict[str, tuple[Job, ...]]:
+    def _chunks(self, geometry: Job, manifest: Mapping, frames_of, *, evidence: bool,
+                pictures: bool = True) -> dict[str, tuple[Job, ...]]:
         meta = manifest.get("meta", {})
         parent = outputs_digest([manifest])
         return {view: tuple(
             Job("render", *geometry.task_key, view, chunk, i, evidence=evidence,
-                parents=(geometry.key,), parent_digest=parent, inputs=geometry.inputs,
-                reads=geometry.reads)
-            for i, chunk in enumerate(chunk_frames(frames_of(meta, view), self.chunk_size)))
+                pictures=pictures, parents=(geometry.key,), parent_digest=parent,
+                inputs=geometry.inputs, reads=geometry.reads)
+            for i, chunk in enumerate(chunk_frames(frames_of(meta, view, geometry),
+                                                   self.chunk_size)))
             for view in self.views}
 
     @staticmethod
@@ -129,7 +150,7 @@ class BatchPlan:
         """A view's image job: every frame of its render chunks, after all of them."""
         first = renders[0]
         return Job("image", *first.task_key, first.view,
-                   tuple(f for job in renders for f in job.frames),
+                   tuple(sorted(f for job in renders for f in job.frames)),
                    parents=tuple(job.key for job in renders),
                    parent_digest=outputs_digest(manifests), inputs=first.inputs,
                    reads=first.reads)

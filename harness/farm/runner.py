@@ -261,18 +261,19 @@ def _index_frame(columns: dict[str, list], names) -> pd.DataFrame:
 
 def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterable[str],
               pipeline: Pipeline, ctx: StageContext, executor, *, progress: bool = True,
-              extra_meta: dict | None = None) -> RunResult:
+              extra_meta: dict | None = None, masks_only=()) -> RunResult:
     """Plan and run every job of ``tasks x versions`` (and their renders and image checks),
     then write the run's tables as one set.
 
     The caller prepares ``ctx.out_dir`` (:meth:`OutputStore.prepare`) and holds its lock.
+    ``masks_only``: :attr:`BatchPlan.masks_only`.
     Writes ``results``, ``ratings``, ``renders`` and ``attachments`` (``.parquet`` + ``.csv``),
     ``summary.json`` and ``tables.json`` there.
     """
     t0 = time.perf_counter()
     plan = BatchPlan.build(tasks, versions, views, chunk_size=ctx.chunk_size,
                            render=pipeline.render is not None,
-                           images=pipeline.image is not None)
+                           images=pipeline.image is not None, masks_only=masks_only)
     scheduler = Scheduler(plan, pipeline, ctx, executor, progress=progress)
     records = scheduler.run()
     table, renders, attached = collect(scheduler, pipeline.attachments)

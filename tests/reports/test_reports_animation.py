@@ -130,8 +130,8 @@ def test_every_task_file_becomes_a_video_and_versions_compare(tmp_path, monkeypa
 
     # A run past the large-run limit (a full set) makes the compared tasks' videos only, and
     # its index says how to get any other.
-    from cassi.reports import report as report_module
-    monkeypatch.setattr(report_module, "ALL_RENDERS_UP_TO", 1)
+    from cassi.harness.evaluation import frames as frame_policy
+    monkeypatch.setattr(frame_policy, "ALL_RENDERS_UP_TO", 1)
     index = write_report(tmp_path / "run", tmp_path / "large").read_text()
     assert (tmp_path / "large" / "animations" / "JW45_118_1_front.mp4").is_file()
     assert not (tmp_path / "large" / "animations" / "JW45_005_1_front.mp4").exists()

@@ -13,7 +13,8 @@ from browsers import chromium
 from reports_fixtures import image, write_run
 from cassi.harness.farm.results import normalize
 from cassi.harness.rubric import file_verdicts
-from cassi.reports.report import (ALL_RENDERS_UP_TO, GROUP_OPEN_UP_TO, LAZY_ROWS, _image_store,
+from cassi.harness.evaluation.frames import ALL_RENDERS_UP_TO
+from cassi.reports.report import (GROUP_OPEN_UP_TO, LAZY_ROWS, _image_store,
                                   _renders_rule, _viewer_images, write_report)
 from cassi.reports.runio import load_run
 

@@ -35,10 +35,15 @@ def _frame():
 def test_mask_blob_keeps_depth_exactly_where_read_and_measures_are_unchanged():
     mask, depth = _frame()
     stored = read_masks_blob(masks_blob(mask, depth, NAMES))
-    assert np.array_equal(stored.mask, mask)
+    # the crop of what the measures read (lips rows 20-39, columns 15-49) and a ring of one pixel
+    assert stored.origin == (19, 14) and stored.mask.shape == (22, 37)
+    assert stored.shape == (64, 64)
+    whole = stored.full()
+    assert np.array_equal(whole.mask[19:41, 14:51], mask[19:41, 14:51])
+    assert not whole.mask[:19].any() and not whole.mask[41:].any()
     read = np.isin(mask, [3, 4, 5])
-    assert np.array_equal(stored.depth[read], depth[read])
-    assert np.all(np.isinf(stored.depth[~read]))
+    assert np.array_equal(whole.depth[read], depth[read])
+    assert np.all(np.isinf(whole.depth[~read]))
 
     class Full:
         pass
