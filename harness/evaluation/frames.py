@@ -58,18 +58,23 @@ def large_run(files: int) -> bool:
     return files > ALL_RENDERS_UP_TO
 
 
+def judged_views(tasks, views) -> frozenset:
+    """(subject, task, rep, view) of the usable task files' :func:`image_views` among
+    ``views``: the views an image job follows
+    (:attr:`cassi.harness.farm.plan.BatchPlan.judged`)."""
+    return frozenset((t.subject, t.task, t.rep, view) for t in tasks if t.usable
+                     for view in views if view in image_views(t.task))
+
+
 def masks_only(tasks, views) -> frozenset:
     """(subject, task, rep, view) whose judged frames beyond the first and the check frames get
     no picture (:attr:`cassi.harness.farm.plan.BatchPlan.masks_only`): in a large run, the
     judged views of every task file but the :data:`COMPARED_TASKS`, whose videos it does not
     make. A night of 1,696 task files otherwise encodes and stores 800,000 pictures nobody
     sees."""
-    usable = [t for t in tasks if t.usable]
-    if not large_run(len(usable)):
+    if not large_run(sum(1 for t in tasks if t.usable)):
         return frozenset()
-    return frozenset((t.subject, t.task, t.rep, view) for t in usable
-                     if t.task not in COMPARED_TASKS
-                     for view in views if view in image_views(t.task))
+    return frozenset(k for k in judged_views(tasks, views) if k[1] not in COMPARED_TASKS)
 
 
 def select_frames(first: int, last: int, *, stride: int, extremes=()) -> list[int]:

@@ -23,7 +23,7 @@ from cassi.harness.farm.runner import Pipeline, RunResult, run_batch
 from cassi.harness.farm.store import OutputStore
 from cassi.harness.farm.workers import worker_env
 from cassi.harness.evaluation.caches import get_corpus, get_profile
-from cassi.harness.evaluation.frames import masks_only, render_budget
+from cassi.harness.evaluation.frames import judged_views, masks_only, render_budget
 from cassi.harness.evaluation.stages import MASKS_FORMAT, cassi_pipeline, catalog
 from cassi.renderer.variant import choose_variant
 
@@ -190,7 +190,8 @@ def _run(cfg, executor, corpus, tasks, versions, views, variant, synthetic, pipe
         atomic_write_text(store.root / "run.json", json.dumps(meta, indent=1, default=str))
         result = run_batch(tasks, versions, views, pipeline, ctx, executor,
                            progress=progress, extra_meta={"synthetic": synthetic},
-                           masks_only=masks_only(tasks, views))
+                           masks_only=masks_only(tasks, views),
+                           judged=judged_views(tasks, views))
         meta["summary"] = result.summary.to_dict()
         meta["finished"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
         atomic_write_text(store.root / "run.json", json.dumps(meta, indent=1, default=str))

@@ -67,6 +67,9 @@ class BatchPlan:
     masks_only : frozenset of (subject, task, rep, view)
         Where the judged frames other than ``meta["render_frames"]`` (a video's grid whose
         video is not made) are rendered as masks only, for the image job, with no picture.
+    judged : frozenset of (subject, task, rep, view), or None
+        The views an image job follows (None: every view): a view no image check judges
+        has none, which would only read its renders to find nothing to judge.
     """
 
     geometry: tuple[Job, ...]
@@ -75,10 +78,12 @@ class BatchPlan:
     chunk_size: int
     images: bool
     masks_only: frozenset = frozenset()
+    judged: frozenset | None = None
 
     @classmethod
     def build(cls, tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterable[str], *,
-              chunk_size: int, render: bool, images: bool, masks_only=()) -> "BatchPlan":
+              chunk_size: int, render: bool, images: bool, masks_only=(),
+              judged=None) -> "BatchPlan":
         versions = list(versions)
         geometry, skipped = [], []
         for spec in tasks:
@@ -91,7 +96,14 @@ class BatchPlan:
                     skipped.append((job, spec.reason or "task file not usable"))
         views = tuple(v for v in views if v != GEOMETRY_VIEW) if render else ()
         return cls(tuple(geometry), tuple(skipped), views, max(1, int(chunk_size)),
-                   bool(images and views), frozenset(masks_only) if images else frozenset())
+                   bool(images and views), frozenset(masks_only) if images else frozenset(),
+                   None if judged is None else frozenset(judged))
+
+    def judges(self, render: Job) -> bool:
+        """Whether an image job follows ``render``'s view (its judged chunks, not evidence)."""
+        return self.images and not render.evidence and (
+            self.judged is None
+            or (render.subject, render.task, render.rep, render.view) in self.judged)
 
     @staticmethod
     def judged_frames(meta: Mapping, view: str) -> list[int]:

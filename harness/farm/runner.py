@@ -177,13 +177,14 @@ class Scheduler:
         if job.stage == "geometry" and manifest is not None:
             for chunks in self.plan.render_jobs(job, manifest).values():
                 for chunk in chunks:
-                    self.chunks[chunk.key] = chunks
+                    if self.plan.judges(chunk):
+                        self.chunks[chunk.key] = chunks
                 for chunk in chunks:
                     self._schedule(chunk)
             for chunks in self.plan.evidence_jobs(job, manifest).values():
                 for chunk in chunks:  # rendered for the report only: no image job waits on them
                     self._schedule(chunk)
-        elif job.stage == "render" and self.plan.images and not job.evidence:
+        elif job.stage == "render" and self.plan.judges(job):
             siblings = self.chunks[job.key]
             if not all(self.records.get(s.key, JobRecord(s.key, "render")).state.finished
                        for s in siblings):
@@ -261,19 +262,20 @@ def _index_frame(columns: dict[str, list], names) -> pd.DataFrame:
 
 def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterable[str],
               pipeline: Pipeline, ctx: StageContext, executor, *, progress: bool = True,
-              extra_meta: dict | None = None, masks_only=()) -> RunResult:
+              extra_meta: dict | None = None, masks_only=(), judged=None) -> RunResult:
     """Plan and run every job of ``tasks x versions`` (and their renders and image checks),
     then write the run's tables as one set.
 
     The caller prepares ``ctx.out_dir`` (:meth:`OutputStore.prepare`) and holds its lock.
-    ``masks_only``: :attr:`BatchPlan.masks_only`.
+    ``masks_only``, ``judged``: :attr:`BatchPlan.masks_only`, :attr:`BatchPlan.judged`.
     Writes ``results``, ``ratings``, ``renders`` and ``attachments`` (``.parquet`` + ``.csv``),
     ``summary.json`` and ``tables.json`` there.
     """
     t0 = time.perf_counter()
     plan = BatchPlan.build(tasks, versions, views, chunk_size=ctx.chunk_size,
                            render=pipeline.render is not None,
-                           images=pipeline.image is not None, masks_only=masks_only)
+                           images=pipeline.image is not None, masks_only=masks_only,
+                           judged=judged)
     scheduler = Scheduler(plan, pipeline, ctx, executor, progress=progress)
     records = scheduler.run()
     table, renders, attached = collect(scheduler, pipeline.attachments)

@@ -55,6 +55,23 @@ def test_only_a_large_run_renders_masks_only_and_never_the_compared_tasks(monkey
     assert frame_policy.masks_only(tasks, views) == frozenset()
 
 
+def test_an_image_job_follows_only_the_views_an_image_check_judges():
+    tasks = [TaskSpec("JW11", 19), TaskSpec("JW11", 106), TaskSpec("JW12", 7, usable=False)]
+    views = ("front", "side", "half", "top")
+    judged = frame_policy.judged_views(tasks, views)
+    assert judged == {("JW11", 19, 1, "front"), ("JW11", 106, 1, "front")}
+    plan = BatchPlan.build(tasks, ["cassi-2.1"], views, chunk_size=4, render=True, images=True,
+                           judged=judged)
+    render = Job("render", "JW11", 19, 1, "cassi-2.1", "front", (0,))
+    assert plan.judges(render)
+    assert not plan.judges(Job("render", "JW11", 19, 1, "cassi-2.1", "side", (0,)))
+    assert not plan.judges(Job("render", "JW11", 19, 1, "cassi-2.1", "front", (0,), evidence=True))
+    unsaid = BatchPlan.build(tasks, ["cassi-2.1"], views, chunk_size=4, render=True, images=True)
+    assert unsaid.judges(Job("render", "JW11", 19, 1, "cassi-2.1", "side", (0,)))  # every view
+    none = BatchPlan.build(tasks, ["cassi-2.1"], views, chunk_size=4, render=True, images=False)
+    assert not none.judges(render)
+
+
 @pytest.mark.render
 def test_a_region_holds_the_whole_frames_pixels_and_gives_the_same_masks_blob(tmp_path):
     corpus = get_corpus(make_corpus(tmp_path / "c", subjects=["JW45"]))
@@ -94,7 +111,7 @@ def test_a_large_runs_masks_only_grid_gives_the_same_results(tmp_path, monkeypat
     def night(name):
         out = tmp_path / name
         run(RunConfig(out=out, corpus=corpus, subjects=("JW45",), tasks=(2, 5),
-                      versions=("cassi-1.0", "cassi-2.1"), views=("front",), stride=0,
+                      versions=("cassi-1.0", "cassi-2.1"), views=("front", "side"), stride=0,
                       extremes=1, animate_stride=24, workers=1), progress=False)
         return out
 
@@ -103,9 +120,15 @@ def test_a_large_runs_masks_only_grid_gives_the_same_results(tmp_path, monkeypat
     large = night("large")
     assert (plain / "results.parquet").read_bytes() == (large / "results.parquet").read_bytes()
     renders = {n: pd.read_parquet(d / "renders.parquet") for n, d in (("plain", plain), ("large", large))}
+    front = {n: r[r["view"] == "front"] for n, r in renders.items()}
     # the pictures left: each file's first and check frames; the judged grid only as masks
-    assert len(renders["large"]) < len(renders["plain"]) / 3
-    shown = set(map(tuple, renders["large"][["task", "version", "frame"]].values.tolist()))
-    assert shown < set(map(tuple, renders["plain"][["task", "version", "frame"]].values.tolist()))
+    assert len(front["large"]) < len(front["plain"]) / 3
+    shown = set(map(tuple, front["large"][["task", "version", "frame"]].values.tolist()))
+    assert shown < set(map(tuple, front["plain"][["task", "version", "frame"]].values.tolist()))
+    side = {n: r[r["view"] == "side"].reset_index(drop=True) for n, r in renders.items()}
+    assert side["large"].drop(columns="path").equals(side["plain"].drop(columns="path"))
     masks_jobs = [p.name for p in (large / "jobs").rglob("*.json") if "masks-" in p.name]
     assert masks_jobs and not [p for p in (plain / "jobs").rglob("*.json") if "masks-" in p.name]
+    # the side view's renders are followed by no image job: no image check judges it
+    checks = [p.parent.name for p in (plain / "jobs").rglob("checks.json")]
+    assert len(checks) == 4 and set(checks) == {"front"}
