@@ -34,21 +34,27 @@ from cassi.harness.evaluation.frames import video_grid
 #: 0.853 in 40 ms, method 6 quality 100 0.819 in 600 ms. Method 2 at 50 keeps a night's report
 #: under 150 MB for about 30 s more encoding on the first night (later nights link the cache).
 WEBP_OPTIONS = {"lossless": True, "exact": True, "method": 2, "quality": 50}
+#: A large run's (a full set's: about 9,000 pictures a subject, on its viewer pages), where
+#: encoding was most of the report: on 200 renders of JW11's full set, method 0 takes 1.2 ms a
+#: render against method 2's 9.1 ms, for 0.74 of the PNGs' bytes against 0.58. Still lossless.
+WEBP_FAST_OPTIONS = {"lossless": True, "exact": True, "method": 0, "quality": 0}
 IMAGE_SUFFIX = ".webp"
 
 
 @functools.lru_cache(maxsize=None)
-def _webp_code() -> str:
+def _webp_code(fast: bool = False) -> str:
     """What a report image's bytes depend on besides the pixels: the options, Pillow and libwebp."""
     from PIL import __version__ as pillow, features  # noqa: PLC0415 - Pillow comes with imageio
 
-    doc = {"options": WEBP_OPTIONS, "pillow": pillow, "libwebp": features.version("webp")}
+    doc = {"options": WEBP_FAST_OPTIONS if fast else WEBP_OPTIONS, "pillow": pillow,
+           "libwebp": features.version("webp")}
     return json.dumps(doc, sort_keys=True)
 
 
-def webp_bytes(src: str | os.PathLike) -> bytes:
+def webp_bytes(src: str | os.PathLike, *, fast: bool = False) -> bytes:
     """The image file ``src`` (a render's PNG: RGB, or RGBA) as lossless WebP: the same pixels,
-    none of the PNG's text chunks, so renders with the same pixels give the same bytes."""
+    none of the PNG's text chunks, so renders with the same pixels give the same bytes.
+    ``fast``: :data:`WEBP_FAST_OPTIONS`."""
     from PIL import Image  # noqa: PLC0415
 
     with Image.open(src) as img:
@@ -56,23 +62,25 @@ def webp_bytes(src: str | os.PathLike) -> bytes:
         if img.mode not in ("RGB", "RGBA"):
             img = img.convert("RGBA" if "A" in img.getbands() else "RGB")
         buf = io.BytesIO()
-        img.save(buf, "WEBP", **WEBP_OPTIONS)
+        img.save(buf, "WEBP", **(WEBP_FAST_OPTIONS if fast else WEBP_OPTIONS))
     return buf.getvalue()
 
 
-def store_image(src: str | os.PathLike, images: Path, cache: Path | None = None) -> Path:
+def store_image(src: str | os.PathLike, images: Path, cache: Path | None = None, *,
+                fast: bool = False) -> Path:
     """A render beside the report, content-addressed: ``images/<ab>/<sha256>.webp``, named by
-    the SHA-256 of its lossless WebP bytes (:func:`webp_bytes`), so a picture that several
-    renders, pages or versions show is stored once. With ``cache`` (a nightly store's media),
-    an encoding made before from the same PNG bytes and codec is linked, not made again."""
+    the SHA-256 of its lossless WebP bytes (:func:`webp_bytes`, ``fast`` for a large run), so a
+    picture that several renders, pages or versions show is stored once. With ``cache`` (a
+    nightly store's media), an encoding made before from the same PNG bytes and codec is
+    linked, not made again."""
     cached = None
     if cache is not None:
-        key = hashlib.sha256(f"{sha256_file(src)} {_webp_code()}".encode()).hexdigest()
+        key = hashlib.sha256(f"{sha256_file(src)} {_webp_code(fast)}".encode()).hexdigest()
         cached = cache / f"{key}{IMAGE_SUFFIX}"
     if cached is not None and cached.is_file():
         data = cached.read_bytes()
     else:
-        data = webp_bytes(src)
+        data = webp_bytes(src, fast=fast)
     digest = hashlib.sha256(data).hexdigest()
     dest = images / digest[:2] / f"{digest}{IMAGE_SUFFIX}"
     if not dest.is_file():

@@ -68,7 +68,8 @@ def code_digest() -> str:
             version = "-"
         h.update(f"{lib}={version}\0".encode())
     h.update(sys.version.encode())
-    h.update(media._webp_code().encode())  # noqa: SLF001 - libwebp's own version
+    for fast in (False, True):  # libwebp's own version, and the options of either kind of run
+        h.update(media._webp_code(fast).encode())  # noqa: SLF001
     return h.hexdigest()
 
 

@@ -273,13 +273,13 @@ def _worst_first(fv: pd.DataFrame) -> pd.DataFrame:
                           ascending=[False, False, True, True, True], kind="mergesort")
 
 
-def _image_store(out: Path, cache: Path | None):
+def _image_store(out: Path, cache: Path | None, *, fast: bool = False):
     """``render path -> its copy beside the report``: content-addressed lossless WebP
-    (:func:`media.store_image`), which the subject pages and the viewer share; each render is
-    encoded once per report."""
+    (:func:`media.store_image`; ``fast`` for a large run), which the subject pages and the
+    viewer share; each render is encoded once per report."""
     @functools.lru_cache(maxsize=None)
     def place(src: str) -> Path:
-        return media.store_image(src, out / "images", cache)
+        return media.store_image(src, out / "images", cache, fast=fast)
     return place
 
 
@@ -896,7 +896,7 @@ def _index_html(run: Run, previous: Run | None, out: Path, env, agree, history,
     fv = file_verdicts(run.results)
     cr = component_ratings(run.results)
     subjects = sorted(fv["subject"].dropna().unique())
-    place = _image_store(out, media_cache)
+    place = _image_store(out, media_cache, fast=_large_run(run) is not None)
     audio_for = _audio_for(run)
     fired, note = _renders_rule(run, fv)
     keys = PageKeys(run, audio_for=audio_for, labels_for=_alignment_for(run), renders_note=note)

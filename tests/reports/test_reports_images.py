@@ -97,6 +97,17 @@ def test_webp_keeps_every_pixel_and_alpha(tmp_path):
     assert np.array_equal(_pixels(dest), rgba)
 
 
+def test_a_large_runs_fast_webp_keeps_every_pixel_too_and_is_cached_apart(tmp_path):
+    rng = np.random.default_rng(4)
+    rgba = rng.integers(0, 256, (37, 53, 4), dtype=np.uint8)
+    Image.fromarray(rgba).save(tmp_path / "a.png")
+    cache = tmp_path / "media"
+    fast = media.store_image(tmp_path / "a.png", tmp_path / "f", cache, fast=True)
+    slow = media.store_image(tmp_path / "a.png", tmp_path / "s", cache)
+    assert np.array_equal(_pixels(fast), rgba) and np.array_equal(_pixels(slow), rgba)
+    assert fast.read_bytes() != slow.read_bytes() and len(list(cache.iterdir())) == 2
+
+
 def test_an_encoding_in_the_media_cache_is_linked_not_made_again(tmp_path, monkeypatch):
     src = tmp_path / "r.png"
     Image.fromarray(image(5)).save(src)
@@ -105,7 +116,7 @@ def test_an_encoding_in_the_media_cache_is_linked_not_made_again(tmp_path, monke
     [cached] = cache.iterdir()
     assert cached.read_bytes() == first.read_bytes()
 
-    def refuse(_):
+    def refuse(*_, **__):
         raise AssertionError("encoded again")
     monkeypatch.setattr(media, "webp_bytes", refuse)
     second = media.store_image(src, tmp_path / "b" / "images", cache)
