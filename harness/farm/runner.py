@@ -24,7 +24,7 @@ from cassi.harness.farm.store import BlobRef, OutputStore, sha256_bytes
 from cassi.harness.farm.tableset import write_table_set
 
 __all__ = ["Pipeline", "RunResult", "Scheduler", "TaskSpec", "OutputWriteError", "run_batch",
-           "collect", "RENDER_COLUMNS", "RENDER_PREFIX", "ATTACHMENT_COLUMNS"]
+           "Collected", "collect", "RENDER_COLUMNS", "RENDER_PREFIX", "ATTACHMENT_COLUMNS"]
 
 #: Outputs named ``render-<frame>`` are images; they are listed in ``renders.parquet``.
 RENDER_PREFIX = "render-"
@@ -90,8 +90,11 @@ class Scheduler:
         self.digests: dict[str, str] = {}
         self.records: dict[str, JobRecord] = {}
         self.chunks: dict[str, tuple[Job, ...]] = {}
-        #: key -> the manifest that verified when the job finished (DONE or CACHED)
+        #: key -> the manifest that verified when a render job finished (DONE or CACHED), kept
+        #: until its view's image job is planned from it
         self.verified: dict[str, dict] = {}
+        #: what the tables need of every finished job, taken as it finishes (:class:`Collected`)
+        self.collected = Collected(pipeline.attachments)
         self.bars = Progress(STAGES, enabled=progress)
 
     # -- the loop ----------------------------------------------------------------------------
@@ -109,9 +112,16 @@ class Scheduler:
         return self.records
 
     def manifest(self, key: str) -> dict | None:
-        """The verified manifest of a finished job (DONE or CACHED), else None: the one that
-        verified when it finished (a DONE job whose outputs did not verify is FAILED)."""
+        """The verified manifest of a finished render job (DONE or CACHED) whose image job is
+        not planned yet, else None: the one that verified when it finished (a DONE job whose
+        outputs did not verify is FAILED). A full set's manifests are not all held at once:
+        each job's rows and index entries are taken as it finishes (:attr:`collected`)."""
         return self.verified.get(key)
+
+    def _verified(self, job: Job, manifest: dict) -> None:
+        self.collected.add(job, manifest)
+        if job.stage == "render" and self.plan.judges(job):
+            self.verified[job.key] = manifest
 
     # -- transitions ---------------------------------------------------------------------------
     def _record(self, job: Job, state: State, reason: str = "", **kw) -> JobRecord:
@@ -128,7 +138,7 @@ class Scheduler:
         self.bars.planned(job.stage)
         manifest = self.store.verified(job.key, digest)
         if manifest is not None:
-            self.verified[job.key] = manifest
+            self._verified(job, manifest)
             self._record(job, State.CACHED)
             self.bars.finished(job.stage, State.CACHED)
             self._unlock(job, manifest)
@@ -167,7 +177,7 @@ class Scheduler:
             if manifest is None:
                 self._record(job, State.FAILED, "outputs missing or corrupt after the job finished")
             else:
-                self.verified[key] = manifest
+                self._verified(job, manifest)
         write_job_log(self.store, rec)
         self.bars.finished(job.stage, rec.state)
         self._unlock(job, manifest)
@@ -189,7 +199,9 @@ class Scheduler:
             if not all(self.records.get(s.key, JobRecord(s.key, "render")).state.finished
                        for s in siblings):
                 return
-            manifests = [self.manifest(s.key) for s in siblings]
+            manifests = [self.verified.pop(s.key, None) for s in siblings]
+            for s in siblings:
+                self.chunks.pop(s.key, None)
             image = self.plan.image_job(siblings, [m for m in manifests if m is not None])
             bad = [s.key for s, m in zip(siblings, manifests) if m is None]
             if bad:
@@ -221,28 +233,44 @@ def _combined(store: OutputStore, rows: list[tuple[str, BlobRef]]) -> pd.DataFra
     return table
 
 
-def collect(scheduler: Scheduler, attachments=()) -> tuple[pd.DataFrame, dict[str, list],
-                                                         dict[str, list]]:
-    """The combined stored rows of every finished job, the render index and the attachment
-    index entries (the outputs named in ``attachments``), each index as column lists."""
-    rows = []
-    # column lists, not a dict a row: a full set's 120,000 index rows
-    renders = {c: [] for c in RENDER_COLUMNS}
-    attached = {c: [] for c in ATTACHMENT_COLUMNS}
-    for key in sorted(scheduler.records):
-        manifest = scheduler.manifest(key)
-        if manifest is None:
-            continue
+class Collected:
+    """What the run's tables need of each finished job, taken as the job finishes so that no
+    manifest is held for the whole run: its rows blob and its entries in the render and
+    attachment indexes (column lists, each row tagged with its job's key, so that the tables
+    come out in job-key order, as from every manifest read at the end)."""
+
+    def __init__(self, attachments=()):
+        self.attachments = tuple(attachments)
+        self.rows: list[tuple[str, BlobRef]] = []
+        # column lists, not a dict a row: a full set's 120,000 index rows
+        self.renders = {c: [] for c in (*RENDER_COLUMNS, "_key")}
+        self.attached = {c: [] for c in (*ATTACHMENT_COLUMNS, "_key")}
+
+    def add(self, job: Job, manifest: dict) -> None:
         outputs = manifest["outputs"]
         if "rows" in outputs:
-            rows.append((key, outputs["rows"]))
-        job = scheduler.jobs[key]
+            self.rows.append((job.key, outputs["rows"]))
         for name, ref in outputs.items():
             if name.startswith(RENDER_PREFIX) and name[len(RENDER_PREFIX):].isdigit():
-                _index_row(renders, job, frame=int(name[len(RENDER_PREFIX):]), path=ref.relpath)
-            elif _attached(name, attachments):
-                _index_row(attached, job, name=name, path=ref.relpath)
-    return _combined(scheduler.store, rows), renders, attached
+                _index_row(self.renders, job, frame=int(name[len(RENDER_PREFIX):]),
+                           path=ref.relpath, _key=job.key)
+            elif _attached(name, self.attachments):
+                _index_row(self.attached, job, name=name, path=ref.relpath, _key=job.key)
+
+    @staticmethod
+    def _by_key(columns: dict[str, list]) -> dict[str, list]:
+        keys = columns["_key"]
+        order = sorted(range(len(keys)), key=keys.__getitem__)  # stable: a job's own order
+        return {c: [v[i] for i in order] for c, v in columns.items() if c != "_key"}
+
+
+def collect(scheduler: Scheduler) -> tuple[pd.DataFrame, dict[str, list], dict[str, list]]:
+    """The combined stored rows of every finished job, the render index and the attachment
+    index entries (the outputs named in the pipeline's ``attachments``), each index as column
+    lists in job-key order: what the scheduler collected as its jobs finished."""
+    got = scheduler.collected
+    return (_combined(scheduler.store, sorted(got.rows, key=lambda r: r[0])),
+            Collected._by_key(got.renders), Collected._by_key(got.attached))
 
 
 def _index_row(columns: dict[str, list], job, **values) -> None:
@@ -278,7 +306,7 @@ def run_batch(tasks: Iterable[TaskSpec], versions: Iterable[str], views: Iterabl
                            judged=judged)
     scheduler = Scheduler(plan, pipeline, ctx, executor, progress=progress)
     records = scheduler.run()
-    table, renders, attached = collect(scheduler, pipeline.attachments)
+    table, renders, attached = collect(scheduler)
     scheduler.store.save_stamps()
     rated = pipeline.ratings(table) if pipeline.ratings is not None else R.empty_ratings()
     summary = Summary(records, time.perf_counter() - t0,

@@ -23,7 +23,8 @@ from cassi.harness.farm import results as R
 from cassi.harness.farm.executors import LocalExecutor
 from cassi.harness.farm.jobs import Job, SkipJob, StageContext, StageOutput, State, npz_bytes
 from cassi.harness.evaluation.frames import select_frames
-from cassi.harness.farm.runner import Pipeline, TaskSpec, run_batch
+from cassi.harness.farm.plan import BatchPlan
+from cassi.harness.farm.runner import Pipeline, Scheduler, TaskSpec, collect, run_batch
 from cassi.harness.farm.store import OutputStore
 from cassi.harness.rubric import ratings_table
 
@@ -145,6 +146,36 @@ def test_batch_runs_and_tables_are_consistent(reference):
     pd.testing.assert_frame_equal(rt, ratings_table(pd.read_parquet(out / "results.parquet")))
     assert set(rt["rating"]) <= {"EXCELLENT", "VERY GOOD", "GOOD", "FAIR"}
     assert (out / "logs" / "JW11" / "019-1" / "v1" / "geometry.log").is_file()
+
+
+def test_no_manifest_is_held_after_the_run_and_the_indexes_come_in_job_key_order(tmp_path):
+    """Each job's rows and index entries are taken as it finishes (2 workers: out of order);
+    the indexes equal those read from every manifest at the end, in job-key order."""
+    ctx = StageContext(out_dir=tmp_path, stride=10, chunk_size=2)
+    store = OutputStore(tmp_path)
+    store.prepare()
+    pipe = Pipeline(geometry=geom_stage, render=render_stage, image=image_stage,
+                    attachments=("positions",))
+    plan = BatchPlan.build(TASKS, ("v1", "v2"), ("front", "half"), chunk_size=2, render=True,
+                           images=True)
+    with LocalExecutor(2) as ex:
+        scheduler = Scheduler(plan, pipe, ctx, ex, progress=False)
+        scheduler.run()
+    assert scheduler.verified == {} and scheduler.chunks == {}
+    _, renders, attached = collect(scheduler)
+    want_renders, want_attached, finished = [], [], []
+    for key in sorted(scheduler.records):
+        manifest = store.verified(key, scheduler.digests[key])
+        job = scheduler.jobs[key]
+        for name, ref in manifest["outputs"].items():
+            if name.startswith("render-"):
+                want_renders.append((key, int(name[7:]), ref.relpath))
+            elif name == "positions":
+                want_attached.append((key, ref.relpath))
+        finished.append(key)
+    assert len(finished) == len(scheduler.records) > 20
+    assert list(zip(renders["frame"], renders["path"])) == [(f, p) for _, f, p in want_renders]
+    assert attached["path"] == [p for _, p in want_attached] and len(want_attached) == 8
 
 
 def test_rerun_skips_everything_and_gives_identical_tables(reference, tmp_path):
