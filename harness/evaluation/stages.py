@@ -35,7 +35,7 @@ from cassi.harness.evaluation.inputs import (read_planned, verify_code, verify_p
 from cassi.harness.farm.jobs import Job, SkipJob, StageContext, StageOutput, npz_bytes
 from cassi.harness.farm.runner import Pipeline
 from cassi.harness.rubric.frames import CHUNK_FRAMES, FileFrames
-from cassi.harness.rubric.image import depth_read, is_read, read_box
+from cassi.harness.rubric.image import depth_read, is_read, read_box, read_pixels
 from cassi.harness.rubric.measures import CRITERION_DIAGNOSTICS, DIAGNOSTICS_READ
 from cassi.renderer.images import png_bytes
 from cassi.renderer.views import PRESET_NAMES, VIEW_NAMES
@@ -288,15 +288,15 @@ def masks_blob(mask: np.ndarray, depth: np.ndarray, part_names, *, origin=(0, 0)
     if mask.max(initial=0) > 255:
         raise ValueError("more than 255 parts: masks are stored as uint8")
     shape = tuple(mask.shape) if shape is None else tuple(shape)
-    (h, w), ids = mask.shape, [i for i, n in enumerate(part_names) if is_read(n)]
-    edges = [e for e, cut in ((mask[0], origin[0] > 0), (mask[:, 0], origin[1] > 0),
-                              (mask[-1], origin[0] + h < shape[0]),
-                              (mask[:, -1], origin[1] + w < shape[1])) if cut] if mask.size else []
-    if any(np.isin(e, ids).any() for e in edges):
+    (h, w), seen = mask.shape, read_pixels(mask, part_names)
+    edges = [e for e, cut in ((seen[0], origin[0] > 0), (seen[:, 0], origin[1] > 0),
+                              (seen[-1], origin[0] + h < shape[0]),
+                              (seen[:, -1], origin[1] + w < shape[1])) if cut] if seen.size else []
+    if any(e.any() for e in edges):
         # what the measures read, and the ring around it, must lie in the rendered region
         raise ValueError(f"the rendered region {h}x{w} at {tuple(origin)} of a {shape} frame "
                          "cuts the parts the image measures read")
-    r0, r1, c0, c1 = read_box(mask, part_names)
+    r0, r1, c0, c1 = read_box(mask, part_names, seen=seen)
     mask = mask[r0:r1, c0:c1]
     kept = np.where(depth_read(mask, part_names), np.asarray(depth, np.float32)[r0:r1, c0:c1],
                     np.float32(np.inf))

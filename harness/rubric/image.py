@@ -29,7 +29,7 @@ from cassi.harness.rubric.registry import (CENTERING_OPEN_SHARE, INCISAL_STEP_FA
                                            TEETH_FRONT_DEPTH_PERCENTILE, TEETH_MIN_PIXELS, TONGUE_MIN_PIXELS,
                                            WIDE_OPEN_SHARE)
 
-__all__ = ["FrameMasks", "FrameStats", "ImageContext", "depth_read", "is_read", "read_box", "mouth_opening", "teeth_split",
+__all__ = ["FrameMasks", "FrameStats", "ImageContext", "depth_read", "is_read", "read_box", "read_pixels", "mouth_opening", "teeth_split",
            "opening_extent",
            "m_centered_high", "m_centered_low", "m_centering_offset", "m_tongue_visible", "m_tongue_in_front",
            "m_lower_teeth_seen", "m_opening_extent"]
@@ -84,7 +84,13 @@ def is_read(name: str) -> bool:
     return name.startswith("lip") or _is_teeth(name) or _is_tongue(name)
 
 
-def read_box(mask: np.ndarray, part_names) -> tuple[int, int, int, int]:
+def read_pixels(mask: np.ndarray, part_names) -> np.ndarray:
+    """bool (H, W): the pixels of the parts the measures read (:func:`is_read`)."""
+    return np.isin(np.asarray(mask), [i for i, n in enumerate(part_names) if is_read(n)])
+
+
+def read_box(mask: np.ndarray, part_names, *, seen: np.ndarray | None = None
+             ) -> tuple[int, int, int, int]:
     """(row0, row1, col0, col1), end-exclusive: the pixels of the parts the measures read
     (:func:`is_read`) with a ring of one pixel around them, clipped to the image; (0, 0, 0, 0)
     when none shows.
@@ -94,13 +100,11 @@ def read_box(mask: np.ndarray, part_names) -> tuple[int, int, int, int]:
     keeps the background around the lips in one piece with the border, so the holes the lips
     enclose (the mouth opening) are the same.
     """
-    mask = np.asarray(mask)
-    ids = [i for i, n in enumerate(part_names) if is_read(n)]
-    seen = np.isin(mask, ids)
+    seen = read_pixels(mask, part_names) if seen is None else seen  # given: read_pixels'
     rows, cols = np.flatnonzero(seen.any(axis=1)), np.flatnonzero(seen.any(axis=0))
     if not rows.size:
         return (0, 0, 0, 0)
-    h, w = mask.shape
+    h, w = seen.shape
     return (max(0, int(rows[0]) - 1), min(h, int(rows[-1]) + 2),
             max(0, int(cols[0]) - 1), min(w, int(cols[-1]) + 2))
 
