@@ -89,10 +89,14 @@ def _with_geometry(results: pd.DataFrame, rows: list[pd.DataFrame], synthetic: b
 
 def _memo_key(run: Path, meta: dict, only: str | None) -> str:
     """What an analysis depends on: the results table's bytes, the code and rubric that graded
-    them and that re-grade them (the run's provenance digests), the packages, ``only``."""
+    them and that re-grade them (the run's provenance digests), the packages, ``only``. The
+    versions' own code only where the analysis animates them again: re-grading the same
+    results under other thresholds reads no version's code (a version's code changed without
+    changing its results, as in a refactor, reuses it)."""
     prov = meta.get("provenance") or {}
-    doc = {k: prov.get(k) for k in ("code_digest", "versions_code_digest", "rubric_digest",
-                                     "packages")}
+    names = ("code_digest", "rubric_digest", "packages") + (
+        () if only == "thresholds" else ("versions_code_digest",))
+    doc = {k: prov.get(k) for k in names}
     if None in doc.values():
         return ""   # a run without provenance: nothing to recognise it by, always computed
     h = hashlib.sha256((run / "results.parquet").read_bytes())

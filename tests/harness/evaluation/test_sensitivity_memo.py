@@ -54,3 +54,16 @@ def test_other_results_code_or_rubric_compute_anew(tmp_path):
     # a run that records no provenance is never recognised
     doc = sensitivity(write_run(tmp_path / "bare", _results(1.14)), only="thresholds", memo=memo)
     assert "reused_from" not in doc
+
+
+def test_a_version_changed_without_changing_its_results_reuses_the_threshold_analysis(tmp_path):
+    """Re-grading under other thresholds reads the results and the rubric, no version's code:
+    only an analysis that animates the versions again keys on their code."""
+    memo = tmp_path / "store" / "derived"
+    sensitivity(_night(tmp_path, "n1", 1.14), only="thresholds", memo=memo)
+    refactored = {**PROVENANCE, "versions_code_digest": "w" * 64}
+    doc = sensitivity(_night(tmp_path, "n2", 1.14, refactored), only="thresholds", memo=memo)
+    assert doc["reused_from"].endswith("n1")
+    other_code = {**PROVENANCE, "code_digest": "d" * 64}
+    doc = sensitivity(_night(tmp_path, "n3", 1.14, other_code), only="thresholds", memo=memo)
+    assert "reused_from" not in doc
