@@ -296,7 +296,7 @@ def masks_blob(mask: np.ndarray, depth: np.ndarray, part_names, *, origin=(0, 0)
         # what the measures read, and the ring around it, must lie in the rendered region
         raise ValueError(f"the rendered region {h}x{w} at {tuple(origin)} of a {shape} frame "
                          "cuts the parts the image measures read")
-    r0, r1, c0, c1 = read_box(mask, part_names, seen=seen)
+    r0, r1, c0, c1 = read_box(seen)
     mask = mask[r0:r1, c0:c1]
     kept = np.where(depth_read(mask, part_names), np.asarray(depth, np.float32)[r0:r1, c0:c1],
                     np.float32(np.inf))

@@ -29,8 +29,8 @@ from cassi.harness.rubric.registry import (CENTERING_OPEN_SHARE, INCISAL_STEP_FA
                                            TEETH_FRONT_DEPTH_PERCENTILE, TEETH_MIN_PIXELS, TONGUE_MIN_PIXELS,
                                            WIDE_OPEN_SHARE)
 
-__all__ = ["FrameMasks", "FrameStats", "ImageContext", "depth_read", "is_read", "read_box", "read_pixels", "mouth_opening", "teeth_split",
-           "opening_extent",
+__all__ = ["FrameMasks", "FrameStats", "ImageContext", "depth_read", "is_read", "read_box",
+           "read_pixels", "mouth_opening", "teeth_split", "opening_extent",
            "m_centered_high", "m_centered_low", "m_centering_offset", "m_tongue_visible", "m_tongue_in_front",
            "m_lower_teeth_seen", "m_opening_extent"]
 
@@ -51,14 +51,12 @@ class FrameMasks:
     @classmethod
     def of(cls, frame: int, result: Any) -> "FrameMasks":
         mask = np.asarray(result.mask)
-        names = [str(n).lower() for n in result.part_names]
         depth = np.asarray(getattr(result, "depth", np.full(mask.shape, np.inf)), np.float64)
 
         def parts(pred) -> np.ndarray:
-            ids = [i for i, n in enumerate(names) if pred(n)]
-            return np.isin(mask, ids) if ids else np.zeros(mask.shape, bool)
+            return _pixels_of(mask, result.part_names, pred)
 
-        lips = parts(lambda n: n.startswith("lip"))
+        lips = parts(_is_lips)
         teeth = parts(_is_teeth)
         upper = parts(lambda n: _is_teeth(n) and "upper" in n)
         lower = parts(lambda n: _is_teeth(n) and "lower" in n)
@@ -67,6 +65,16 @@ class FrameMasks:
             upper, lower = teeth_split(teeth, mouth_opening(lips), depth)
         tongue = parts(_is_tongue)
         return cls(int(frame), lips, upper, lower, teeth, tongue, depth, split)
+
+
+def _pixels_of(mask: np.ndarray, part_names, pred) -> np.ndarray:
+    """bool (H, W): the pixels of the parts whose (lower-case) name ``pred`` accepts."""
+    ids = [i for i, n in enumerate(part_names) if pred(str(n).lower())]
+    return np.isin(np.asarray(mask), ids)
+
+
+def _is_lips(name: str) -> bool:
+    return name.startswith("lip")
 
 
 def _is_teeth(name: str) -> bool:
@@ -81,26 +89,24 @@ def is_read(name: str) -> bool:
     """Whether the image measures read part ``name`` (lips, teeth or tongue, as
     :meth:`FrameMasks.of` names them); every other part is background to them."""
     name = str(name).lower()
-    return name.startswith("lip") or _is_teeth(name) or _is_tongue(name)
+    return _is_lips(name) or _is_teeth(name) or _is_tongue(name)
 
 
 def read_pixels(mask: np.ndarray, part_names) -> np.ndarray:
     """bool (H, W): the pixels of the parts the measures read (:func:`is_read`)."""
-    return np.isin(np.asarray(mask), [i for i, n in enumerate(part_names) if is_read(n)])
+    return _pixels_of(mask, part_names, is_read)
 
 
-def read_box(mask: np.ndarray, part_names, *, seen: np.ndarray | None = None
-             ) -> tuple[int, int, int, int]:
-    """(row0, row1, col0, col1), end-exclusive: the pixels of the parts the measures read
-    (:func:`is_read`) with a ring of one pixel around them, clipped to the image; (0, 0, 0, 0)
-    when none shows.
+def read_box(seen: np.ndarray) -> tuple[int, int, int, int]:
+    """(row0, row1, col0, col1), end-exclusive: the pixels ``seen`` of the parts the measures
+    read (:func:`read_pixels`) with a ring of one pixel around them, clipped to the image;
+    (0, 0, 0, 0) when none shows.
 
     Every measure gives the same value on this crop as on the whole frame: they count, label
     and compare those parts' pixels and their depth, which the crop holds whole, and the ring
     keeps the background around the lips in one piece with the border, so the holes the lips
     enclose (the mouth opening) are the same.
     """
-    seen = read_pixels(mask, part_names) if seen is None else seen  # given: read_pixels'
     rows, cols = np.flatnonzero(seen.any(axis=1)), np.flatnonzero(seen.any(axis=0))
     if not rows.size:
         return (0, 0, 0, 0)
@@ -114,9 +120,7 @@ def depth_read(mask: np.ndarray, part_names) -> np.ndarray:
     line of touching teeth, :func:`_depth_cut`; the front teeth's depth) and the tongue's
     (:func:`_tongue_in_front`). Depth anywhere else changes no measure, so the render stage
     stores it only here."""
-    names = [str(n).lower() for n in part_names]
-    ids = [i for i, n in enumerate(names) if _is_teeth(n) or _is_tongue(n)]
-    return np.isin(np.asarray(mask), ids)
+    return _pixels_of(mask, part_names, lambda n: _is_teeth(n) or _is_tongue(n))
 
 
 def mouth_opening(lips: np.ndarray) -> np.ndarray:
