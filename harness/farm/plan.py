@@ -129,39 +129,39 @@ class BatchPlan:
         """The render chunks of :meth:`judged_frames` a finished geometry job unlocks, per
         view: together, the frames the view's image job judges. Where :attr:`masks_only`
         says so, those beyond ``meta["render_frames"]`` are chunks of masks only."""
-        pictured = self._chunks(geometry, manifest, self._pictured, evidence=False)
-        masks = self._chunks(geometry, manifest, self._masks_only, evidence=False,
-                             pictures=False)
-        return {view: pictured[view] + masks[view] for view in pictured}
-
-    def _masks_only(self, meta: Mapping, view: str, geometry: Job) -> list[int]:
-        if (geometry.subject, geometry.task, geometry.rep, view) not in self.masks_only:
-            return []
+        meta = manifest.get("meta", {})
         shown = {int(f) for f in meta.get("render_frames", [])}
-        return [f for f in self.judged_frames(meta, view) if int(f) not in shown]
-
-    def _pictured(self, meta: Mapping, view: str, geometry: Job) -> list[int]:
-        left = set(self._masks_only(meta, view, geometry))
-        return [f for f in self.judged_frames(meta, view) if f not in left]
+        pictured, masks = {}, {}
+        for view in self.views:
+            judged = self.judged_frames(meta, view)
+            if (geometry.subject, geometry.task, geometry.rep, view) in self.masks_only:
+                pictured[view] = [f for f in judged if int(f) in shown]
+                masks[view] = [f for f in judged if int(f) not in shown]
+            else:
+                pictured[view], masks[view] = judged, []
+        pictured = self._chunks(geometry, manifest, pictured, evidence=False)
+        masks = self._chunks(geometry, manifest, masks, evidence=False, pictures=False)
+        return {view: pictured[view] + masks[view] for view in self.views}
 
     def evidence_jobs(self, geometry: Job, manifest: Mapping) -> dict[str, tuple[Job, ...]]:
         """The render chunks of :meth:`evidence_frames` a finished geometry job unlocks, per
         view (views without any left out): rendered and listed, never judged."""
+        meta = manifest.get("meta", {})
         out = self._chunks(geometry, manifest,
-                           lambda meta, view, _: self.evidence_frames(meta, view), evidence=True)
+                           {view: self.evidence_frames(meta, view) for view in self.views},
+                           evidence=True)
         return {view: jobs for view, jobs in out.items() if jobs}
 
-    def _chunks(self, geometry: Job, manifest: Mapping, frames_of, *, evidence: bool,
-                pictures: bool = True) -> dict[str, tuple[Job, ...]]:
-        meta = manifest.get("meta", {})
+    def _chunks(self, geometry: Job, manifest: Mapping, frames: Mapping[str, list[int]], *,
+                evidence: bool, pictures: bool = True) -> dict[str, tuple[Job, ...]]:
+        """Per view, the render jobs of ``frames[view]`` in chunks (of masks only: larger)."""
         parent = outputs_digest([manifest])
+        size = self.chunk_size if pictures else MASKS_CHUNK_FACTOR * self.chunk_size
         return {view: tuple(
             Job("render", *geometry.task_key, view, chunk, i, evidence=evidence,
                 pictures=pictures, parents=(geometry.key,), parent_digest=parent,
                 inputs=geometry.inputs, reads=geometry.reads)
-            for i, chunk in enumerate(chunk_frames(
-                frames_of(meta, view, geometry),
-                self.chunk_size if pictures else MASKS_CHUNK_FACTOR * self.chunk_size)))
+            for i, chunk in enumerate(chunk_frames(frames[view], size)))
             for view in self.views}
 
     @staticmethod
