@@ -257,20 +257,21 @@ class Collected:
             elif _attached(name, self.attachments):
                 _index_row(self.attached, job, name=name, path=ref.relpath, _key=job.key)
 
-    @staticmethod
-    def _by_key(columns: dict[str, list]) -> dict[str, list]:
-        keys = columns["_key"]
-        order = sorted(range(len(keys)), key=keys.__getitem__)  # stable: a job's own order
-        return {c: [v[i] for i in order] for c, v in columns.items() if c != "_key"}
+    def ordered(self) -> tuple[list[tuple[str, BlobRef]], dict[str, list], dict[str, list]]:
+        """The rows blobs, the render index and the attachment index, in job-key order."""
+        def by_key(columns: dict[str, list]) -> dict[str, list]:
+            keys = columns["_key"]
+            order = sorted(range(len(keys)), key=keys.__getitem__)  # stable: a job's own order
+            return {c: [v[i] for i in order] for c, v in columns.items() if c != "_key"}
+        return sorted(self.rows, key=lambda r: r[0]), by_key(self.renders), by_key(self.attached)
 
 
 def collect(scheduler: Scheduler) -> tuple[pd.DataFrame, dict[str, list], dict[str, list]]:
     """The combined stored rows of every finished job, the render index and the attachment
     index entries (the outputs named in the pipeline's ``attachments``), each index as column
     lists in job-key order: what the scheduler collected as its jobs finished."""
-    got = scheduler.collected
-    return (_combined(scheduler.store, sorted(got.rows, key=lambda r: r[0])),
-            Collected._by_key(got.renders), Collected._by_key(got.attached))
+    rows, renders, attached = scheduler.collected.ordered()
+    return _combined(scheduler.store, rows), renders, attached
 
 
 def _index_row(columns: dict[str, list], job, **values) -> None:
